@@ -1,0 +1,61 @@
+"""One exception family for everything jointplay reports to a user.
+
+Each error knows the command-line exit code it maps to, so the CLI never has
+to guess: 2 for a model that cannot be read or is invalid, 3 for a mechanism
+that its joints do not hold against the loads.
+"""
+
+from __future__ import annotations
+
+
+class JointplayError(Exception):
+    """Base class of every error jointplay raises on purpose."""
+
+    exit_code: int = 1
+
+
+class ModelError(JointplayError, ValueError):
+    """The model (file or Python objects) is invalid.
+
+    The message is one paragraph: where (file and entry), what is wrong
+    (expected ..., got ...), and the fix.
+    """
+
+    exit_code = 2
+
+    def __init__(self, message: str, *, source: str | None = None, entry: str | None = None):
+        self.problem = message
+        self.source = source
+        self.entry = entry
+        where = ": ".join(part for part in (source, entry) if part)
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class UnboundedMechanismError(JointplayError):
+    """The loads drive a motion that no joint limits: there is no equilibrium.
+
+    ``body`` names the (first) body that moves, ``motion`` describes the free
+    motion in words, and ``direction`` holds, per moving body, the driven
+    small-displacement torsor ``(rotation, translation at the global origin)``.
+    """
+
+    exit_code = 3
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        body: str,
+        motion: str,
+        direction: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]],
+    ):
+        self.body = body
+        self.motion = motion
+        self.direction = direction
+        super().__init__(message)
+
+
+class SolverError(JointplayError):
+    """The cone solver failed, or its answer could not be certified."""
+
+    exit_code = 1

@@ -1,0 +1,70 @@
+"""Frames, vectors and the joint-frame rule.
+
+Naming: ``R_world_joint`` has the joint's x, y, z axes as columns, in global
+axes, so ``R_world_joint @ v_joint`` gives a joint-frame vector in global axes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+Vec3 = tuple[float, float, float]
+FloatArray = NDArray[np.float64]
+
+GLOBAL_AXES: dict[str, FloatArray] = {
+    "X": np.array([1.0, 0.0, 0.0]),
+    "Y": np.array([0.0, 1.0, 0.0]),
+    "Z": np.array([0.0, 0.0, 1.0]),
+}
+
+#: Below this sine of the angle, two directions count as parallel.
+PARALLEL_SINE = 1e-9
+
+
+def skew(v: FloatArray) -> FloatArray:
+    """The matrix ``[v]x`` with ``[v]x @ w == cross(v, w)``."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def unit(v: FloatArray) -> FloatArray:
+    return np.asarray(v, dtype=float) / float(np.linalg.norm(v))
+
+
+def is_parallel(a: FloatArray, b: FloatArray) -> bool:
+    a_hat, b_hat = unit(a), unit(b)
+    return float(np.linalg.norm(np.cross(a_hat, b_hat))) < PARALLEL_SINE
+
+
+def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:
+    """Return ``R_world_joint`` for a joint whose x axis is ``axis``.
+
+    The rule (documented in docs/conventions.md): x = axis; z = the part of
+    ``up`` perpendicular to x, normalized; y = z cross x. ``up`` defaults to
+    the global Z axis; when the axis itself is along global Z, the default
+    ``up`` is global -X for +Z and +X for -Z, so that the frame is the global
+    frame turned about global Y. With axis = global X and the default ``up``
+    the joint frame is the global frame, as in the paper.
+    """
+    x = unit(axis)
+    if up is None:
+        up = GLOBAL_AXES["Z"]
+        if is_parallel(x, up):
+            up = np.array([-np.sign(x[2]), 0.0, 0.0])
+    z = np.asarray(up, dtype=float) - float(np.dot(up, x)) * x
+    z = unit(z)
+    y = np.cross(z, x)
+    return np.column_stack([x, y, z])
+
+
+def describe_direction(direction: FloatArray) -> str:
+    """'the global X axis' style names for axis-aligned directions, else the vector."""
+    d = unit(direction)
+    for name, axis in GLOBAL_AXES.items():
+        if is_parallel(d, axis):
+            return f"global {name}"
+    return "[" + ", ".join(f"{c:.4g}" for c in d) + "]"
+
+
+def fmt_point(p: FloatArray) -> str:
+    return "(" + ", ".join(f"{0.0 if abs(c) < 1e-12 else c:.6g}" for c in p) + ") mm"

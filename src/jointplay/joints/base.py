@@ -1,0 +1,103 @@
+"""What every joint type shares: its frame, and the contract to name its contacts.
+
+A joint between bodies ``a`` and ``b`` limits the small displacement of b
+relative to a. That relative torsor is written at the joint centre, in the
+joint frame (x = the joint axis), as a 6-vector ``tau = (t, w)``: ``t`` the
+relative translation of the centre, ``w`` the relative rotation. The point at
+local position ``p`` moves by ``delta(p) = t + w x p``.
+
+Each joint type turns ``tau`` into its *contacts*: named clearance cones
+``|| rows @ tau || <= radius`` (a ball of the play, in 1, 2 or 3 directions),
+or fixed rows ``rows @ tau = 0``. Nothing else about the joint reaches the
+solver, so a new joint type is one new module in this package.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, model_validator
+
+from ..fields import Direction, Name, NonNegativeLength, Point
+from ..geometry import FloatArray, is_parallel, joint_frame, skew
+
+ContactKind = Literal["ball", "fixed"]
+
+#: Registered joint classes by their ``type`` name, filled by subclassing.
+JOINT_TYPES: dict[str, type[Joint]] = {}
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One clearance cone of a joint, in the joint frame.
+
+    ``kind == "ball"``: ``|| rows @ tau || <= radius`` (mm); the contact
+    touches when the norm reaches the radius. ``kind == "fixed"``:
+    ``rows @ tau == 0``. ``point`` is where the contact acts, in joint-frame
+    coordinates relative to the joint centre (mm).
+    """
+
+    name: str
+    kind: ContactKind
+    rows: FloatArray
+    radius: float
+    point: FloatArray
+
+
+def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:
+    """Rows of ``delta(p) = t + w x p = [I, -[p]x] @ tau`` for the chosen joint axes."""
+    full = np.hstack([np.eye(3), -skew(np.asarray(p, dtype=float))])
+    return full[["xyz".index(c) for c in directions], :]
+
+
+class Joint(BaseModel):
+    """Fields common to all joints. Subclasses set ``type`` and ``contacts``."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    type_name: ClassVar[str] = ""
+
+    name: Name
+    between: tuple[Name, Name]
+    at: Point
+    axis: Direction = (1.0, 0.0, 0.0)
+    up: Direction | None = None
+    clearance: NonNegativeLength
+
+    @classmethod
+    def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
+        super().__pydantic_init_subclass__(**kwargs)
+        type_field = cls.model_fields.get("type")
+        if type_field is not None and isinstance(type_field.default, str):
+            cls.type_name = type_field.default
+            JOINT_TYPES[cls.type_name] = cls
+
+    @model_validator(mode="after")
+    def _check_up(self) -> Joint:
+        if self.up is not None and is_parallel(np.array(self.up), np.array(self.axis)):
+            raise ValueError(
+                f"up {list(self.up)} is parallel to axis {list(self.axis)}; "
+                "give an 'up' vector across the axis, or leave it out"
+            )
+        return self
+
+    @cached_property
+    def R_world_joint(self) -> FloatArray:
+        """Joint axes x, y, z as columns, in global axes."""
+        up = None if self.up is None else np.array(self.up)
+        return joint_frame(np.array(self.axis), up)
+
+    @cached_property
+    def centre(self) -> FloatArray:
+        return np.array(self.at, dtype=float)
+
+    def contacts(self) -> tuple[Contact, ...]:
+        raise NotImplementedError
+
+    @property
+    def size(self) -> float:
+        """A length of the joint itself (mm), used for the model's length scale."""
+        return 0.0

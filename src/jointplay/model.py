@@ -1,0 +1,193 @@
+"""The mechanism: bodies, joints and loads, frozen and validated.
+
+A ``Model`` is plain data. It never holds solver state or results; the
+solver builds its own workspace from it (see ``assembly.py``).
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections import deque
+from collections.abc import Iterable
+from functools import cached_property
+from typing import TYPE_CHECKING, Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, StrictBool, model_validator
+
+from .fields import ForceVector, Name, Point, TorqueVector
+from .joints import JOINT_TYPES, Joint
+
+if TYPE_CHECKING:
+    AnyJoint = Joint
+else:
+    from typing import Union
+
+    AnyJoint = Annotated[
+        Union[tuple(JOINT_TYPES.values())],  # noqa: UP007 - built from the registry
+        Field(discriminator="type"),
+    ]
+
+
+class EntryError(ValueError):
+    """A model-level problem that belongs to one entry (``joints[1] 'l2'``)."""
+
+    def __init__(self, entry: str, problem: str):
+        self.entry = entry
+        self.problem = problem
+        super().__init__(f"{entry}: {problem}")
+
+
+def suggest(word: str, candidates: Iterable[str]) -> str:
+    """' Did you mean 'x'?' for a likely typo, else ''."""
+    close = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
+    return f" Did you mean '{close[0]}'?" if close else ""
+
+
+class Body(BaseModel):
+    """A rigid body. Ground bodies do not move; every other body gets a torsor."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    name: Name
+    ground: StrictBool = False
+
+
+class Load(BaseModel):
+    """A force at a point of a body, a torque on a body, or both."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    body: Name
+    at: Point | None = None
+    force: ForceVector | None = None
+    torque: TorqueVector | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> Load:
+        if self.force is None and self.torque is None:
+            raise ValueError("a load needs a 'force' (with 'at') or a 'torque', or both")
+        if self.force is not None and self.at is None:
+            raise ValueError(
+                "a force needs its point of application: add 'at: [x, y, z]' (mm)"
+            )
+        return self
+
+
+class Model(BaseModel):
+    """A mechanism with clearances: schema v1 of the model file."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", populate_by_name=True)
+
+    schema_version: Literal[1] = Field(1, alias="schema")
+    name: str | None = None
+    description: str | None = None
+    bodies: tuple[Body, ...] = Field(min_length=1)
+    joints: tuple[AnyJoint, ...] = Field(min_length=1)
+    loads: tuple[Load, ...] = ()
+
+    @model_validator(mode="after")
+    def _check_topology(self) -> Model:
+        names = [b.name for b in self.bodies]
+        _check_unique(names, "bodies", "body")
+        _check_unique([j.name for j in self.joints], "joints", "joint")
+        grounds = {b.name for b in self.bodies if b.ground}
+        if not grounds:
+            raise EntryError(
+                "bodies",
+                "no ground body; mark the fixed body with 'ground: true' "
+                f"(bodies are: {', '.join(names)})",
+            )
+        for i, joint in enumerate(self.joints):
+            entry = f"joints[{i}] '{joint.name}'"
+            a, b = joint.between
+            for body in (a, b):
+                if body not in names:
+                    raise EntryError(
+                        entry,
+                        f"between: unknown body '{body}'; bodies are: {', '.join(names)}."
+                        + suggest(body, names),
+                    )
+            if a == b:
+                raise EntryError(
+                    entry, f"between: the joint goes from body '{a}' to itself; name two bodies"
+                )
+            if a in grounds and b in grounds:
+                raise EntryError(
+                    entry,
+                    f"between: both '{a}' and '{b}' are ground bodies, so the joint "
+                    "constrains nothing; connect a moving body",
+                )
+        for i, load in enumerate(self.loads):
+            entry = f"loads[{i}]"
+            if load.body not in names:
+                raise EntryError(
+                    entry,
+                    f"body: unknown body '{load.body}'; bodies are: {', '.join(names)}."
+                    + suggest(load.body, names),
+                )
+            if load.body in grounds:
+                raise EntryError(
+                    entry,
+                    f"body: '{load.body}' is a ground body, which does not move, so the load "
+                    "does nothing; put it on a moving body",
+                )
+        unreached = _unreached_from_ground(names, grounds, [j.between for j in self.joints])
+        if unreached:
+            raise EntryError(
+                "bodies",
+                "no chain of joints connects "
+                + ", ".join(f"'{n}'" for n in unreached)
+                + " to a ground body; add a joint, or mark the body 'ground: true'",
+            )
+        return self
+
+    @cached_property
+    def moving_bodies(self) -> tuple[Body, ...]:
+        return tuple(b for b in self.bodies if not b.ground)
+
+    def body(self, name: str) -> Body:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    def joint(self, name: str) -> Joint:
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(name)
+
+    def replace(self, **changes: Any) -> Model:
+        """A new validated model with some top-level fields changed."""
+        data = self.model_dump(by_alias=True, exclude_none=True)
+        data.update(changes)
+        return Model.model_validate(data)
+
+
+def _check_unique(names: list[str], section: str, what: str) -> None:
+    seen: dict[str, int] = {}
+    for i, n in enumerate(names):
+        if n in seen:
+            raise EntryError(
+                f"{section}[{i}]",
+                f"duplicate {what} name '{n}' (also {section}[{seen[n]}]); give each {what} "
+                "its own name",
+            )
+        seen[n] = i
+
+
+def _unreached_from_ground(
+    names: list[str], grounds: set[str], edges: list[tuple[str, str]]
+) -> list[str]:
+    neighbours: dict[str, set[str]] = {n: set() for n in names}
+    for a, b in edges:
+        neighbours[a].add(b)
+        neighbours[b].add(a)
+    seen = set(grounds)
+    queue = deque(grounds)
+    while queue:
+        for nxt in neighbours[queue.popleft()]:
+            if nxt not in seen:
+                seen.add(nxt)
+                queue.append(nxt)
+    return [n for n in names if n not in seen]

@@ -1,0 +1,178 @@
+"""Results that carry their own proof.
+
+A ``Result`` holds, per body, its small displacement (global axes, at the
+global origin); per joint, the relative torsor of b with respect to a at the
+joint centre in the joint frame, and the state of each contact; and the
+``Certificate`` that the solver checked before handing the result out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .geometry import FloatArray
+
+if TYPE_CHECKING:
+    from .assembly import Assembly
+
+#: A contact counts as touching when it uses this much of its play or more.
+TOUCHING = 1.0 - 1e-8
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """Independent checks of an optimum, computed from the final numbers.
+
+    ``feasibility_mm``: the largest amount by which a contact goes past its
+    clearance (0 when feasible). ``equilibrium_residual``: the imbalance of
+    loads and contact forces in generalized coordinates, relative to the
+    loads. ``min_force``: the smallest contact multiplier (must not be
+    negative). ``method``: ``polished`` (KKT equations solved to machine
+    precision), ``least-norm face`` (a tie resolved by a second program),
+    ``interior-point`` (the cone solver's own answer), or ``no load``.
+    """
+
+    certified: bool
+    method: str
+    feasibility_mm: float
+    equilibrium_residual: float
+    complementarity: float
+    min_force: float
+    iterations: int
+
+
+@dataclass(frozen=True)
+class ContactResult:
+    name: str
+    gap_used: float  # fraction of the play used, 0..1
+    in_contact: bool
+    force_magnitude: float  # N, that body a exerts on body b at this contact
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "gap_used": self.gap_used, "in_contact": self.in_contact}
+
+
+@dataclass(frozen=True)
+class JointResult:
+    name: str
+    type: str
+    between: tuple[str, str]
+    centre: FloatArray  # mm, global
+    R_world_joint: FloatArray  # joint axes as columns
+    translation: FloatArray  # mm, b relative to a, at the centre, joint frame
+    rotation: FloatArray  # rad, joint frame
+    contacts: tuple[ContactResult, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        R = self.R_world_joint
+        return {
+            "axes": {k: _list(R[:, i]) for i, k in enumerate("xyz")},
+            "translation": _list(self.translation),
+            "rotation": _list(self.rotation),
+            "contacts": [c.to_dict() for c in self.contacts],
+        }
+
+
+@dataclass(frozen=True)
+class BodyResult:
+    name: str
+    translation: FloatArray  # mm, of the body point at the global origin, global axes
+    rotation: FloatArray  # rad, global axes
+
+    def displacement_of(self, point: FloatArray) -> FloatArray:
+        """Displacement (mm) of the body point at ``point`` (mm, global)."""
+        return self.translation + np.cross(self.rotation, np.asarray(point, dtype=float))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"translation": _list(self.translation), "rotation": _list(self.rotation)}
+
+
+@dataclass(frozen=True)
+class Result:
+    status: str
+    potential_energy: float  # N*mm
+    bodies: dict[str, BodyResult]
+    joints: dict[str, JointResult]
+    certificate: Certificate
+    free_motions: tuple[str, ...]  # free motions that no load drives (reported as 0)
+    solve_time: float  # s
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document of ``jointplay solve --json``."""
+        return {
+            "status": self.status,
+            "potential_energy": float(self.potential_energy),
+            "bodies": {n: b.to_dict() for n, b in self.bodies.items()},
+            "joints": {n: j.to_dict() for n, j in self.joints.items()},
+        }
+
+    def check(self) -> None:
+        """Raise ``AssertionError`` unless the certificate holds."""
+        c = self.certificate
+        assert c.certified, f"uncertified result: {c}"
+
+
+def _list(v: FloatArray) -> list[float]:
+    return [float(c) + 0.0 for c in v]  # + 0.0 turns -0.0 into 0.0
+
+
+def build_result(
+    asm: Assembly,
+    x: FloatArray,
+    forces: FloatArray,
+    certificate: Certificate,
+    solve_time: float,
+    free_basis: FloatArray,
+) -> Result:
+    """Turn scaled unknowns and ball-contact forces (N) into a ``Result``."""
+    from .solver import describe_motion
+
+    model = asm.model
+    bodies: dict[str, BodyResult] = {}
+    for b in model.bodies:
+        if b.ground:
+            bodies[b.name] = BodyResult(b.name, np.zeros(3), np.zeros(3))
+    for i, name in enumerate(asm.body_names):
+        omega, v_origin = asm.body_motion(x, i)
+        bodies[name] = BodyResult(name, v_origin, omega)
+    bodies = {b.name: bodies[b.name] for b in model.bodies}
+
+    ball_force = {id(c): f for c, f in zip(asm.balls, forces, strict=True)}
+    per_joint: dict[int, list[ContactResult]] = {}
+    for c in asm.contacts:
+        if c.is_fixed:
+            state = ContactResult(c.contact.name, 1.0, True, float("nan"))
+        else:
+            rho = float(np.linalg.norm(c.A @ x))
+            used = min(max(rho / c.radius, 0.0), 1.0)
+            state = ContactResult(c.contact.name, used, used >= TOUCHING, float(ball_force[id(c)]))
+        per_joint.setdefault(c.joint_index, []).append(state)
+
+    joints: dict[str, JointResult] = {}
+    for jdx, joint in enumerate(model.joints):
+        tau = asm.G[jdx] @ x
+        joints[joint.name] = JointResult(
+            joint.name,
+            joint.type_name,
+            joint.between,
+            joint.centre,
+            joint.R_world_joint,
+            np.asarray(tau[:3]),
+            np.asarray(tau[3:]),
+            tuple(per_joint.get(jdx, [])),
+        )
+
+    free = []
+    for k in range(free_basis.shape[1]):
+        d = free_basis[:, k]
+        for i, name in enumerate(asm.body_names):
+            omega, v_origin = asm.body_motion(d, i)
+            if np.linalg.norm(omega) * asm.ell + np.linalg.norm(v_origin) > 1e-9:
+                free.append(f"body '{name}': {describe_motion(omega, v_origin, asm.ell)}")
+                break
+
+    energy = -float(asm.g @ x)
+    return Result("optimal", energy, bodies, joints, certificate, tuple(free), solve_time)
