@@ -115,6 +115,13 @@ class Result:
         assert c.certified, f"uncertified result: {c}"
 
 
+def _clean(v: FloatArray, scale: float) -> FloatArray:
+    """Zero the round-off (below 1e-14 of the scale) that the solver leaves in exact zeros."""
+    out = np.array(v, dtype=float)
+    out[np.abs(out) < 1e-14 * scale] = 0.0
+    return out
+
+
 def _list(v: FloatArray) -> list[float]:
     return [float(c) + 0.0 for c in v]  # + 0.0 turns -0.0 into 0.0
 
@@ -137,7 +144,7 @@ def build_result(
             bodies[b.name] = BodyResult(b.name, np.zeros(3), np.zeros(3))
     for i, name in enumerate(asm.body_names):
         omega, v_origin = asm.body_motion(x, i)
-        bodies[name] = BodyResult(name, v_origin, omega)
+        bodies[name] = BodyResult(name, _clean(v_origin, asm.s), _clean(omega, asm.s / asm.ell))
     bodies = {b.name: bodies[b.name] for b in model.bodies}
 
     ball_force = {id(c): f for c, f in zip(asm.balls, forces, strict=True)}
@@ -160,8 +167,8 @@ def build_result(
             joint.between,
             joint.centre,
             joint.R_world_joint,
-            np.asarray(tau[:3]),
-            np.asarray(tau[3:]),
+            _clean(tau[:3], asm.s),
+            _clean(tau[3:], asm.s / asm.ell),
             tuple(per_joint.get(jdx, [])),
         )
 

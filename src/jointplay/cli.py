@@ -1,0 +1,101 @@
+"""The ``jointplay`` command line. Exit codes: 0 solved, 2 invalid model,
+3 mechanism not held by its joints, 1 anything else."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import traceback
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+
+from . import __version__
+from .errors import JointplayError, ModelError, UnboundedMechanismError
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="Where the parts of a mechanism really sit when its joints have clearance.",
+    pretty_exceptions_enable=False,
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"jointplay {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="Show the version.")
+    ] = False,
+) -> None:
+    """Clearance equilibrium of mechanisms: positions, contacts, certificates."""
+
+
+@app.command()
+def solve(
+    model_path: Annotated[Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+) -> None:
+    """Solve the equilibrium of MODEL and report joints, contacts and bodies."""
+    from .modelfile import load
+    from .solver import solve as solve_model
+    from .textreport import render
+
+    def run() -> None:
+        model = load(model_path)
+        result = solve_model(model)
+        if as_json:
+            typer.echo(json.dumps(result.to_dict(), indent=2))
+        else:
+            render(model, result, str(model_path), Console(highlight=False, soft_wrap=False))
+
+    _guarded(run, as_json)
+
+
+def _guarded(run: Any, as_json: bool) -> None:
+    err = Console(stderr=True, highlight=False, soft_wrap=True)
+    try:
+        run()
+    except JointplayError as exc:
+        kind = (
+            "invalid model"
+            if isinstance(exc, ModelError)
+            else "not held"
+            if isinstance(exc, UnboundedMechanismError)
+            else "error"
+        )
+        if as_json:
+            status = {2: "invalid", 3: "unbounded"}.get(exc.exit_code, "error")
+            doc: dict[str, Any] = {"status": status, "message": str(exc)}
+            if isinstance(exc, UnboundedMechanismError):
+                doc.update(body=exc.body, motion=exc.motion)
+            typer.echo(json.dumps(doc, indent=2))
+        err.print(f"jointplay: {kind}: {exc}", markup=False)
+        raise typer.Exit(exc.exit_code) from None
+    except (typer.Exit, typer.Abort, KeyboardInterrupt):
+        raise
+    except Exception as exc:  # a bug in jointplay, not in the input
+        if os.environ.get("JOINTPLAY_DEBUG"):
+            traceback.print_exc()
+        err.print(
+            f"jointplay: internal error ({type(exc).__name__}: {exc}). This is a bug in "
+            "jointplay; set JOINTPLAY_DEBUG=1 to see the traceback, and please report it.",
+            markup=False,
+        )
+        raise typer.Exit(1) from None
+
+
+def main() -> None:
+    sys.exit(app())  # pragma: no cover
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

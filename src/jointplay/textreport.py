@@ -1,0 +1,80 @@
+"""The human-readable report of ``jointplay solve``: the paper's kinematic
+vectorial sets per joint, and which contacts touch."""
+
+from __future__ import annotations
+
+from rich.console import Console, Group
+from rich.table import Table
+from rich.text import Text
+
+from .geometry import fmt_point
+from .model import Model
+from .result import Result
+
+
+def _num(v: float, digits: int = 8) -> str:
+    return f"{0.0 if abs(v) < 1e-300 else v: .{digits}e}"
+
+
+def render(model: Model, result: Result, source: str, console: Console) -> None:
+    cert = result.certificate
+    title = model.name or source
+    header = Text()
+    header.append(f"{title}\n", style="bold")
+    header.append(f"status: {result.status}")
+    header.append(
+        f"   certificate: {'holds' if cert.certified else 'FAILED'} ({cert.method}; "
+        f"clearance exceeded by {cert.feasibility_mm:.1e} mm, "
+        f"equilibrium residual {cert.equilibrium_residual:.1e})\n"
+    )
+    header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm")
+    parts: list[Table | Text] = [header]
+
+    for joint in model.joints:
+        jr = result.joints[joint.name]
+        a, b = jr.between
+        table = Table(
+            title=(
+                f"joint {jr.name} ({jr.type}) at {fmt_point(jr.centre)}: "
+                f"{b} relative to {a}"
+            ),
+            title_justify="left",
+            show_edge=False,
+        )
+        table.add_column("axis")
+        table.add_column("direction (global)")
+        table.add_column("translation (mm)", justify="right")
+        table.add_column("rotation (rad)", justify="right")
+        for i, axis in enumerate("xyz"):
+            direction = "[" + ", ".join(f"{c:.4g}" for c in jr.R_world_joint[:, i] + 0.0) + "]"
+            table.add_row(axis, direction, _num(jr.translation[i]), _num(jr.rotation[i]))
+        contacts = ", ".join(
+            f"{c.name}: {'TOUCHING' if c.in_contact else 'free'} ({100 * c.gap_used:.2f}% of play)"
+            for c in jr.contacts
+        )
+        parts.append(table)
+        parts.append(Text(f"  contacts: {contacts}"))
+
+    body_table = Table(
+        title="bodies: small displacement at the global origin, in global axes",
+        title_justify="left",
+        show_edge=False,
+    )
+    body_table.add_column("body")
+    body_table.add_column("")
+    for axis in "XYZ":
+        body_table.add_column(axis, justify="right")
+    for name, br in result.bodies.items():
+        if model.body(name).ground:
+            continue
+        body_table.add_row(name, "translation (mm)", *(_num(v, 6) for v in br.translation))
+        body_table.add_row("", "rotation (rad)", *(_num(v, 6) for v in br.rotation))
+    parts.append(body_table)
+    if result.free_motions:
+        parts.append(
+            Text(
+                "free motions that no joint holds and no load drives (reported as 0):\n"
+                + "\n".join(f"  {m}" for m in result.free_motions)
+            )
+        )
+    console.print(Group(*parts))
