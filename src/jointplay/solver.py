@@ -182,10 +182,13 @@ class Workspace:
         return sol
 
     # -- phase 2 and polishing ---------------------------------------------
-    def _active(self, point: _Point, balls: tuple[ContactRows, ...]) -> list[int]:
+    def _active(
+        self, point: _Point, balls: tuple[ContactRows, ...], lam_scale: float = 0.0
+    ) -> list[int]:
+        """Contacts whose multiplier outweighs their slack (both relative)."""
         if len(point.lam) == 0:
             return []
-        lam_max = max(float(np.max(point.lam)), 1e-300)
+        lam_max = max(float(np.max(point.lam)), lam_scale, 1e-300)
         active = []
         for i, c in enumerate(balls):
             slack = c.radius - float(np.linalg.norm(c.A @ point.x))
@@ -230,7 +233,7 @@ class Workspace:
         x = np.asarray(sol.x)
         lam_rest = np.array([sol.z[j] for j in self._soc_starts(face.shape[0], rest)])
         p2 = _Point(x, lam_rest)
-        active2 = self._active(p2, rest)
+        active2 = self._active(p2, rest, float(np.max(np.abs(self.M @ x))))
         polished = _newton(
             self.M.toarray(), np.zeros(self.m), face.toarray(), face_rhs,
             [rest[i] for i in active2], x, lam_rest[active2],
@@ -414,11 +417,12 @@ def describe_motion(omega: FloatArray, v_origin: FloatArray, ell: float) -> str:
         return f"translation along {_axis_words(v_origin)}"
     axis_point = np.cross(omega, v_origin) / w**2
     pitch = float(omega @ v_origin) / w**2
-    axis = _axis_words(omega)
     if np.linalg.norm(axis_point) <= 1e-9 * ell:
-        where = f"rotation about {axis}"
+        where = f"rotation about {_axis_words(omega)}"
     else:
-        where = f"rotation about an axis along {axis.removeprefix('the ')} through {fmt_point(axis_point)}"
+        name = describe_direction(omega)
+        along = f"parallel to {name}" if name.startswith("global") else f"along {name}"
+        where = f"rotation about an axis {along} through {fmt_point(axis_point)}"
     if abs(pitch) > 1e-9 * ell:
         where = f"screw motion ({where}, {pitch:.4g} mm of slide per rad)"
     return where
@@ -426,4 +430,4 @@ def describe_motion(omega: FloatArray, v_origin: FloatArray, ell: float) -> str:
 
 def _axis_words(direction: FloatArray) -> str:
     name = describe_direction(direction)
-    return f"the {name} axis" if name.startswith("global") else f"direction {name}"
+    return f"the {name} axis" if name.startswith("global") else f"the direction {name}"
