@@ -172,14 +172,42 @@ def build_result(
             tuple(per_joint.get(jdx, [])),
         )
 
-    free = []
-    for k in range(free_basis.shape[1]):
-        d = free_basis[:, k]
-        for i, name in enumerate(asm.body_names):
-            omega, v_origin = asm.body_motion(d, i)
-            if np.linalg.norm(omega) * asm.ell + np.linalg.norm(v_origin) > 1e-9:
-                free.append(f"body '{name}': {describe_motion(omega, v_origin, asm.ell)}")
-                break
-
+    free = [_describe_free(asm, d) for d in _echelon(free_basis.T)]
     energy = -float(asm.g @ x)
     return Result("optimal", energy, bodies, joints, certificate, tuple(free), solve_time)
+
+
+def _echelon(basis_rows: FloatArray, tol: float = 1e-9) -> list[FloatArray]:
+    """Reduced row-echelon form of a basis, so that each free motion involves as
+    few bodies and components as possible (one spin per shaft, say)."""
+    a = np.array(basis_rows, dtype=float)
+    rows, cols = a.shape
+    r = 0
+    for c in range(cols):
+        if r == rows:
+            break
+        p = r + int(np.argmax(np.abs(a[r:, c])))
+        if abs(a[p, c]) <= tol:
+            continue
+        a[[r, p]] = a[[p, r]]
+        a[r] /= a[r, c]
+        for k in range(rows):
+            if k != r:
+                a[k] -= a[k, c] * a[r]
+        r += 1
+    return [row for row in a[:r]]
+
+
+def _describe_free(asm: Assembly, d: FloatArray) -> str:
+    from .solver import describe_motion
+
+    parts = []
+    sizes = []
+    for i, name in enumerate(asm.body_names):
+        omega, v_origin = asm.body_motion(d, i)
+        size = float(np.linalg.norm(d[6 * i : 6 * i + 6]))
+        if size > 0:
+            sizes.append(size)
+            parts.append((size, f"body '{name}': {describe_motion(omega, v_origin, asm.ell)}"))
+    biggest = max(sizes, default=0.0)
+    return ", with ".join(text for size, text in parts if size > 1e-9 * biggest)
