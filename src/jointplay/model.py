@@ -39,7 +39,7 @@ class EntryError(ValueError):
 
 def suggest(word: str, candidates: Iterable[str]) -> str:
     """' Did you mean 'x'?' for a likely typo, else ''."""
-    close = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
+    close = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.5)
     return f" Did you mean '{close[0]}'?" if close else ""
 
 

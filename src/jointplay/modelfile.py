@@ -110,7 +110,10 @@ def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> 
     err = errors[0]
     original = (err.get("ctx") or {}).get("error")
     if isinstance(original, EntryError):
-        return ModelError(original.problem + ".", source=source, entry=original.entry)
+        problem = original.problem
+        if not problem.endswith((".", "?")):
+            problem += "."
+        return ModelError(problem, source=source, entry=original.entry)
     loc = list(err["loc"])
     entry, field_path = _entry(loc, data)
     problem = _problem(err, loc, data)

@@ -1,0 +1,199 @@
+"""Every bad input gets one clear message naming the file, the entry and the fix,
+and exit code 2 from the CLI; never a traceback."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+from conftest import spherical_shaft
+
+import jointplay
+from jointplay import ModelError
+
+
+def write(tmp_path: Path, data: Any, name: str = "model.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(data, sort_keys=False) if not isinstance(data, str) else data)
+    return path
+
+
+def joint(index: int, **changes: Any) -> dict[str, Any]:
+    data = spherical_shaft()
+    data["joints"][index].update(changes)
+    return data
+
+
+CASES: list[tuple[str, Any, str]] = [
+    ("unknown body in a joint",
+     joint(1, between=["S0", "S2"]),
+     r"joints\[1\] 'l2': between: unknown body 'S2'; bodies are: S0, S1\. Did you mean 'S1'\?"),
+    ("unknown body in a load",
+     spherical_shaft(loads=[{"body": "shaft", "at": [0, 0, 0], "force": [1, 0, 0]}]),
+     r"loads\[0\]: body: unknown body 'shaft'"),
+    ("unknown joint type",
+     joint(0, type="sferical"),
+     r"joints\[0\] 'l1': unknown joint type 'sferical'\. Did you mean 'spherical'\? Known types:"),
+    ("duplicate body names",
+     spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1"}, {"name": "S1"}]),
+     r"bodies\[2\]: duplicate body name 'S1' \(also bodies\[1\]\)"),
+    ("duplicate joint names",
+     joint(1, name="l1"),
+     r"joints\[1\]: duplicate joint name 'l1' \(also joints\[0\]\)"),
+    ("joint from a body to itself",
+     joint(0, between=["S1", "S1"]),
+     r"joints\[0\] 'l1': between: the joint goes from body 'S1' to itself"),
+    ("negative clearance",
+     joint(0, clearance=-0.2),
+     r"joints\[0\] 'l1': clearance: expected a value >= 0, got -0\.2"),
+    ("zero length",
+     joint(1, length=0),
+     r"joints\[1\] 'l2': length: expected a value > 0, got 0"),
+    ("negative length",
+     joint(1, length="-4 cm"),
+     r"joints\[1\] 'l2': length: expected a value > 0, got -40"),
+    ("zero axis",
+     joint(1, axis=[0, 0, 0]),
+     r"joints\[1\] 'l2': axis: expected a nonzero direction"),
+    ("NaN",
+     joint(0, clearance=float("nan")),
+     r"joints\[0\] 'l1': clearance: expected a finite length"),
+    ("NaN in a vector",
+     spherical_shaft(loads=[{"body": "S1", "at": [300, 0, 0], "force": [1, ".nan", 1]}]),
+     r"loads\[0\]: force: component y: expected a finite force"),
+    ("no ground body",
+     spherical_shaft(bodies=[{"name": "S0"}, {"name": "S1"}]),
+     r"bodies: no ground body; mark the fixed body with 'ground: true'"),
+    ("a body no joint connects to ground",
+     spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1"}, {"name": "S2"}]),
+     r"bodies: no chain of joints connects 'S2' to a ground body"),
+    ("wrong units",
+     joint(0, clearance="3 kg"),
+     r"joints\[0\] 'l1': clearance: expected a length, got '3 kg', which is a \[mass\]; write a "
+     r"plain number in mm or a string with units"),
+    ("unknown unit",
+     joint(0, clearance="3 furlongs_per_fortnight"),
+     r"joints\[0\] 'l1': clearance: unknown unit in '3 furlongs_per_fortnight'"),
+    ("unknown key with a suggestion",
+     joint(1, lenght=40),
+     r"joints\[1\] 'l2': lenght: unknown key 'lenght'\. Did you mean 'length'\?"),
+    ("missing key",
+     {"bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
+      "joints": [{"name": "l1", "type": "cylindrical", "between": ["S0", "S1"], "at": [0, 0, 0],
+                  "clearance": 0.2}]},
+     r"joints\[0\] 'l1': length: the key 'length' is required here; add it"),
+    ("a force without a point",
+     spherical_shaft(loads=[{"body": "S1", "force": [1, 0, 0]}]),
+     r"loads\[0\]: a force needs its point of application"),
+    ("a load on the ground",
+     spherical_shaft(loads=[{"body": "S0", "at": [0, 0, 0], "force": [1, 0, 0]}]),
+     r"loads\[0\]: body: 'S0' is a ground body"),
+    ("a vector of two components",
+     joint(0, at=[0, 0]),
+     r"joints\[0\] 'l1': at: expected a list of 3 components"),
+    ("up along the axis",
+     joint(1, up=[2, 0, 0]),
+     r"joints\[1\] 'l2': up \[2\.0, 0\.0, 0\.0\] is parallel to axis"),
+    ("ground given as text",
+     spherical_shaft(bodies=[{"name": "S0", "ground": "yes"}, {"name": "S1"}]),
+     r"bodies\[0\] 'S0': ground: expected true or false, got 'yes'"),
+    ("a joint between two grounds",
+     spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1", "ground": True}]),
+     r"joints\[0\] 'l1': between: both 'S0' and 'S1' are ground bodies"),
+    ("unknown top-level key",
+     spherical_shaft(load=[]),
+     r"unknown key 'load'\. Did you mean 'loads'\?"),
+    ("not a mapping", [1, 2, 3], r"expected a mapping with 'bodies', 'joints' and 'loads'"),
+    ("empty file", "", r"the file is empty"),
+    ("not YAML at all", "bodies: [\n  - {name: S0", r"not valid YAML at line"),
+    ("duplicate YAML key", "bodies: []\nbodies: []\n", r"duplicate key 'bodies'"),
+    ("no joints", spherical_shaft(joints=[]), r"joints: expected at least one entry"),
+]
+
+
+@pytest.mark.parametrize(("label", "data", "message"), CASES, ids=[c[0] for c in CASES])
+def test_bad_model_raises_one_clear_model_error(
+    tmp_path: Path, label: str, data: Any, message: str
+) -> None:
+    path = write(tmp_path, data)
+    with pytest.raises(ModelError, match=message) as info:
+        jointplay.load(path)
+    text = str(info.value)
+    assert text.startswith(str(path) + ": ")
+    assert "\n" not in text
+    assert "Traceback" not in text
+
+
+@pytest.mark.parametrize(("label", "data", "message"), CASES[:8], ids=[c[0] for c in CASES[:8]])
+def test_cli_exits_2_with_the_message_and_no_traceback(
+    tmp_path: Path, label: str, data: Any, message: str
+) -> None:
+    path = write(tmp_path, data)
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
+        capture_output=True, text=True, timeout=60,
+    )
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert "Traceback" not in proc.stderr
+    assert str(path) in proc.stderr
+    assert proc.stderr.startswith("jointplay: invalid model: ")
+
+
+def test_missing_file_is_exit_2(tmp_path: Path) -> None:
+    with pytest.raises(ModelError, match="no such file"):
+        jointplay.load(tmp_path / "nope.yaml")
+
+
+def test_json_and_toml_read_the_same_keys(tmp_path: Path) -> None:
+    data = spherical_shaft()
+    data["loads"].append({"body": "S1", "torque": [0, 0, "1 N*m"]})
+    as_yaml = jointplay.load(write(tmp_path, data))
+    as_json = jointplay.load(write(tmp_path, json.dumps(data), "model.json"))
+    toml = """
+[[bodies]]
+name = "S0"
+ground = true
+[[bodies]]
+name = "S1"
+[[joints]]
+name = "l1"
+type = "spherical"
+between = ["S0", "S1"]
+at = [0, 0, 0]
+clearance = 0.2
+[[joints]]
+name = "l2"
+type = "cylindrical"
+between = ["S0", "S1"]
+at = [200, 0, 0]
+axis = [1, 0, 0]
+length = 40
+clearance = 0.2
+[[loads]]
+body = "S1"
+at = [300, 0, 0]
+force = [1, 1, 1]
+[[loads]]
+body = "S1"
+torque = [0, 0, "1 N*m"]
+"""
+    as_toml = jointplay.load(write(tmp_path, toml, "model.toml"))
+    assert as_yaml == as_json == as_toml
+    bad_json = write(tmp_path, "{\"bodies\": [", "bad.json")
+    with pytest.raises(ModelError, match=r"bad.json: not valid JSON"):
+        jointplay.load(bad_json)
+    bad_toml = write(tmp_path, "bodies = [", "bad.toml")
+    with pytest.raises(ModelError, match=r"bad.toml: not valid TOML"):
+        jointplay.load(bad_toml)
+
+
+def test_models_are_immutable() -> None:
+    model = jointplay.model_from_dict(spherical_shaft())
+    with pytest.raises(Exception, match="frozen"):
+        model.joints[0].clearance = 1.0  # type: ignore[misc]

@@ -1,0 +1,93 @@
+"""The command line: report, JSON schema, exit codes."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import MM, PAPER, RAD
+
+import jointplay
+
+
+def run(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "jointplay.cli", *args], capture_output=True,
+                          text=True, timeout=120)
+
+
+def test_solve_prints_the_paper_like_report() -> None:
+    proc = run("solve", str(PAPER / "6.1.6.1.yaml"))
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    assert "status: optimal" in out
+    assert "certificate: holds" in out
+    assert "joint l2 (cylindrical) at (200, 0, 0) mm: S1 relative to S0" in out
+    assert "8.89297292e-02" in out  # u1, as the paper prints 8.892973e-2
+    assert "end+: TOUCHING" in out and "end-: free (73.50% of play)" in out
+    assert "body 'S1': rotation about the global X axis" in out
+
+
+def test_solve_json_has_exactly_the_documented_schema() -> None:
+    proc = run("solve", str(PAPER / "6.1.6.1.yaml"), "--json")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert set(doc) == {"status", "potential_energy", "bodies", "joints"}
+    assert doc["status"] == "optimal"
+    assert set(doc["bodies"]) == {"S0", "S1"}
+    for body in doc["bodies"].values():
+        assert set(body) == {"translation", "rotation"}
+    assert set(doc["joints"]) == {"l1", "l2"}
+    l2 = doc["joints"]["l2"]
+    assert set(l2) == {"axes", "translation", "rotation", "contacts"}
+    assert l2["axes"] == {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
+    assert [set(c) for c in l2["contacts"]] == [{"name", "gap_used", "in_contact"}] * 2
+    assert [c["in_contact"] for c in l2["contacts"]] == [False, True]
+    assert all(0.0 <= c["gap_used"] <= 1.0 for c in l2["contacts"])
+    assert l2["translation"][1] == pytest.approx(6.134259e-2, abs=MM)
+    assert l2["rotation"][2] == pytest.approx(4.684034e-4, abs=RAD)
+    # the JSON is Result.to_dict(), the Python API's answer
+    api = jointplay.solve(jointplay.load(PAPER / "6.1.6.1.yaml")).to_dict()
+    assert api == doc
+
+
+def test_unbounded_exits_3_naming_body_and_motion(tmp_path: Path) -> None:
+    path = tmp_path / "free.yaml"
+    path.write_text(
+        """
+bodies:
+  - {name: housing, ground: true}
+  - {name: shaft}
+joints:
+  - {name: l1, type: spherical, between: [housing, shaft], at: [0, 0, 0], clearance: 0.2}
+  - {name: l2, type: cylindrical, between: [housing, shaft], at: [200, 0, 0], length: 40, clearance: 0.2}
+loads:
+  - {body: shaft, torque: ["1 N*m", 0, 0]}
+"""
+    )
+    proc = run("solve", str(path))
+    assert proc.returncode == 3
+    assert proc.stdout == ""
+    assert ("body 'shaft': rotation about the global X axis is not held by any joint, and the "
+            "loads drive it") in proc.stderr
+    assert "Traceback" not in proc.stderr
+    proc = run("solve", str(path), "--json")
+    assert proc.returncode == 3
+    doc = json.loads(proc.stdout)
+    assert doc["status"] == "unbounded"
+    assert doc["body"] == "shaft"
+    assert doc["motion"] == "rotation about the global X axis"
+
+
+def test_version_and_help() -> None:
+    assert run("--version").stdout.strip() == f"jointplay {jointplay.__version__}"
+    assert "solve" in run("--help").stdout
+
+
+def test_every_bundled_example_solves() -> None:
+    for path in sorted((PAPER.parent).rglob("*.yaml")):
+        proc = run("solve", str(path), "--json")
+        assert proc.returncode == 0, (path, proc.stderr)
+        assert json.loads(proc.stdout)["status"] == "optimal"
