@@ -25,10 +25,22 @@ def spherical_shaft(**over: object) -> dict[str, object]:
     data: dict[str, object] = {
         "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
         "joints": [
-            {"name": "l1", "type": "spherical", "between": ["S0", "S1"], "at": [0, 0, 0],
-             "clearance": 0.2},
-            {"name": "l2", "type": "cylindrical", "between": ["S0", "S1"], "at": [200, 0, 0],
-             "axis": [1, 0, 0], "length": 40, "clearance": 0.2},
+            {
+                "name": "l1",
+                "type": "spherical",
+                "between": ["S0", "S1"],
+                "at": [0, 0, 0],
+                "clearance": 0.2,
+            },
+            {
+                "name": "l2",
+                "type": "cylindrical",
+                "between": ["S0", "S1"],
+                "at": [200, 0, 0],
+                "axis": [1, 0, 0],
+                "length": 40,
+                "clearance": 0.2,
+            },
         ],
         "loads": [{"body": "S1", "at": [300, 0, 0], "force": [1, 1, 1]}],
     }

@@ -11,9 +11,9 @@ from typing import Any
 
 import pytest
 import yaml
-from conftest import spherical_shaft
 
 import jointplay
+from conftest import spherical_shaft
 from jointplay import ModelError
 
 
@@ -30,84 +30,140 @@ def joint(index: int, **changes: Any) -> dict[str, Any]:
 
 
 CASES: list[tuple[str, Any, str]] = [
-    ("unknown body in a joint",
-     joint(1, between=["S0", "S2"]),
-     r"joints\[1\] 'l2': between: unknown body 'S2'; bodies are: S0, S1\. Did you mean 'S1'\?"),
-    ("unknown body in a load",
-     spherical_shaft(loads=[{"body": "shaft", "at": [0, 0, 0], "force": [1, 0, 0]}]),
-     r"loads\[0\]: body: unknown body 'shaft'"),
-    ("unknown joint type",
-     joint(0, type="sferical"),
-     r"joints\[0\] 'l1': unknown joint type 'sferical'\. Did you mean 'spherical'\? Known types:"),
-    ("duplicate body names",
-     spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1"}, {"name": "S1"}]),
-     r"bodies\[2\]: duplicate body name 'S1' \(also bodies\[1\]\)"),
-    ("duplicate joint names",
-     joint(1, name="l1"),
-     r"joints\[1\]: duplicate joint name 'l1' \(also joints\[0\]\)"),
-    ("joint from a body to itself",
-     joint(0, between=["S1", "S1"]),
-     r"joints\[0\] 'l1': between: the joint goes from body 'S1' to itself"),
-    ("negative clearance",
-     joint(0, clearance=-0.2),
-     r"joints\[0\] 'l1': clearance: expected a value >= 0, got -0\.2"),
-    ("zero length",
-     joint(1, length=0),
-     r"joints\[1\] 'l2': length: expected a value > 0, got 0"),
-    ("negative length",
-     joint(1, length="-4 cm"),
-     r"joints\[1\] 'l2': length: expected a value > 0, got -40"),
-    ("zero axis",
-     joint(1, axis=[0, 0, 0]),
-     r"joints\[1\] 'l2': axis: expected a nonzero direction"),
-    ("NaN",
-     joint(0, clearance=float("nan")),
-     r"joints\[0\] 'l1': clearance: expected a finite length"),
-    ("NaN in a vector",
-     spherical_shaft(loads=[{"body": "S1", "at": [300, 0, 0], "force": [1, ".nan", 1]}]),
-     r"loads\[0\]: force: component y: expected a finite force"),
-    ("no ground body",
-     spherical_shaft(bodies=[{"name": "S0"}, {"name": "S1"}]),
-     r"bodies: no ground body; mark the fixed body with 'ground: true'"),
-    ("a body no joint connects to ground",
-     spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1"}, {"name": "S2"}]),
-     r"bodies: no chain of joints connects 'S2' to a ground body"),
-    ("wrong units",
-     joint(0, clearance="3 kg"),
-     r"joints\[0\] 'l1': clearance: expected a length, got '3 kg', which is a \[mass\]; write a "
-     r"plain number in mm or a string with units"),
-    ("unknown unit",
-     joint(0, clearance="3 furlongs_per_fortnight"),
-     r"joints\[0\] 'l1': clearance: unknown unit in '3 furlongs_per_fortnight'"),
-    ("unknown key with a suggestion",
-     joint(1, lenght=40),
-     r"joints\[1\] 'l2': lenght: unknown key 'lenght'\. Did you mean 'length'\?"),
-    ("missing key",
-     {"bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
-      "joints": [{"name": "l1", "type": "cylindrical", "between": ["S0", "S1"], "at": [0, 0, 0],
-                  "clearance": 0.2}]},
-     r"joints\[0\] 'l1': length: the key 'length' is required here; add it"),
-    ("a force without a point",
-     spherical_shaft(loads=[{"body": "S1", "force": [1, 0, 0]}]),
-     r"loads\[0\]: a force needs its point of application"),
-    ("a load on the ground",
-     spherical_shaft(loads=[{"body": "S0", "at": [0, 0, 0], "force": [1, 0, 0]}]),
-     r"loads\[0\]: body: 'S0' is a ground body"),
-    ("a vector of two components",
-     joint(0, at=[0, 0]),
-     r"joints\[0\] 'l1': at: expected a list of 3 components"),
-    ("up along the axis",
-     joint(1, up=[2, 0, 0]),
-     r"joints\[1\] 'l2': up \[2\.0, 0\.0, 0\.0\] is parallel to axis"),
-    ("ground given as text",
-     spherical_shaft(bodies=[{"name": "S0", "ground": "yes"}, {"name": "S1"}]),
-     r"bodies\[0\] 'S0': ground: expected true or false, got 'yes'"),
-    ("a joint between two grounds",
-     spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1", "ground": True}]),
-     r"joints\[0\] 'l1': between: both 'S0' and 'S1' are ground bodies"),
-    ("unknown top-level key",
-     spherical_shaft(load=[]),
-     r"unknown key 'load'\. Did you mean 'loads'\?"),
+    (
+        "unknown body in a joint",
+        joint(1, between=["S0", "S2"]),
+        r"joints\[1\] 'l2': between: unknown body 'S2'; bodies are: S0, S1\. Did you mean 'S1'\?",
+    ),
+    (
+        "unknown body in a load",
+        spherical_shaft(loads=[{"body": "shaft", "at": [0, 0, 0], "force": [1, 0, 0]}]),
+        r"loads\[0\]: body: unknown body 'shaft'",
+    ),
+    (
+        "unknown joint type",
+        joint(0, type="sferical"),
+        r"joints\[0\] 'l1': unknown joint type 'sferical'\. Did you mean 'spherical'\? "
+        r"Known types:",
+    ),
+    (
+        "duplicate body names",
+        spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1"}, {"name": "S1"}]),
+        r"bodies\[2\]: duplicate body name 'S1' \(also bodies\[1\]\)",
+    ),
+    (
+        "duplicate joint names",
+        joint(1, name="l1"),
+        r"joints\[1\]: duplicate joint name 'l1' \(also joints\[0\]\)",
+    ),
+    (
+        "joint from a body to itself",
+        joint(0, between=["S1", "S1"]),
+        r"joints\[0\] 'l1': between: the joint goes from body 'S1' to itself",
+    ),
+    (
+        "negative clearance",
+        joint(0, clearance=-0.2),
+        r"joints\[0\] 'l1': clearance: expected a value >= 0, got -0\.2",
+    ),
+    ("zero length", joint(1, length=0), r"joints\[1\] 'l2': length: expected a value > 0, got 0"),
+    (
+        "negative length",
+        joint(1, length="-4 cm"),
+        r"joints\[1\] 'l2': length: expected a value > 0, got -40",
+    ),
+    (
+        "zero axis",
+        joint(1, axis=[0, 0, 0]),
+        r"joints\[1\] 'l2': axis: expected a nonzero direction",
+    ),
+    (
+        "NaN",
+        joint(0, clearance=float("nan")),
+        r"joints\[0\] 'l1': clearance: expected a finite length",
+    ),
+    (
+        "NaN in a vector",
+        spherical_shaft(loads=[{"body": "S1", "at": [300, 0, 0], "force": [1, ".nan", 1]}]),
+        r"loads\[0\]: force: component y: expected a finite force",
+    ),
+    (
+        "no ground body",
+        spherical_shaft(bodies=[{"name": "S0"}, {"name": "S1"}]),
+        r"bodies: no ground body; mark the fixed body with 'ground: true'",
+    ),
+    (
+        "a body no joint connects to ground",
+        spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1"}, {"name": "S2"}]),
+        r"bodies: no chain of joints connects 'S2' to a ground body",
+    ),
+    (
+        "wrong units",
+        joint(0, clearance="3 kg"),
+        r"joints\[0\] 'l1': clearance: expected a length, got '3 kg', which is a \[mass\]; write a "
+        r"plain number in mm or a string with units",
+    ),
+    (
+        "unknown unit",
+        joint(0, clearance="3 furlongs_per_fortnight"),
+        r"joints\[0\] 'l1': clearance: unknown unit in '3 furlongs_per_fortnight'",
+    ),
+    (
+        "unknown key with a suggestion",
+        joint(1, lenght=40),
+        r"joints\[1\] 'l2': lenght: unknown key 'lenght'\. Did you mean 'length'\?",
+    ),
+    (
+        "missing key",
+        {
+            "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
+            "joints": [
+                {
+                    "name": "l1",
+                    "type": "cylindrical",
+                    "between": ["S0", "S1"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.2,
+                }
+            ],
+        },
+        r"joints\[0\] 'l1': length: the key 'length' is required here; add it",
+    ),
+    (
+        "a force without a point",
+        spherical_shaft(loads=[{"body": "S1", "force": [1, 0, 0]}]),
+        r"loads\[0\]: a force needs its point of application",
+    ),
+    (
+        "a load on the ground",
+        spherical_shaft(loads=[{"body": "S0", "at": [0, 0, 0], "force": [1, 0, 0]}]),
+        r"loads\[0\]: body: 'S0' is a ground body",
+    ),
+    (
+        "a vector of two components",
+        joint(0, at=[0, 0]),
+        r"joints\[0\] 'l1': at: expected a list of 3 components",
+    ),
+    (
+        "up along the axis",
+        joint(1, up=[2, 0, 0]),
+        r"joints\[1\] 'l2': up \[2\.0, 0\.0, 0\.0\] is parallel to axis",
+    ),
+    (
+        "ground given as text",
+        spherical_shaft(bodies=[{"name": "S0", "ground": "yes"}, {"name": "S1"}]),
+        r"bodies\[0\] 'S0': ground: expected true or false, got 'yes'",
+    ),
+    (
+        "a joint between two grounds",
+        spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1", "ground": True}]),
+        r"joints\[0\] 'l1': between: both 'S0' and 'S1' are ground bodies",
+    ),
+    (
+        "unknown top-level key",
+        spherical_shaft(load=[]),
+        r"unknown key 'load'\. Did you mean 'loads'\?",
+    ),
     ("not a mapping", [1, 2, 3], r"expected a mapping with 'bodies', 'joints' and 'loads'"),
     ("empty file", "", r"the file is empty"),
     ("not YAML at all", "bodies: [\n  - {name: S0", r"not valid YAML at line"),
@@ -136,7 +192,9 @@ def test_cli_exits_2_with_the_message_and_no_traceback(
     path = write(tmp_path, data)
     proc = subprocess.run(
         [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert proc.returncode == 2
     assert proc.stdout == ""
@@ -185,7 +243,7 @@ torque = [0, 0, "1 N*m"]
 """
     as_toml = jointplay.load(write(tmp_path, toml, "model.toml"))
     assert as_yaml == as_json == as_toml
-    bad_json = write(tmp_path, "{\"bodies\": [", "bad.json")
+    bad_json = write(tmp_path, '{"bodies": [', "bad.json")
     with pytest.raises(ModelError, match=r"bad.json: not valid JSON"):
         jointplay.load(bad_json)
     bad_toml = write(tmp_path, "bodies = [", "bad.toml")

@@ -8,14 +8,15 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import MM, PAPER, RAD
 
 import jointplay
+from conftest import MM, PAPER, RAD
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "jointplay.cli", *args], capture_output=True,
-                          text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", *args], capture_output=True, text=True, timeout=120
+    )
 
 
 def test_solve_prints_the_paper_like_report() -> None:
@@ -62,7 +63,8 @@ bodies:
   - {name: shaft}
 joints:
   - {name: l1, type: spherical, between: [housing, shaft], at: [0, 0, 0], clearance: 0.2}
-  - {name: l2, type: cylindrical, between: [housing, shaft], at: [200, 0, 0], length: 40, clearance: 0.2}
+  - {name: l2, type: cylindrical, between: [housing, shaft], at: [200, 0, 0],
+     length: 40, clearance: 0.2}
 loads:
   - {body: shaft, torque: ["1 N*m", 0, 0]}
 """
@@ -70,8 +72,10 @@ loads:
     proc = run("solve", str(path))
     assert proc.returncode == 3
     assert proc.stdout == ""
-    assert ("body 'shaft': rotation about the global X axis is not held by any joint, and the "
-            "loads drive it") in proc.stderr
+    assert (
+        "body 'shaft': rotation about the global X axis is not held by any joint, and the "
+        "loads drive it"
+    ) in proc.stderr
     assert "Traceback" not in proc.stderr
     proc = run("solve", str(path), "--json")
     assert proc.returncode == 3

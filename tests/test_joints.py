@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import MM, RAD
 
 import jointplay
+from conftest import MM, RAD
 from jointplay import UnboundedMechanismError
 
 
@@ -33,8 +33,11 @@ AT = [10.0, 20.0, 30.0]
 
 def test_spherical_moves_its_centre_by_half_the_clearance_along_the_force() -> None:
     force = np.array([3.0, -4.0, 12.0])
-    r = solved(one_joint({"type": "spherical", "clearance": 0.5}, {"body": "B", "at": AT,
-                                                                    "force": list(force)}))
+    r = solved(
+        one_joint(
+            {"type": "spherical", "clearance": 0.5}, {"body": "B", "at": AT, "force": list(force)}
+        )
+    )
     jr = r.joints["j"]
     np.testing.assert_allclose(jr.translation, 0.25 * force / np.linalg.norm(force), atol=MM)
     np.testing.assert_allclose(jr.rotation, 0, atol=RAD)  # free, unloaded
@@ -44,14 +47,21 @@ def test_spherical_moves_its_centre_by_half_the_clearance_along_the_force() -> N
 
 def test_spherical_does_not_hold_a_torque() -> None:
     model = one_joint({"type": "spherical", "clearance": 0.5}, {"body": "B", "torque": [0, 1, 0]})
-    with pytest.raises(UnboundedMechanismError, match=r"body 'B': rotation about an axis parallel to "
-                       r"global Y through \(10, 0, 30\) mm is not held by any joint"):
+    with pytest.raises(
+        UnboundedMechanismError,
+        match=r"body 'B': rotation about an axis parallel to "
+        r"global Y through \(10, 0, 30\) mm is not held by any joint",
+    ):
         jointplay.solve(model)
 
 
 def test_cylindrical_radial_force_at_centre() -> None:
-    r = solved(one_joint({"type": "cylindrical", "clearance": 0.2, "length": 40},
-                         {"body": "B", "at": AT, "force": [0, 0, -5]}))
+    r = solved(
+        one_joint(
+            {"type": "cylindrical", "clearance": 0.2, "length": 40},
+            {"body": "B", "at": AT, "force": [0, 0, -5]},
+        )
+    )
     jr = r.joints["j"]
     np.testing.assert_allclose(jr.translation, [0, 0, -0.1], atol=MM)
     np.testing.assert_allclose(jr.rotation, 0, atol=RAD)
@@ -59,8 +69,12 @@ def test_cylindrical_radial_force_at_centre() -> None:
 
 
 def test_cylindrical_tilts_by_clearance_over_length_under_a_moment() -> None:
-    r = solved(one_joint({"type": "cylindrical", "clearance": 0.2, "length": 40},
-                         {"body": "B", "torque": [0, 0, 7]}))
+    r = solved(
+        one_joint(
+            {"type": "cylindrical", "clearance": 0.2, "length": 40},
+            {"body": "B", "torque": [0, 0, 7]},
+        )
+    )
     jr = r.joints["j"]
     np.testing.assert_allclose(jr.translation, 0, atol=MM)
     np.testing.assert_allclose(jr.rotation, [0, 0, 0.2 / 40], atol=RAD)
@@ -69,8 +83,12 @@ def test_cylindrical_tilts_by_clearance_over_length_under_a_moment() -> None:
 def test_cylindrical_force_beyond_the_bore_tilts_the_shaft() -> None:
     """F across the axis at x = a > L/2: both ends touch, gamma = J/L, v = 0."""
     at = [10.0 + 100.0, 20.0, 30.0]
-    r = solved(one_joint({"type": "cylindrical", "clearance": 0.2, "length": 40},
-                         {"body": "B", "at": at, "force": [0, 2, 0]}))
+    r = solved(
+        one_joint(
+            {"type": "cylindrical", "clearance": 0.2, "length": 40},
+            {"body": "B", "at": at, "force": [0, 2, 0]},
+        )
+    )
     jr = r.joints["j"]
     np.testing.assert_allclose(jr.translation, 0, atol=MM)
     np.testing.assert_allclose(jr.rotation, [0, 0, 0.2 / 40], atol=RAD)
@@ -79,16 +97,22 @@ def test_cylindrical_force_beyond_the_bore_tilts_the_shaft() -> None:
 
 
 def test_cylindrical_does_not_hold_axial_force() -> None:
-    model = one_joint({"type": "cylindrical", "clearance": 0.2, "length": 40, "axis": [0, 1, 0]},
-                      {"body": "B", "at": AT, "force": [0, 1, 0]})
+    model = one_joint(
+        {"type": "cylindrical", "clearance": 0.2, "length": 40, "axis": [0, 1, 0]},
+        {"body": "B", "at": AT, "force": [0, 1, 0]},
+    )
     with pytest.raises(UnboundedMechanismError, match="translation along the global Y axis"):
         jointplay.solve(model)
 
 
 def test_cylindrical_on_a_skew_axis_follows_its_frame() -> None:
     axis = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
-    r = solved(one_joint({"type": "cylindrical", "clearance": 0.2, "length": 40,
-                          "axis": list(axis)}, {"body": "B", "at": AT, "force": [0, 0, 1]}))
+    r = solved(
+        one_joint(
+            {"type": "cylindrical", "clearance": 0.2, "length": 40, "axis": list(axis)},
+            {"body": "B", "at": AT, "force": [0, 0, 1]},
+        )
+    )
     jr = r.joints["j"]
     np.testing.assert_allclose(jr.R_world_joint[:, 0], axis, atol=1e-15)
     np.testing.assert_allclose(jr.R_world_joint[:, 2], [0, 0, 1], atol=1e-15)
@@ -98,8 +122,12 @@ def test_cylindrical_on_a_skew_axis_follows_its_frame() -> None:
 def test_revolute_axial_force_takes_the_axial_play_and_stays_centred() -> None:
     """A pure axial load leaves the radial position open (a tie); the least-norm
     equilibrium is the centred one."""
-    r = solved(one_joint({"type": "revolute", "clearance": 0.2, "length": 40,
-                          "axial_clearance": 0.06}, {"body": "B", "at": AT, "force": [-3, 0, 0]}))
+    r = solved(
+        one_joint(
+            {"type": "revolute", "clearance": 0.2, "length": 40, "axial_clearance": 0.06},
+            {"body": "B", "at": AT, "force": [-3, 0, 0]},
+        )
+    )
     jr = r.joints["j"]
     np.testing.assert_allclose(jr.translation, [-0.03, 0, 0], atol=MM)
     np.testing.assert_allclose(jr.rotation, 0, atol=RAD)
@@ -109,24 +137,35 @@ def test_revolute_axial_force_takes_the_axial_play_and_stays_centred() -> None:
 
 
 def test_revolute_does_not_hold_a_torque_about_its_axis() -> None:
-    model = one_joint({"type": "revolute", "clearance": 0.2, "length": 40, "axial_clearance": 0.1},
-                      {"body": "B", "torque": [1, 0, 0]})
-    with pytest.raises(UnboundedMechanismError, match="rotation about an axis parallel to global X"):
+    model = one_joint(
+        {"type": "revolute", "clearance": 0.2, "length": 40, "axial_clearance": 0.1},
+        {"body": "B", "torque": [1, 0, 0]},
+    )
+    with pytest.raises(
+        UnboundedMechanismError, match="rotation about an axis parallel to global X"
+    ):
         jointplay.solve(model)
 
 
 def test_revolute_combined_load() -> None:
-    r = solved(one_joint({"type": "revolute", "clearance": 0.2, "length": 40,
-                          "axial_clearance": 0.06},
-                         {"body": "B", "at": AT, "force": [1, 0, 1]}))
+    r = solved(
+        one_joint(
+            {"type": "revolute", "clearance": 0.2, "length": 40, "axial_clearance": 0.06},
+            {"body": "B", "at": AT, "force": [1, 0, 1]},
+        )
+    )
     jr = r.joints["j"]
     np.testing.assert_allclose(jr.translation, [0.03, 0, 0.1], atol=MM)
     np.testing.assert_allclose(jr.rotation, 0, atol=RAD)
 
 
 def test_sphere_in_cylinder_radial_force() -> None:
-    r = solved(one_joint({"type": "sphere_in_cylinder", "clearance": 0.3, "axis": [0, 0, 1]},
-                         {"body": "B", "at": AT, "force": [3, 4, 0]}))
+    r = solved(
+        one_joint(
+            {"type": "sphere_in_cylinder", "clearance": 0.3, "axis": [0, 0, 1]},
+            {"body": "B", "at": AT, "force": [3, 4, 0]},
+        )
+    )
     jr = r.joints["j"]
     # joint frame for axis +Z: x = Z, y = Y, z = -X
     np.testing.assert_allclose(jr.R_world_joint, [[0, 0, -1], [0, 1, 0], [1, 0, 0]], atol=1e-15)
@@ -135,23 +174,33 @@ def test_sphere_in_cylinder_radial_force() -> None:
 
 
 def test_sphere_in_cylinder_slides_freely() -> None:
-    model = one_joint({"type": "sphere_in_cylinder", "clearance": 0.3},
-                      {"body": "B", "at": AT, "force": [1, 0, 0]})
+    model = one_joint(
+        {"type": "sphere_in_cylinder", "clearance": 0.3},
+        {"body": "B", "at": AT, "force": [1, 0, 0]},
+    )
     with pytest.raises(UnboundedMechanismError, match="translation along the global X axis"):
         jointplay.solve(model)
 
 
 def test_rigid_joint_holds_everything() -> None:
-    r = solved(one_joint({"type": "rigid"}, {"body": "B", "at": AT, "force": [1, 2, 3]},
-                         {"body": "B", "torque": [4, 5, 6]}))
+    r = solved(
+        one_joint(
+            {"type": "rigid"},
+            {"body": "B", "at": AT, "force": [1, 2, 3]},
+            {"body": "B", "torque": [4, 5, 6]},
+        )
+    )
     np.testing.assert_allclose(r.bodies["B"].translation, 0, atol=MM)
     np.testing.assert_allclose(r.bodies["B"].rotation, 0, atol=RAD)
     assert [c.in_contact for c in r.joints["j"].contacts] == [True]
 
 
 def test_zero_clearance_spherical_is_a_fixed_point() -> None:
-    r = solved(one_joint({"type": "spherical", "clearance": 0}, {"body": "B", "at": AT,
-                                                                  "force": [1, 0, 0]}))
+    r = solved(
+        one_joint(
+            {"type": "spherical", "clearance": 0}, {"body": "B", "at": AT, "force": [1, 0, 0]}
+        )
+    )
     np.testing.assert_allclose(r.joints["j"].translation, 0, atol=MM)
     assert r.joints["j"].contacts[0].in_contact
 
@@ -161,8 +210,12 @@ def test_cylindrical_tie_on_the_end_face_picks_the_least_norm_point() -> None:
     positions (v + gamma L/2 = J/2); the least-norm one in the metric
     |t|^2 + l^2 |w|^2 (here l = L) is v = (J/2) / (1 + L^2 / (4 l^2))."""
     L, J = 40.0, 0.2
-    r = solved(one_joint({"type": "cylindrical", "clearance": J, "length": L, "at": [0, 0, 0]},
-                         {"body": "B", "at": [L / 2, 0, 0], "force": [0, 1, 0]}))
+    r = solved(
+        one_joint(
+            {"type": "cylindrical", "clearance": J, "length": L, "at": [0, 0, 0]},
+            {"body": "B", "at": [L / 2, 0, 0], "force": [0, 1, 0]},
+        )
+    )
     jr = r.joints["j"]
     v = (J / 2) / (1 + L**2 / (4 * L**2))
     gamma = v * L / (2 * L**2)

@@ -7,11 +7,11 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import MM, RAD, spherical_shaft
 from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
 import jointplay
+from conftest import MM, RAD, spherical_shaft
 from jointplay import UnboundedMechanismError
 
 
@@ -25,16 +25,32 @@ def test_three_spheres_in_a_closed_loop_closed_form() -> None:
     """G-A (J1), A-B (J2), B-G (J3) all centred at one point, F on B: B goes
     min(J1/2 + J2/2, J3/2) along F."""
     force = np.array([1.0, 2.0, 2.0])
+
     def loop(j3: float) -> dict[str, Any]:
         return {
             "bodies": [{"name": "G", "ground": True}, {"name": "A"}, {"name": "B"}],
             "joints": [
-                {"name": "ga", "type": "spherical", "between": ["G", "A"], "at": [0, 0, 0],
-                 "clearance": 0.2},
-                {"name": "ab", "type": "spherical", "between": ["A", "B"], "at": [0, 0, 0],
-                 "clearance": 0.1},
-                {"name": "bg", "type": "spherical", "between": ["B", "G"], "at": [0, 0, 0],
-                 "clearance": j3},
+                {
+                    "name": "ga",
+                    "type": "spherical",
+                    "between": ["G", "A"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.2,
+                },
+                {
+                    "name": "ab",
+                    "type": "spherical",
+                    "between": ["A", "B"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.1,
+                },
+                {
+                    "name": "bg",
+                    "type": "spherical",
+                    "between": ["B", "G"],
+                    "at": [0, 0, 0],
+                    "clearance": j3,
+                },
             ],
             "loads": [{"body": "B", "at": [0, 0, 0], "force": list(force)}],
         }
@@ -52,7 +68,8 @@ def test_three_spheres_in_a_closed_loop_closed_form() -> None:
         np.testing.assert_allclose(r.bodies[body].rotation, 0, atol=RAD)
     # the loop closes: B relative to G equals (B rel A) + (A rel G)
     np.testing.assert_allclose(
-        r.joints["bg"].translation, -(r.joints["ga"].translation + r.joints["ab"].translation),
+        r.joints["bg"].translation,
+        -(r.joints["ga"].translation + r.joints["ab"].translation),
         atol=1e-12,
     )
 
@@ -60,12 +77,28 @@ def test_three_spheres_in_a_closed_loop_closed_form() -> None:
 LOOP = {
     "bodies": [{"name": "G", "ground": True}, {"name": "A"}, {"name": "B"}],
     "joints": [
-        {"name": "s", "type": "spherical", "between": ["G", "A"], "at": [0, 0, 0],
-         "clearance": 0.2},
-        {"name": "c", "type": "cylindrical", "between": ["A", "B"], "at": [100, 0, 0],
-         "length": 30, "clearance": 0.1},
-        {"name": "r", "type": "sphere_in_cylinder", "between": ["B", "G"], "at": [200, 0, 0],
-         "clearance": 0.3},
+        {
+            "name": "s",
+            "type": "spherical",
+            "between": ["G", "A"],
+            "at": [0, 0, 0],
+            "clearance": 0.2,
+        },
+        {
+            "name": "c",
+            "type": "cylindrical",
+            "between": ["A", "B"],
+            "at": [100, 0, 0],
+            "length": 30,
+            "clearance": 0.1,
+        },
+        {
+            "name": "r",
+            "type": "sphere_in_cylinder",
+            "between": ["B", "G"],
+            "at": [200, 0, 0],
+            "clearance": 0.3,
+        },
     ],
     "loads": [
         {"body": "B", "at": [150, 0, 0], "force": [0, 1, 1]},
@@ -78,6 +111,7 @@ LOOP = {
 def _independent_slsqp(data: dict[str, Any]) -> tuple[float, Any]:
     """The LOOP problem written from scratch (global-origin torsors, squared-norm
     constraints) and solved by SciPy's SLSQP from several starts."""
+
     def disp(x: np.ndarray, body: int, p: np.ndarray) -> np.ndarray:
         v, w = x[6 * body : 6 * body + 3], x[6 * body + 3 : 6 * body + 6]
         return v + np.cross(w, p)
@@ -107,9 +141,13 @@ def _independent_slsqp(data: dict[str, Any]) -> tuple[float, Any]:
     best = (np.inf, None)
     for _ in range(6):
         y0 = rng.normal(scale=1e-2, size=12)
-        res = minimize(lambda y: 100 * energy(D * y), y0, method="SLSQP",
-                       constraints=[{"type": "ineq", "fun": lambda y: 100 * constraints(D * y)}],
-                       options={"ftol": 1e-15, "maxiter": 2000})
+        res = minimize(
+            lambda y: 100 * energy(D * y),
+            y0,
+            method="SLSQP",
+            constraints=[{"type": "ineq", "fun": lambda y: 100 * constraints(D * y)}],
+            options={"ftol": 1e-15, "maxiter": 2000},
+        )
         x = D * res.x
         # Every contact is centred at x = 0, so shrinking x makes it exactly feasible.
         radii = np.array([0.1, 0.05, 0.05, 0.15])
@@ -124,8 +162,12 @@ def _independent_slsqp(data: dict[str, Any]) -> tuple[float, Any]:
 def test_closed_loop_matches_an_independent_solver() -> None:
     r = solved(LOOP)
     slsqp_energy, constraints = _independent_slsqp(LOOP)
-    x = np.r_[r.bodies["A"].translation, r.bodies["A"].rotation,
-              r.bodies["B"].translation, r.bodies["B"].rotation]
+    x = np.r_[
+        r.bodies["A"].translation,
+        r.bodies["A"].rotation,
+        r.bodies["B"].translation,
+        r.bodies["B"].rotation,
+    ]
     # our point is feasible for the independently written constraints ...
     assert np.min(constraints(x)) > -1e-14
     # ... and no (feasible) SLSQP point has a lower energy: ours is the global optimum.
@@ -138,25 +180,40 @@ def test_rigid_joint_splitting_a_body_gives_the_same_answer() -> None:
     split = spherical_shaft(
         bodies=[{"name": "S0", "ground": True}, {"name": "S1a"}, {"name": "S1b"}],
         joints=[
-            {"name": "l1", "type": "spherical", "between": ["S0", "S1a"], "at": [0, 0, 0],
-             "clearance": 0.2},
+            {
+                "name": "l1",
+                "type": "spherical",
+                "between": ["S0", "S1a"],
+                "at": [0, 0, 0],
+                "clearance": 0.2,
+            },
             {"name": "weld", "type": "rigid", "between": ["S1a", "S1b"], "at": [100, 0, 0]},
-            {"name": "l2", "type": "cylindrical", "between": ["S0", "S1b"], "at": [200, 0, 0],
-             "length": 40, "clearance": 0.2},
+            {
+                "name": "l2",
+                "type": "cylindrical",
+                "between": ["S0", "S1b"],
+                "at": [200, 0, 0],
+                "length": 40,
+                "clearance": 0.2,
+            },
         ],
         loads=[{"body": "S1b", "at": [300, 0, 0], "force": [1, 1, 1]}],
     )
     parts = solved(split)
     for name in ("l1", "l2"):
-        np.testing.assert_allclose(parts.joints[name].translation, whole.joints[name].translation,
-                                   atol=1e-12)
-        np.testing.assert_allclose(parts.joints[name].rotation, whole.joints[name].rotation,
-                                   atol=1e-14)
+        np.testing.assert_allclose(
+            parts.joints[name].translation, whole.joints[name].translation, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            parts.joints[name].rotation, whole.joints[name].rotation, atol=1e-14
+        )
     for part in ("S1a", "S1b"):
-        np.testing.assert_allclose(parts.bodies[part].translation, whole.bodies["S1"].translation,
-                                   atol=1e-12)
-        np.testing.assert_allclose(parts.bodies[part].rotation, whole.bodies["S1"].rotation,
-                                   atol=1e-14)
+        np.testing.assert_allclose(
+            parts.bodies[part].translation, whole.bodies["S1"].translation, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            parts.bodies[part].rotation, whole.bodies["S1"].rotation, atol=1e-14
+        )
     assert parts.potential_energy == pytest.approx(whole.potential_energy, rel=1e-12)
 
 
@@ -184,14 +241,16 @@ def test_invariance_under_a_rigid_motion_of_the_whole_model(data: dict[str, Any]
     for name, jr in base.joints.items():
         np.testing.assert_allclose(moved.joints[name].translation, jr.translation, atol=1e-9 * MM)
         np.testing.assert_allclose(moved.joints[name].rotation, jr.rotation, atol=1e-9 * RAD)
-        np.testing.assert_allclose(moved.joints[name].R_world_joint, R @ jr.R_world_joint,
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            moved.joints[name].R_world_joint, R @ jr.R_world_joint, atol=1e-12
+        )
     probe = np.array([37.0, 11.0, -5.0])
     for name, br in base.bodies.items():
         mb = moved.bodies[name]
         np.testing.assert_allclose(mb.rotation, R @ br.rotation, atol=1e-9 * RAD)
-        np.testing.assert_allclose(mb.displacement_of(R @ probe + t),
-                                   R @ br.displacement_of(probe), atol=1e-9 * MM)
+        np.testing.assert_allclose(
+            mb.displacement_of(R @ probe + t), R @ br.displacement_of(probe), atol=1e-9 * MM
+        )
     assert moved.potential_energy == pytest.approx(base.potential_energy, rel=1e-10)
 
 
@@ -213,19 +272,32 @@ def test_units_in_strings_give_the_same_answer() -> None:
     mm = solved(spherical_shaft())
     metric = spherical_shaft(
         joints=[
-            {"name": "l1", "type": "spherical", "between": ["S0", "S1"], "at": [0, 0, 0],
-             "clearance": "200 um"},
-            {"name": "l2", "type": "cylindrical", "between": ["S0", "S1"],
-             "at": ["0.2 m", 0, 0], "length": "4 cm", "clearance": "0.02 cm"},
+            {
+                "name": "l1",
+                "type": "spherical",
+                "between": ["S0", "S1"],
+                "at": [0, 0, 0],
+                "clearance": "200 um",
+            },
+            {
+                "name": "l2",
+                "type": "cylindrical",
+                "between": ["S0", "S1"],
+                "at": ["0.2 m", 0, 0],
+                "length": "4 cm",
+                "clearance": "0.02 cm",
+            },
         ],
         loads=[{"body": "S1", "at": ["30 cm", 0, 0], "force": ["1 N", "0.001 kN", "1000 mN"]}],
     )
     other = solved(metric)
     for name in ("l1", "l2"):
-        np.testing.assert_allclose(other.joints[name].translation, mm.joints[name].translation,
-                                   atol=1e-12)
-        np.testing.assert_allclose(other.joints[name].rotation, mm.joints[name].rotation,
-                                   atol=1e-14)
+        np.testing.assert_allclose(
+            other.joints[name].translation, mm.joints[name].translation, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            other.joints[name].rotation, mm.joints[name].rotation, atol=1e-14
+        )
 
 
 def test_potential_energy_is_minus_the_work_of_the_loads() -> None:
@@ -236,15 +308,22 @@ def test_potential_energy_is_minus_the_work_of_the_loads() -> None:
 
 def test_unbounded_internal_mobility_names_body_and_motion() -> None:
     data = copy.deepcopy(LOOP)
-    data["joints"][2] = {"name": "r", "type": "sphere_in_cylinder", "between": ["B", "G"],
-                         "at": [200, 0, 0], "clearance": 0.3}
+    data["joints"][2] = {
+        "name": "r",
+        "type": "sphere_in_cylinder",
+        "between": ["B", "G"],
+        "at": [200, 0, 0],
+        "clearance": 0.3,
+    }
     data["loads"].append({"body": "B", "at": [150, 0, 0], "force": [5, 0, 0]})
     with pytest.raises(UnboundedMechanismError) as info:
         jointplay.solve(jointplay.model_from_dict(data))
     assert info.value.body == "B"
     assert info.value.motion == "translation along the global X axis"
-    assert "body 'B': translation along the global X axis is not held by any joint, and the " \
-           "loads drive it" in str(info.value)
+    assert (
+        "body 'B': translation along the global X axis is not held by any joint, and the "
+        "loads drive it" in str(info.value)
+    )
 
 
 def test_free_unloaded_motions_are_listed_and_zero() -> None:

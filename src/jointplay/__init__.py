@@ -1,9 +1,9 @@
 """jointplay: where the parts of a mechanism really sit when its joints have play.
 
-    >>> import jointplay
-    >>> model = jointplay.load("examples/paper/6.1.6.1.yaml")
-    >>> result = jointplay.solve(model)
-    >>> result.joints["l1"].translation  # mm, in the joint frame
+>>> import jointplay
+>>> model = jointplay.load("examples/paper/6.1.6.1.yaml")
+>>> result = jointplay.solve(model)
+>>> result.joints["l1"].translation  # mm, in the joint frame
 """
 
 from .errors import JointplayError, ModelError, SolverError, UnboundedMechanismError

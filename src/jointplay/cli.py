@@ -41,7 +41,9 @@ def _main(
 
 @app.command()
 def solve(
-    model_path: Annotated[Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")],
+    model_path: Annotated[
+        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
+    ],
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
 ) -> None:
     """Solve the equilibrium of MODEL and report joints, contacts and bodies."""

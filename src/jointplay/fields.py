@@ -61,7 +61,9 @@ def _nonzero_vector(value: Vec3) -> Vec3:
 
 Name = Annotated[str, StringConstraints(strict=True, min_length=1, strip_whitespace=True)]
 Length = Annotated[float, BeforeValidator(_scalar("length"))]
-NonNegativeLength = Annotated[float, BeforeValidator(_scalar("length")), AfterValidator(_non_negative)]
+NonNegativeLength = Annotated[
+    float, BeforeValidator(_scalar("length")), AfterValidator(_non_negative)
+]
 PositiveLength = Annotated[float, BeforeValidator(_scalar("length")), AfterValidator(_positive)]
 Point = Annotated[Vec3, BeforeValidator(_vector("length"))]
 Direction = Annotated[Vec3, BeforeValidator(_vector("length")), AfterValidator(_nonzero_vector)]

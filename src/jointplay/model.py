@@ -67,9 +67,7 @@ class Load(BaseModel):
         if self.force is None and self.torque is None:
             raise ValueError("a load needs a 'force' (with 'at') or a 'torque', or both")
         if self.force is not None and self.at is None:
-            raise ValueError(
-                "a force needs its point of application: add 'at: [x, y, z]' (mm)"
-            )
+            raise ValueError("a force needs its point of application: add 'at: [x, y, z]' (mm)")
         return self
 
 

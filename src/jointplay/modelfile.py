@@ -70,7 +70,7 @@ def parse_text(text: str, suffix: str, source: str) -> Any:
             return json.loads(text)
         if suffix == ".toml":
             return tomllib.loads(text)
-        return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 - a SafeLoader subclass
+        return yaml.load(text, Loader=_StrictLoader)
     except json.JSONDecodeError as exc:
         raise ModelError(
             f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}", source=source
@@ -163,7 +163,9 @@ def _problem(err: Any, loc: list[Any], data: dict[str, Any]) -> str:
     if kind == "union_tag_not_found":
         return f"the joint needs a 'type'; one of: {', '.join(sorted(JOINT_TYPES))}"
     if kind == "literal_error" and loc == ["schema"]:
-        return f"this is schema version 1; got {err.get('input')!r}. Write 'schema: 1' or leave it out"
+        return (
+            f"this is schema version 1; got {err.get('input')!r}. Write 'schema: 1' or leave it out"
+        )
     if kind in ("too_short",) and loc and loc[0] in ("bodies", "joints"):
         return f"expected at least one entry in '{loc[0]}'"
     if kind in ("tuple_type", "list_type") and loc and loc[0] in ("bodies", "joints", "loads"):

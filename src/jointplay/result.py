@@ -135,7 +135,6 @@ def build_result(
     free_basis: FloatArray,
 ) -> Result:
     """Turn scaled unknowns and ball-contact forces (N) into a ``Result``."""
-    from .solver import describe_motion
 
     model = asm.model
     bodies: dict[str, BodyResult] = {}

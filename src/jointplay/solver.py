@@ -203,8 +203,13 @@ class Workspace:
         face = sp.vstack([eq, *face_rows], format="csr").toarray()
         if face.shape[0] and _rank(face) == self.m:
             polished = _newton(
-                None, -g_hat, eq.toarray(), np.zeros(eq.shape[0]),
-                [self.balls[i] for i in active], point.x, point.lam[active],
+                None,
+                -g_hat,
+                eq.toarray(),
+                np.zeros(eq.shape[0]),
+                [self.balls[i] for i in active],
+                point.x,
+                point.lam[active],
             )
             if polished is not None:
                 x, lam_active, _nu, its = polished
@@ -224,8 +229,10 @@ class Workspace:
             v = self.balls[i].A @ point.x
             directions.append(self.balls[i].radius * v / np.linalg.norm(v))
         face = sp.vstack([eq, *[self.balls[i].A for i in active]], format="csr")
-        face_rhs = np.concatenate([np.zeros(eq.shape[0]), *directions]) if active else np.zeros(
-            eq.shape[0]
+        face_rhs = (
+            np.concatenate([np.zeros(eq.shape[0]), *directions])
+            if active
+            else np.zeros(eq.shape[0])
         )
         rest = tuple(c for i, c in enumerate(self.balls) if i not in active)
         rest_index = [i for i in range(len(self.balls)) if i not in active]
@@ -235,8 +242,13 @@ class Workspace:
         p2 = _Point(x, lam_rest)
         active2 = self._active(p2, rest, float(np.max(np.abs(self.M @ x))))
         polished = _newton(
-            self.M.toarray(), np.zeros(self.m), face.toarray(), face_rhs,
-            [rest[i] for i in active2], x, lam_rest[active2],
+            self.M.toarray(),
+            np.zeros(self.m),
+            face.toarray(),
+            face_rhs,
+            [rest[i] for i in active2],
+            x,
+            lam_rest[active2],
         )
         if polished is not None:
             x = polished[0]
@@ -326,8 +338,7 @@ def _newton(
     A = [c.A.toarray() for c in balls]
     r = np.array([c.radius for c in balls])
     x, lam = x0.copy(), lam0.astype(float).copy()
-    Eq_pinv_rhs = np.linalg.lstsq(Eq.T, -(q if P is None else P @ x + q), rcond=None)[0] if ne else []
-    nu = np.asarray(Eq_pinv_rhs, dtype=float) * 0.0
+    nu = np.zeros(ne)
     scale = max(1.0, float(np.linalg.norm(q)))
     best = None
     for it in range(max_iter + 1):
@@ -388,9 +399,7 @@ def _unbounded(asm: Assembly, direction: FloatArray) -> UnboundedMechanismError:
     _, body, omega, v_origin = moving[0]
     motion = describe_motion(omega, v_origin, asm.ell)
     others = [mv[1] for mv in moving[1:]]
-    with_others = (
-        f" (together with {', '.join(repr(o) for o in others)})" if others else ""
-    )
+    with_others = f" (together with {', '.join(repr(o) for o in others)})" if others else ""
     message = (
         f"body '{body}': {motion} is not held by any joint, and the loads drive it{with_others}. "
         "There is no equilibrium: add a joint or a clearance limit that holds this motion, "
@@ -405,7 +414,10 @@ def _unbounded(asm: Assembly, direction: FloatArray) -> UnboundedMechanismError:
         for mv in moving
     }
     return UnboundedMechanismError(
-        message, body=body, motion=motion, direction=direction_map  # type: ignore[arg-type]
+        message,
+        body=body,
+        motion=motion,
+        direction=direction_map,  # type: ignore[arg-type]
     )
 
 

@@ -34,10 +34,7 @@ def render(model: Model, result: Result, source: str, console: Console) -> None:
         jr = result.joints[joint.name]
         a, b = jr.between
         table = Table(
-            title=(
-                f"joint {jr.name} ({jr.type}) at {fmt_point(jr.centre)}: "
-                f"{b} relative to {a}"
-            ),
+            title=(f"joint {jr.name} ({jr.type}) at {fmt_point(jr.centre)}: {b} relative to {a}"),
             title_justify="left",
             show_edge=False,
         )
