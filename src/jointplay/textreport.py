@@ -21,11 +21,11 @@ def render(model: Model, result: Result, source: str, console: Console) -> None:
     title = model.name or source
     header = Text()
     header.append(f"{title}\n", style="bold")
-    header.append(f"status: {result.status}")
+    header.append(f"status: {result.status}\n")
     header.append(
-        f"   certificate: {'holds' if cert.certified else 'FAILED'} ({cert.method}; "
-        f"clearance exceeded by {cert.feasibility_mm:.1e} mm, "
-        f"equilibrium residual {cert.equilibrium_residual:.1e})\n"
+        f"certificate: {'holds' if cert.certified else 'FAILED'} ({cert.method}): "
+        f"past clearance {cert.feasibility_mm:.1e} mm, "
+        f"imbalance {cert.equilibrium_residual:.1e}\n"
     )
     header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm")
     parts: list[Table | Text] = [header]
