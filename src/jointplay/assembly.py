@@ -23,25 +23,79 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import NDArray
 
 from .geometry import FloatArray, skew
 from .joints import Contact, Joint
 from .model import Model
 
+IntArray = NDArray[np.intp]
+
+
+@dataclass(frozen=True)
+class JointMap:
+    """A joint's (6, m) map from scaled unknowns to its relative torsor
+    ``(t mm, w rad)``, stored compactly: only the columns of its two bodies."""
+
+    cols: IntArray
+    block: FloatArray  # (6, len(cols))
+    m: int
+
+    def apply(self, x: FloatArray) -> FloatArray:
+        return self.block @ x[self.cols]
+
+    def __matmul__(self, x: FloatArray) -> FloatArray:
+        return self.apply(x)
+
+    def sparse(self) -> sp.csr_matrix:
+        return _scatter(self.block, self.cols, self.m)
+
 
 @dataclass(frozen=True)
 class ContactRows:
-    """Where one contact of one joint sits in the cone program."""
+    """Where one contact of one joint sits in the cone program: its rows
+    ``A = rows @ G_joint / s`` (scaled), kept on the joint's columns only."""
 
     joint_index: int
     contact_index: int
     contact: Contact
-    A: sp.csr_matrix  # (k, m) scaled: rows @ G_joint / s
+    cols: IntArray
+    block: FloatArray  # (k, len(cols))
     radius: float  # scaled: contact.radius / s
+    m: int
 
     @property
     def is_fixed(self) -> bool:
         return self.contact.kind == "fixed" or self.radius == 0.0
+
+    @property
+    def k(self) -> int:
+        return int(self.block.shape[0])
+
+    def apply(self, x: FloatArray) -> FloatArray:
+        """``A @ x``."""
+        return self.block @ x[self.cols]
+
+    def adjoint(self, u: FloatArray) -> FloatArray:
+        """``A.T @ u`` as a full m-vector."""
+        out = np.zeros(self.m)
+        np.add.at(out, self.cols, self.block.T @ u)
+        return out
+
+    def dense(self) -> FloatArray:
+        out = np.zeros((self.k, self.m))
+        np.add.at(out.T, self.cols, self.block.T)
+        return out
+
+    @cached_property
+    def A(self) -> sp.csr_matrix:
+        return _scatter(self.block, self.cols, self.m)
+
+
+def _scatter(block: FloatArray, cols: IntArray, m: int) -> sp.csr_matrix:
+    k = block.shape[0]
+    rows = np.repeat(np.arange(k), len(cols))
+    return sp.csr_matrix((block.ravel(), (rows, np.tile(cols, k))), shape=(k, m))
 
 
 @dataclass(frozen=True)
@@ -53,7 +107,7 @@ class Assembly:
     body_ref: FloatArray  # (n, 3) reference point c_b of each moving body (mm)
     s: float  # mm per unit of scaled translation
     ell: float  # mm: rotation lever of the scaling and of the least-norm metric
-    G: tuple[sp.csr_matrix, ...]  # per joint (6, m): scaled x -> (t mm, w rad) in joint frame
+    G: tuple[JointMap, ...]  # per joint: scaled x -> (t mm, w rad) in joint frame
     contacts: tuple[ContactRows, ...]
     g: FloatArray  # (m,) work of the loads per unit scaled x (N*mm)
 
@@ -84,10 +138,18 @@ class Assembly:
         under a rigid motion of the whole model or a change of units, and a
         rigid joint (no relative motion) adds nothing to it.
         """
-        w = sp.diags(np.r_[np.full(3, 1.0 / self.s), np.full(3, self.ell / self.s)])
-        blocks = [w @ G for G in self.G]
-        stacked = sp.vstack(blocks, format="csc")
-        return (stacked.T @ stacked).tocsc()
+        w = np.r_[np.full(3, 1.0 / self.s), np.full(3, self.ell / self.s)]
+        rows, cols, vals = [], [], []
+        for G in self.G:
+            wb = w[:, None] * G.block
+            local = wb.T @ wb
+            rows.append(np.repeat(G.cols, len(G.cols)))
+            cols.append(np.tile(G.cols, len(G.cols)))
+            vals.append(local.ravel())
+        return sp.csc_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(self.m, self.m),
+        )
 
     def scale_matrix(self) -> FloatArray:
         """Physical (V_c mm, Omega rad) per body from scaled x: ``x_phys = D * x``."""
@@ -123,14 +185,14 @@ def assemble(model: Model) -> Assembly:
         s = max([spread, *sizes, 1.0])
     ell = max([spread, *sizes, s])
 
-    G_list: list[sp.csr_matrix] = []
+    G_list: list[JointMap] = []
     contacts: list[ContactRows] = []
     for jdx, joint in enumerate(model.joints):
         G = _joint_map(joint, index, body_ref, s, ell, m)
         G_list.append(G)
         for cdx, contact in enumerate(joint.contacts()):
-            A = sp.csr_matrix(contact.rows / s) @ G
-            contacts.append(ContactRows(jdx, cdx, contact, sp.csr_matrix(A), contact.radius / s))
+            block = (contact.rows / s) @ G.block
+            contacts.append(ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m))
 
     g = np.zeros(m)
     for load in model.loads:
@@ -148,10 +210,11 @@ def assemble(model: Model) -> Assembly:
 
 def _joint_map(
     joint: Joint, index: dict[str, int], body_ref: FloatArray, s: float, ell: float, m: int
-) -> sp.csr_matrix:
-    """(6, m) map from scaled unknowns to the relative torsor of b w.r.t. a at the joint."""
+) -> JointMap:
+    """The map from scaled unknowns to the relative torsor of b w.r.t. a at the joint."""
     R_joint_world = joint.R_world_joint.T
-    G = sp.lil_matrix((6, m))
+    cols: list[IntArray] = []
+    blocks: list[FloatArray] = []
     for sign, name in ((-1.0, joint.between[0]), (1.0, joint.between[1])):
         if name not in index:
             continue  # ground body
@@ -161,5 +224,6 @@ def _joint_map(
         block[:3, :3] = s * R_joint_world
         block[:3, 3:] = -(s / ell) * R_joint_world @ skew(lever)
         block[3:, 3:] = (s / ell) * R_joint_world
-        G[:, 6 * i : 6 * i + 6] = G[:, 6 * i : 6 * i + 6] + sign * block
-    return sp.csr_matrix(G)
+        cols.append(np.arange(6 * i, 6 * i + 6))
+        blocks.append(sign * block)
+    return JointMap(np.concatenate(cols), np.hstack(blocks), m)

@@ -152,7 +152,7 @@ def build_result(
         if c.is_fixed:
             state = ContactResult(c.contact.name, 1.0, True, float("nan"))
         else:
-            rho = float(np.linalg.norm(c.A @ x))
+            rho = float(np.linalg.norm(c.apply(x)))
             used = min(max(rho / c.radius, 0.0), 1.0)
             state = ContactResult(c.contact.name, used, used >= TOUCHING, float(ball_force[id(c)]))
         per_joint.setdefault(c.joint_index, []).append(state)

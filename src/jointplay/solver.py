@@ -63,6 +63,7 @@ class _Point:
     nu: FloatArray = field(default_factory=lambda: np.zeros(0))  # per equality row
     method: str = "interior-point"
     iterations: int = 0
+    certificate: Certificate | None = None
 
 
 def solve(model: Model, settings: SolverSettings | None = None) -> Result:
@@ -85,11 +86,14 @@ class Workspace:
         self.N = self._free_motions()
         self.M = assembly.metric
         self.K = sp.csr_matrix(np.asarray(self.M @ self.N).T)
+        self._E_dense = self.E.toarray()
+        self._eq = sp.vstack([self.E, self.K], format="csr")
+        self._eq_dense = self._eq.toarray()
 
     # -- free motions -------------------------------------------------------
     def _free_motions(self) -> FloatArray:
-        rows = [c.A for c in self.asm.contacts]
-        C = sp.vstack(rows, format="csr").toarray() if rows else np.zeros((0, self.m))
+        rows = [c.dense() for c in self.asm.contacts]
+        C = np.vstack(rows) if rows else np.zeros((0, self.m))
         if C.shape[0] == 0:
             return np.eye(self.m)
         return np.asarray(sla.null_space(C, rcond=self.settings.free_motion_rcond))
@@ -116,7 +120,7 @@ class Workspace:
             point = self._phase1(g_hat)
             if self.settings.polish:
                 point = self._polish(g_hat, point)
-        cert = self._certify(g_hat, point)
+        cert = point.certificate or self._certify(g_hat, point)
         if not cert.certified:
             raise SolverError(
                 "the solver's answer could not be certified: "
@@ -131,7 +135,7 @@ class Workspace:
 
     # -- phase 1: the cone program -----------------------------------------
     def _equalities(self) -> sp.csr_matrix:
-        return sp.vstack([self.E, self.K], format="csr")
+        return self._eq
 
     def _phase1(self, g_hat: FloatArray) -> _Point:
         eq = self._equalities()
@@ -144,7 +148,7 @@ class Workspace:
         starts, row = [], n_eq
         for c in balls:
             starts.append(row)
-            row += 1 + c.A.shape[0]
+            row += 1 + c.k
         return starts
 
     def _clarabel(
@@ -161,7 +165,7 @@ class Workspace:
         if eq.shape[0]:
             cones.append(clarabel.ZeroConeT(eq.shape[0]))
         for c in balls:
-            k = c.A.shape[0]
+            k = c.k
             blocks.append(sp.vstack([sp.csr_matrix((1, self.m)), c.A]))
             rhs.append(np.r_[c.radius, np.zeros(k)])
             cones.append(clarabel.SecondOrderConeT(k + 1))
@@ -191,7 +195,7 @@ class Workspace:
         lam_max = max(float(np.max(point.lam)), lam_scale, 1e-300)
         active = []
         for i, c in enumerate(balls):
-            slack = c.radius - float(np.linalg.norm(c.A @ point.x))
+            slack = c.radius - float(np.linalg.norm(c.apply(point.x)))
             if point.lam[i] / lam_max > max(slack / c.radius, 1e-9):
                 active.append(i)
         return active
@@ -199,13 +203,13 @@ class Workspace:
     def _polish(self, g_hat: FloatArray, point: _Point) -> _Point:
         active = self._active(point, self.balls)
         eq = self._equalities()
-        face_rows = [self.balls[i].A for i in active]
-        face = sp.vstack([eq, *face_rows], format="csr").toarray()
+        eq_dense = self._eq_dense
+        face = np.vstack([eq_dense, *[self.balls[i].dense() for i in active]])
         if face.shape[0] and _rank(face) == self.m:
             polished = _newton(
                 None,
                 -g_hat,
-                eq.toarray(),
+                eq_dense,
                 np.zeros(eq.shape[0]),
                 [self.balls[i] for i in active],
                 point.x,
@@ -216,7 +220,8 @@ class Workspace:
                 lam = np.zeros(len(self.balls))
                 lam[active] = lam_active
                 candidate = _Point(x, lam, method="polished", iterations=point.iterations + its)
-                if self._certify(g_hat, candidate).certified:
+                candidate.certificate = self._certify(g_hat, candidate)
+                if candidate.certificate.certified:
                     return candidate
             return point
         return self._phase2(g_hat, point, active)
@@ -226,7 +231,7 @@ class Workspace:
         eq = self._equalities()
         directions = []
         for i in active:
-            v = self.balls[i].A @ point.x
+            v = self.balls[i].apply(point.x)
             directions.append(self.balls[i].radius * v / np.linalg.norm(v))
         face = sp.vstack([eq, *[self.balls[i].A for i in active]], format="csr")
         face_rhs = (
@@ -257,8 +262,8 @@ class Workspace:
 
     def _forces_at(self, g_hat: FloatArray, x: FloatArray, active: list[int]) -> FloatArray:
         """Contact multipliers that best balance the loads at ``x`` (least squares)."""
-        cols = [self.balls[i].A.T @ _unit(self.balls[i].A @ x) for i in active]
-        E = self.E.toarray()
+        cols = [self.balls[i].adjoint(_unit(self.balls[i].apply(x))) for i in active]
+        E = self._E_dense
         Amat = np.column_stack([*cols, E.T]) if (cols or E.shape[0]) else np.zeros((self.m, 0))
         coef = np.linalg.lstsq(Amat, g_hat, rcond=None)[0] if Amat.shape[1] else np.zeros(0)
         lam = np.zeros(len(self.balls))
@@ -274,15 +279,15 @@ class Workspace:
         residual_vec = g_hat.copy()
         comp = 0.0
         for i, c in enumerate(self.balls):
-            v = c.A @ x
+            v = c.apply(x)
             rho = float(np.linalg.norm(v))
             feas = max(feas, rho - c.radius)
             if lam[i] != 0.0 and rho > 0.0:
-                residual_vec -= lam[i] * (c.A.T @ (v / rho))
+                residual_vec -= lam[i] * c.adjoint(v / rho)
                 comp = max(comp, abs(lam[i]) * max(c.radius - rho, 0.0) / max_ball_radius)
         if self.E.shape[0]:
-            feas = max(feas, float(np.max(np.abs(self.E @ x))))
-            E = self.E.toarray()
+            E = self._E_dense
+            feas = max(feas, float(np.max(np.abs(E @ x))))
             nu = np.linalg.lstsq(E.T, residual_vec, rcond=None)[0]
             residual_vec -= E.T @ nu
         loaded = bool(np.linalg.norm(g_hat) > 0)
@@ -335,7 +340,7 @@ def _newton(
     Returns None when it does not converge to machine precision.
     """
     m, na, ne = len(x0), len(balls), Eq.shape[0]
-    A = [c.A.toarray() for c in balls]
+    A = [c.dense() for c in balls]
     r = np.array([c.radius for c in balls])
     x, lam = x0.copy(), lam0.astype(float).copy()
     nu = np.zeros(ne)
