@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import clarabel
 import numpy as np
@@ -89,6 +90,7 @@ class Workspace:
         self._E_dense = self.E.toarray()
         self._eq = sp.vstack([self.E, self.K], format="csr")
         self._eq_dense = self._eq.toarray()
+        self._phase1_data: tuple[Any, ...] | None = None
 
     # -- free motions -------------------------------------------------------
     def _free_motions(self) -> FloatArray:
@@ -139,7 +141,7 @@ class Workspace:
 
     def _phase1(self, g_hat: FloatArray) -> _Point:
         eq = self._equalities()
-        sol = self._clarabel(None, -g_hat, eq, np.zeros(eq.shape[0]), self.balls)
+        sol = self._clarabel(None, -g_hat, eq, np.zeros(eq.shape[0]), self.balls, cache=True)
         lam = np.array([sol.z[j] for j in self._soc_starts(eq.shape[0], self.balls)])
         x = np.asarray(sol.x)
         return _Point(x, lam, np.asarray(sol.z[: eq.shape[0]]), iterations=sol.iterations)
@@ -158,25 +160,14 @@ class Workspace:
         eq: sp.csr_matrix,
         eq_rhs: FloatArray,
         balls: tuple[ContactRows, ...],
+        cache: bool = False,
     ) -> clarabel.DefaultSolution:
-        blocks = [eq]
-        rhs = [eq_rhs]
-        cones = []
-        if eq.shape[0]:
-            cones.append(clarabel.ZeroConeT(eq.shape[0]))
-        for c in balls:
-            k = c.k
-            blocks.append(sp.vstack([sp.csr_matrix((1, self.m)), c.A]))
-            rhs.append(np.r_[c.radius, np.zeros(k)])
-            cones.append(clarabel.SecondOrderConeT(k + 1))
-        A = sp.vstack(blocks, format="csc")
-        b = np.concatenate(rhs)
-        P_upper = sp.csc_matrix((self.m, self.m)) if P is None else sp.triu(P, format="csc")
-        settings = clarabel.DefaultSettings()
-        settings.verbose = False
-        tol = self.settings.ipm_tolerance
-        settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
-        settings.max_iter = self.settings.max_iterations
+        data = self._phase1_data if cache else None
+        if data is None:
+            data = self._cone_data(P, eq, eq_rhs, balls)
+            if cache:
+                self._phase1_data = data
+        P_upper, A, b, cones, settings = data
         sol = clarabel.DefaultSolver(P_upper, q, A, b, cones, settings).solve()
         status = str(sol.status)
         if status.endswith("DualInfeasible"):  # should have been caught by _check_driven
@@ -186,6 +177,45 @@ class Workspace:
         return sol
 
     # -- phase 2 and polishing ---------------------------------------------
+    def _cone_data(
+        self,
+        P: sp.csc_matrix | None,
+        eq: sp.csr_matrix,
+        eq_rhs: FloatArray,
+        balls: tuple[ContactRows, ...],
+    ) -> tuple[Any, ...]:
+        """Clarabel's (P, A, b, cones, settings): equalities, then one cone per contact."""
+        rows, cols, vals = [], [], []
+        eq_coo = eq.tocoo()
+        rows.append(eq_coo.row)
+        cols.append(eq_coo.col)
+        vals.append(eq_coo.data)
+        rhs = [eq_rhs]
+        cones = []
+        if eq.shape[0]:
+            cones.append(clarabel.ZeroConeT(eq.shape[0]))
+        row = eq.shape[0]
+        for c in balls:
+            k, n = c.k, len(c.cols)
+            rows.append(row + 1 + np.repeat(np.arange(k), n))
+            cols.append(np.tile(c.cols, k))
+            vals.append(c.block.ravel())
+            rhs.append(np.r_[c.radius, np.zeros(k)])
+            cones.append(clarabel.SecondOrderConeT(k + 1))
+            row += k + 1
+        A = sp.csc_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(row, self.m),
+        )
+        b = np.concatenate(rhs)
+        P_upper = sp.csc_matrix((self.m, self.m)) if P is None else sp.triu(P, format="csc")
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        tol = self.settings.ipm_tolerance
+        settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
+        settings.max_iter = self.settings.max_iterations
+        return P_upper, A, b, cones, settings
+
     def _active(
         self, point: _Point, balls: tuple[ContactRows, ...], lam_scale: float = 0.0
     ) -> list[int]:
