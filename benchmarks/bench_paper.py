@@ -127,7 +127,14 @@ class PaperSLSQP:
     SLSQP's convention for inequalities is ``fun(x) >= 0``.
     """
 
-    def __init__(self, ftol: float = 1e-15, maxiter: int = 10_000, x0: np.ndarray | None = None):
+    def __init__(
+        self,
+        ftol: float = 1e-15,
+        maxiter: int = 10_000,
+        x0: np.ndarray | None = None,
+        analytic: bool = True,
+    ):
+        self.analytic = analytic
         self.h = L2 / 2
         self.r1_sq = (J1 / 2) ** 2
         self.r2_sq = (J2 / 2) ** 2
@@ -149,10 +156,14 @@ class PaperSLSQP:
             + [free, (-r2, r2), (-r2, r2)]  # (12) u2, v2, w2
             + [free, (-tilt, tilt), (-tilt, tilt)]  # (13) α2, β2, γ2
         )
-        self.constraints = (
+        self.constraints: tuple[dict[str, Any], ...] = (
             {"type": "eq", "fun": self.eq, "jac": self.eq_jac},
             {"type": "ineq", "fun": self.ineq, "jac": self.ineq_jac},
         )
+        if not analytic:  # SciPy's default: finite-difference gradients
+            self.constraints = tuple(
+                {k: v for k, v in c.items() if k != "jac"} for c in self.constraints
+            )
         self.options = {"ftol": ftol, "maxiter": maxiter}
         self.x0 = np.zeros(12) if x0 is None else np.asarray(x0, dtype=float)
 
@@ -194,7 +205,7 @@ class PaperSLSQP:
         return minimize(
             self.objective,
             self.x0,
-            jac=self.objective_jac,
+            jac=self.objective_jac if self.analytic else None,
             method="SLSQP",
             bounds=self.bounds,
             constraints=self.constraints,
@@ -360,6 +371,10 @@ def main(argv: list[str] | None = None) -> int:
     rows.append(("jointplay.solve", t_jp, (0.0, 0.0)))
     t_sl = per_solve_times(paper.solve, repeat, warmup)
     rows.append(("SLSQP (paper's method)", t_sl, differences(x_slsqp, ref)))
+    paper_fd = PaperSLSQP(ftol=1e-12, analytic=False)
+    x_fd = np.asarray(paper_fd.solve().x)
+    t_fd = per_solve_times(paper_fd.solve, repeat, warmup)
+    rows.append(("SLSQP, finite-diff. gradients", t_fd, differences(x_fd, ref)))
     if cp is not None:
         V, W = cvxpy_build_and_solve()
         x_cvx = torsors_from_origin(V, W)
