@@ -104,6 +104,27 @@ CASES: list[tuple[str, Any, str]] = [
         r"plain number in mm or a string with units",
     ),
     (
+        "an angle as a length",
+        joint(0, clearance="0.5 deg"),
+        r"joints\[0\] 'l1': clearance: expected a length, got '0.5 deg'",
+    ),
+    (
+        "a clearance on a rigid joint",
+        spherical_shaft(
+            bodies=[{"name": "S0", "ground": True}, {"name": "S1"}],
+            joints=[
+                {
+                    "name": "w",
+                    "type": "rigid",
+                    "between": ["S0", "S1"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.1,
+                }
+            ],
+        ),
+        r"joints\[0\] 'w': clearance: a rigid joint has no play, got clearance 0.1",
+    ),
+    (
         "unknown unit",
         joint(0, clearance="3 furlongs_per_fortnight"),
         r"joints\[0\] 'l1': clearance: unknown unit in '3 furlongs_per_fortnight'",

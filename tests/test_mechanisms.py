@@ -338,3 +338,30 @@ def test_no_load_leaves_everything_centred() -> None:
     for jr in r.joints.values():
         np.testing.assert_allclose(jr.translation, 0, atol=0)
     assert r.potential_energy == 0.0
+
+
+def test_a_far_away_weld_does_not_change_a_tie() -> None:
+    """A tie is resolved in the joints' metric; a rigid joint (no relative motion)
+    must not change it, wherever it is."""
+    base = {
+        "bodies": [{"name": "G", "ground": True}, {"name": "B"}],
+        "joints": [
+            {
+                "name": "j",
+                "type": "cylindrical",
+                "between": ["G", "B"],
+                "at": [0, 0, 0],
+                "clearance": 0.2,
+                "length": 40,
+            }
+        ],
+        "loads": [{"body": "B", "at": [20, 0, 0], "force": [0, 1, 0]}],
+    }
+    welded = copy.deepcopy(base)
+    welded["bodies"].append({"name": "C"})
+    welded["joints"].append(
+        {"name": "w", "type": "rigid", "between": ["B", "C"], "at": [1000, 0, 0]}
+    )
+    a, b = solved(base), solved(welded)
+    np.testing.assert_allclose(b.joints["j"].translation, a.joints["j"].translation, atol=1e-12)
+    np.testing.assert_allclose(b.joints["j"].rotation, a.joints["j"].rotation, atol=1e-14)

@@ -176,11 +176,14 @@ def assemble(model: Model) -> Assembly:
                 centres[index[name]].append(joint.centre)
     body_ref = np.array([np.mean(c, axis=0) for c in centres]).reshape(n, 3)
 
-    all_centres = np.array([j.centre for j in model.joints])
+    # Rigid joints add nothing to the metric, so they do not set its length scale:
+    # splitting a body with a weld anywhere leaves every answer unchanged.
+    with_play = [j for j in model.joints if any(c.kind == "ball" for c in j.contacts())]
+    all_centres = np.array([j.centre for j in (with_play or model.joints)])
     spread = float(np.max(np.linalg.norm(all_centres - all_centres.mean(axis=0), axis=1)))
     radii = [c.radius for j in model.joints for c in j.contacts() if c.kind == "ball"]
     s = max(radii, default=0.0)
-    sizes = [j.size for j in model.joints]
+    sizes = [j.size for j in with_play]
     if s == 0.0:  # every joint is tight: any length of the model will do
         s = max([spread, *sizes, 1.0])
     ell = max([spread, *sizes, s])

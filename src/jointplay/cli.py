@@ -85,6 +85,8 @@ def _guarded(run: Any, as_json: bool) -> None:
     except (typer.Exit, typer.Abort, KeyboardInterrupt):
         raise
     except Exception as exc:  # a bug in jointplay, not in the input
+        if as_json:
+            typer.echo(json.dumps({"status": "error", "message": f"internal error: {exc}"}))
         if os.environ.get("JOINTPLAY_DEBUG"):
             traceback.print_exc()
         err.print(

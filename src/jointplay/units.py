@@ -75,7 +75,7 @@ def _parse(text: str, dimension: str, unit: str) -> float:
         raise ValueError(f"cannot read {text!r} as a {dimension}; {_hint(dimension)}") from exc
     if not isinstance(quantity, registry.Quantity):  # a bare number in a string
         return float(quantity)
-    if quantity.dimensionless and dimension != "angle":
+    if quantity.unitless:  # "5": a plain number in the base unit
         return float(quantity.magnitude)
     try:
         return float(quantity.to(unit).magnitude)

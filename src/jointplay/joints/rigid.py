@@ -1,7 +1,7 @@
 """Rigid joint: the two bodies move as one (no relative motion at all).
 
-Its ``clearance`` is ignored and defaults to 0; it exists so that one body
-can be modelled as several parts, or a part fixed to the ground::
+It has no clearance (``clearance`` may only be 0); it exists so that one
+body can be modelled as several parts, or a part fixed to the ground::
 
       [ a ]##[ b ]        t = 0, w = 0
 """
@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+from pydantic import field_validator
 
 from ..fields import NonNegativeLength
 from .base import Contact, Joint
@@ -19,6 +20,16 @@ from .base import Contact, Joint
 class Rigid(Joint):
     type: Literal["rigid"] = "rigid"
     clearance: NonNegativeLength = 0.0
+
+    @field_validator("clearance")
+    @classmethod
+    def _no_play(cls, value: float) -> float:
+        if value != 0.0:
+            raise ValueError(
+                f"a rigid joint has no play, got clearance {value:g}; remove 'clearance', "
+                "or use a joint type with play"
+            )
+        return value
 
     def contacts(self) -> tuple[Contact, ...]:
         return (Contact("rigid", "fixed", np.eye(6), 0.0, np.zeros(3)),)
