@@ -68,3 +68,27 @@ def describe_direction(direction: FloatArray) -> str:
 
 def fmt_point(p: FloatArray) -> str:
     return "(" + ", ".join(f"{0.0 if abs(c) < 1e-12 else c:.6g}" for c in p) + ") mm"
+
+
+def describe_motion(omega: FloatArray, v_origin: FloatArray, ell: float) -> str:
+    """A small rigid motion in words: a translation, a rotation about an axis, or a screw."""
+    w = float(np.linalg.norm(omega))
+    v = float(np.linalg.norm(v_origin))
+    if w * ell <= 1e-9 * v:
+        return f"translation along {_axis_words(v_origin)}"
+    axis_point = np.cross(omega, v_origin) / w**2
+    pitch = float(omega @ v_origin) / w**2
+    if np.linalg.norm(axis_point) <= 1e-9 * ell:
+        where = f"rotation about {_axis_words(omega)}"
+    else:
+        name = describe_direction(omega)
+        along = f"parallel to {name}" if name.startswith("global") else f"along {name}"
+        where = f"rotation about an axis {along} through {fmt_point(axis_point)}"
+    if abs(pitch) > 1e-9 * ell:
+        where = f"screw motion ({where}, {pitch:.4g} mm of slide per rad)"
+    return where
+
+
+def _axis_words(direction: FloatArray) -> str:
+    name = describe_direction(direction)
+    return f"the {name} axis" if name.startswith("global") else f"the direction {name}"

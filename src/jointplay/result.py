@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .geometry import FloatArray
+from .geometry import FloatArray, describe_motion
 
 if TYPE_CHECKING:
     from .assembly import Assembly
@@ -198,8 +198,6 @@ def _echelon(basis_rows: FloatArray, tol: float = 1e-9) -> list[FloatArray]:
 
 
 def _describe_free(asm: Assembly, d: FloatArray) -> str:
-    from .solver import describe_motion
-
     parts = []
     sizes = []
     for i, name in enumerate(asm.body_names):

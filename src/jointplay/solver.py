@@ -21,7 +21,7 @@ convex, so Clarabel's interior-point answer is the global optimum. Then:
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import clarabel
@@ -31,7 +31,7 @@ import scipy.sparse as sp
 
 from .assembly import Assembly, ContactRows, assemble
 from .errors import SolverError, UnboundedMechanismError
-from .geometry import FloatArray, describe_direction, fmt_point
+from .geometry import FloatArray, describe_motion
 from .model import Model
 from .result import Certificate, Result, build_result
 
@@ -61,7 +61,6 @@ class _Point:
 
     x: FloatArray
     lam: FloatArray  # per ball contact (scaled)
-    nu: FloatArray = field(default_factory=lambda: np.zeros(0))  # per equality row
     method: str = "interior-point"
     iterations: int = 0
     certificate: Certificate | None = None
@@ -144,7 +143,7 @@ class Workspace:
         sol = self._clarabel(None, -g_hat, eq, np.zeros(eq.shape[0]), self.balls, cache=True)
         lam = np.array([sol.z[j] for j in self._soc_starts(eq.shape[0], self.balls)])
         x = np.asarray(sol.x)
-        return _Point(x, lam, np.asarray(sol.z[: eq.shape[0]]), iterations=sol.iterations)
+        return _Point(x, lam, iterations=sol.iterations)
 
     def _soc_starts(self, n_eq: int, balls: tuple[ContactRows, ...]) -> list[int]:
         starts, row = [], n_eq
@@ -454,27 +453,3 @@ def _unbounded(asm: Assembly, direction: FloatArray) -> UnboundedMechanismError:
         motion=motion,
         direction=direction_map,  # type: ignore[arg-type]
     )
-
-
-def describe_motion(omega: FloatArray, v_origin: FloatArray, ell: float) -> str:
-    """A small rigid motion in words: a translation, a rotation about an axis, or a screw."""
-    w = float(np.linalg.norm(omega))
-    v = float(np.linalg.norm(v_origin))
-    if w * ell <= 1e-9 * v:
-        return f"translation along {_axis_words(v_origin)}"
-    axis_point = np.cross(omega, v_origin) / w**2
-    pitch = float(omega @ v_origin) / w**2
-    if np.linalg.norm(axis_point) <= 1e-9 * ell:
-        where = f"rotation about {_axis_words(omega)}"
-    else:
-        name = describe_direction(omega)
-        along = f"parallel to {name}" if name.startswith("global") else f"along {name}"
-        where = f"rotation about an axis {along} through {fmt_point(axis_point)}"
-    if abs(pitch) > 1e-9 * ell:
-        where = f"screw motion ({where}, {pitch:.4g} mm of slide per rad)"
-    return where
-
-
-def _axis_words(direction: FloatArray) -> str:
-    name = describe_direction(direction)
-    return f"the {name} axis" if name.startswith("global") else f"the direction {name}"
