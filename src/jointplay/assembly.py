@@ -18,16 +18,16 @@ Everything the solver needs is linear in ``x``:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from .geometry import FloatArray, skew
+from .geometry import FloatArray, cross, skew
 from .joints import Contact, Joint
-from .model import Model
+from .model import Load, Model
 
 IntArray = NDArray[np.intp]
 
@@ -46,9 +46,6 @@ class JointMap:
 
     def __matmul__(self, x: FloatArray) -> FloatArray:
         return self.apply(x)
-
-    def sparse(self) -> sp.csr_matrix:
-        return _scatter(self.block, self.cols, self.m)
 
 
 @dataclass(frozen=True)
@@ -87,15 +84,46 @@ class ContactRows:
         np.add.at(out.T, self.cols, self.block.T)
         return out
 
-    @cached_property
-    def A(self) -> sp.csr_matrix:
-        return _scatter(self.block, self.cols, self.m)
 
+@dataclass(frozen=True)
+class BallStack:
+    """The clearance cones ``|A_i x| <= r_i`` stacked for vectorized work.
 
-def _scatter(block: FloatArray, cols: IntArray, m: int) -> sp.csr_matrix:
-    k = block.shape[0]
-    rows = np.repeat(np.arange(k), len(cols))
-    return sp.csr_matrix((block.ravel(), (rows, np.tile(cols, k))), shape=(k, m))
+    ``A`` holds the rows of every cone one after the other (cone ``i`` is rows
+    ``start[i] : start[i] + k[i]``), ``r`` the radii (scaled).
+    """
+
+    A: FloatArray  # (sum k, m)
+    start: IntArray  # (n,) first row of each cone
+    k: IntArray  # (n,) rows per cone
+    r: FloatArray  # (n,)
+
+    @staticmethod
+    def of(balls: Sequence[ContactRows], m: int) -> BallStack:
+        k = np.array([c.k for c in balls], dtype=np.intp)
+        start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
+        A = np.vstack([c.dense() for c in balls]) if balls else np.zeros((0, m))
+        r = np.array([c.radius for c in balls], dtype=float)
+        return BallStack(A, start, k, r)
+
+    def take(self, which: Sequence[int]) -> BallStack:
+        """The sub-stack of cones ``which`` (in that order)."""
+        idx = np.asarray(which, dtype=np.intp)
+        k = self.k[idx]
+        rows = (
+            np.concatenate([np.arange(a, a + n) for a, n in zip(self.start[idx], k, strict=True)])
+            if len(idx)
+            else np.zeros(0, dtype=np.intp)
+        )
+        start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
+        return BallStack(self.A[rows], start, k, self.r[idx])
+
+    def norms(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``(A @ x, |A_i x|)``."""
+        v = self.A @ x
+        if not len(self.k):
+            return v, np.zeros(0)
+        return v, np.sqrt(np.add.reduceat(v * v, self.start))
 
 
 @dataclass(frozen=True)
@@ -124,32 +152,50 @@ class Assembly:
         return tuple(c for c in self.contacts if c.is_fixed)
 
     @cached_property
-    def E(self) -> sp.csr_matrix:
-        """Equality rows (rigid joints and zero-clearance contacts)."""
-        if not self.fixed:
-            return sp.csr_matrix((0, self.m))
-        return sp.vstack([c.A for c in self.fixed], format="csr")
-
-    @cached_property
-    def metric(self) -> sp.csc_matrix:
-        """Least-norm metric: sum over joints of |t/s|^2 + |w * ell / s|^2.
+    def metric(self) -> FloatArray:
+        """Least-norm metric (dense m x m): sum over joints of |t/s|^2 + |w * ell / s|^2.
 
         It measures the relative motion in the joints, so it does not change
         under a rigid motion of the whole model or a change of units, and a
         rigid joint (no relative motion) adds nothing to it.
         """
         w = np.r_[np.full(3, 1.0 / self.s), np.full(3, self.ell / self.s)]
-        rows, cols, vals = [], [], []
+        M = np.zeros((self.m, self.m))
         for G in self.G:
             wb = w[:, None] * G.block
-            local = wb.T @ wb
-            rows.append(np.repeat(G.cols, len(G.cols)))
-            cols.append(np.tile(G.cols, len(G.cols)))
-            vals.append(local.ravel())
-        return sp.csc_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-            shape=(self.m, self.m),
-        )
+            M[np.ix_(G.cols, G.cols)] += wb.T @ wb
+        return M
+
+    def metric_times(self, X: FloatArray) -> FloatArray:
+        """``metric @ X`` without forming the metric."""
+        w2 = np.r_[np.full(3, 1.0 / self.s), np.full(3, self.ell / self.s)] ** 2
+        out = np.zeros((self.m, X.shape[1]))
+        for G in self.G:
+            out[G.cols] += G.block.T @ (w2[:, None] * (G.block @ X[G.cols]))
+        return out
+
+    @cached_property
+    def body_index(self) -> dict[str, int]:
+        return {name: i for i, name in enumerate(self.body_names)}
+
+    def work_of(self, loads: Sequence[Load]) -> FloatArray:
+        """``g`` for another set of loads on the same mechanism."""
+        for load in loads:
+            if load.body not in self.body_index:
+                raise ValueError(f"load on body {load.body!r}, which is not a moving body")
+        return load_work(loads, self.body_index, self.body_ref, self.s, self.ell)
+
+    @cached_property
+    def stack(self) -> BallStack:
+        """All clearance cones stacked into dense arrays (see ``BallStack``)."""
+        return BallStack.of(self.balls, self.m)
+
+    @cached_property
+    def E(self) -> FloatArray:
+        """Equality rows (rigid joints and zero-clearance contacts), dense."""
+        if not self.fixed:
+            return np.zeros((0, self.m))
+        return np.vstack([c.dense() for c in self.fixed])
 
     def scale_matrix(self) -> FloatArray:
         """Physical (V_c mm, Omega rad) per body from scaled x: ``x_phys = D * x``."""
@@ -160,7 +206,7 @@ class Assembly:
         """(rotation rad, translation at global origin mm) of moving body ``i``."""
         v_ref = self.s * x[6 * i : 6 * i + 3]
         omega = (self.s / self.ell) * x[6 * i + 3 : 6 * i + 6]
-        return omega, v_ref - np.cross(omega, self.body_ref[i])
+        return omega, v_ref - cross(omega, self.body_ref[i])
 
 
 def assemble(model: Model) -> Assembly:
@@ -178,10 +224,10 @@ def assemble(model: Model) -> Assembly:
 
     # Rigid joints add nothing to the metric, so they do not set its length scale:
     # splitting a body with a weld anywhere leaves every answer unchanged.
-    with_play = [j for j in model.joints if any(c.kind == "ball" for c in j.contacts())]
+    with_play = [j for j in model.joints if any(c.kind == "ball" for c in j.cones)]
     all_centres = np.array([j.centre for j in (with_play or model.joints)])
     spread = float(np.max(np.linalg.norm(all_centres - all_centres.mean(axis=0), axis=1)))
-    radii = [c.radius for j in model.joints for c in j.contacts() if c.kind == "ball"]
+    radii = [c.radius for j in model.joints for c in j.cones if c.kind == "ball"]
     s = max(radii, default=0.0)
     sizes = [j.size for j in with_play]
     if s == 0.0:  # every joint is tight: any length of the model will do
@@ -193,22 +239,32 @@ def assemble(model: Model) -> Assembly:
     for jdx, joint in enumerate(model.joints):
         G = _joint_map(joint, index, body_ref, s, ell, m)
         G_list.append(G)
-        for cdx, contact in enumerate(joint.contacts()):
+        for cdx, contact in enumerate(joint.cones):
             block = (contact.rows / s) @ G.block
             contacts.append(ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m))
 
-    g = np.zeros(m)
-    for load in model.loads:
+    g = load_work(model.loads, index, body_ref, s, ell)
+    return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g)
+
+
+def load_work(
+    loads: Sequence[Load],
+    index: dict[str, int],
+    body_ref: FloatArray,
+    s: float,
+    ell: float,
+) -> FloatArray:
+    """The loads' work per unit of scaled unknowns (N*mm): ``g`` with V = -g @ x."""
+    g = np.zeros(6 * len(body_ref))
+    for load in loads:
         i = index[load.body]
         force = np.zeros(3) if load.force is None else np.array(load.force)
-        torque = np.zeros(3) if load.torque is None else np.array(load.torque)
-        moment = torque.copy()
+        moment = np.zeros(3) if load.torque is None else np.array(load.torque)
         if load.at is not None:
-            moment += np.cross(np.array(load.at) - body_ref[i], force)
+            moment += cross(np.array(load.at) - body_ref[i], force)
         g[6 * i : 6 * i + 3] += s * force
         g[6 * i + 3 : 6 * i + 6] += (s / ell) * moment
-
-    return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g)
+    return g
 
 
 def _joint_map(

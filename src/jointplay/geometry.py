@@ -27,13 +27,20 @@ def skew(v: FloatArray) -> FloatArray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
+def cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``a x b`` for 3-vectors (``np.cross`` is slow on single vectors)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 def unit(v: FloatArray) -> FloatArray:
     return np.asarray(v, dtype=float) / float(np.linalg.norm(v))
 
 
 def is_parallel(a: FloatArray, b: FloatArray) -> bool:
     a_hat, b_hat = unit(a), unit(b)
-    return float(np.linalg.norm(np.cross(a_hat, b_hat))) < PARALLEL_SINE
+    return float(np.linalg.norm(cross(a_hat, b_hat))) < PARALLEL_SINE
 
 
 def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:
@@ -53,7 +60,7 @@ def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:
             up = np.array([-np.sign(x[2]), 0.0, 0.0])
     z = np.asarray(up, dtype=float) - float(np.dot(up, x)) * x
     z = unit(z)
-    y = np.cross(z, x)
+    y = cross(z, x)
     return np.column_stack([x, y, z])
 
 
@@ -76,7 +83,7 @@ def describe_motion(omega: FloatArray, v_origin: FloatArray, ell: float) -> str:
     v = float(np.linalg.norm(v_origin))
     if w * ell <= 1e-9 * v:
         return f"translation along {_axis_words(v_origin)}"
-    axis_point = np.cross(omega, v_origin) / w**2
+    axis_point = cross(omega, v_origin) / w**2
     pitch = float(omega @ v_origin) / w**2
     if np.linalg.norm(axis_point) <= 1e-9 * ell:
         where = f"rotation about {_axis_words(omega)}"

@@ -8,12 +8,13 @@ joint centre in the joint frame, and the state of each contact; and the
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .geometry import FloatArray, describe_motion
+from .geometry import FloatArray, cross, describe_motion
 
 if TYPE_CHECKING:
     from .assembly import Assembly
@@ -84,7 +85,7 @@ class BodyResult:
 
     def displacement_of(self, point: FloatArray) -> FloatArray:
         """Displacement (mm) of the body point at ``point`` (mm, global)."""
-        return self.translation + np.cross(self.rotation, np.asarray(point, dtype=float))
+        return self.translation + cross(self.rotation, np.asarray(point, dtype=float))
 
     def to_dict(self) -> dict[str, Any]:
         return {"translation": _list(self.translation), "rotation": _list(self.rotation)}
@@ -97,8 +98,13 @@ class Result:
     bodies: dict[str, BodyResult]
     joints: dict[str, JointResult]
     certificate: Certificate
-    free_motions: tuple[str, ...]  # free motions that no load drives (reported as 0)
     solve_time: float  # s
+    #: Describes the free motions that no load drives (reported as 0); called lazily.
+    describe_free: Callable[[], tuple[str, ...]] = field(repr=False, compare=False)
+
+    @property
+    def free_motions(self) -> tuple[str, ...]:
+        return self.describe_free()
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document of ``jointplay solve --json``."""
@@ -132,29 +138,35 @@ def build_result(
     forces: FloatArray,
     certificate: Certificate,
     solve_time: float,
-    free_basis: FloatArray,
+    describe_free: Callable[[], tuple[str, ...]],
+    g: FloatArray,
 ) -> Result:
-    """Turn scaled unknowns and ball-contact forces (N) into a ``Result``."""
+    """Turn scaled unknowns and ball-contact forces (N) into a ``Result``
+    (``g``: the loads' work, for the potential energy)."""
 
     model = asm.model
     bodies: dict[str, BodyResult] = {}
+    index = asm.body_index
+    zero = np.zeros(3)
     for b in model.bodies:
-        if b.ground:
-            bodies[b.name] = BodyResult(b.name, np.zeros(3), np.zeros(3))
-    for i, name in enumerate(asm.body_names):
-        omega, v_origin = asm.body_motion(x, i)
-        bodies[name] = BodyResult(name, _clean(v_origin, asm.s), _clean(omega, asm.s / asm.ell))
-    bodies = {b.name: bodies[b.name] for b in model.bodies}
+        if b.name in index:
+            omega, v_origin = asm.body_motion(x, index[b.name])
+            rot = _clean(omega, asm.s / asm.ell)
+            bodies[b.name] = BodyResult(b.name, _clean(v_origin, asm.s), rot)
+        else:
+            bodies[b.name] = BodyResult(b.name, zero, zero)
 
-    ball_force = {id(c): f for c, f in zip(asm.balls, forces, strict=True)}
+    _, rho = asm.stack.norms(x)
+    used = np.clip(rho / asm.stack.r, 0.0, 1.0) if len(rho) else rho
+    ball_state = {id(c): i for i, c in enumerate(asm.balls)}
     per_joint: dict[int, list[ContactResult]] = {}
     for c in asm.contacts:
-        if c.is_fixed:
+        i = ball_state.get(id(c))
+        if i is None:
             state = ContactResult(c.contact.name, 1.0, True, float("nan"))
         else:
-            rho = float(np.linalg.norm(c.apply(x)))
-            used = min(max(rho / c.radius, 0.0), 1.0)
-            state = ContactResult(c.contact.name, used, used >= TOUCHING, float(ball_force[id(c)]))
+            u = float(used[i])
+            state = ContactResult(c.contact.name, u, u >= TOUCHING, float(forces[i]))
         per_joint.setdefault(c.joint_index, []).append(state)
 
     joints: dict[str, JointResult] = {}
@@ -171,9 +183,13 @@ def build_result(
             tuple(per_joint.get(jdx, [])),
         )
 
-    free = [_describe_free(asm, d) for d in _echelon(free_basis.T)]
-    energy = -float(asm.g @ x)
-    return Result("optimal", energy, bodies, joints, certificate, tuple(free), solve_time)
+    energy = -float(g @ x)
+    return Result("optimal", energy, bodies, joints, certificate, solve_time, describe_free)
+
+
+def describe_free_motions(asm: Assembly, free_basis: FloatArray) -> tuple[str, ...]:
+    """The free motions (columns of ``free_basis``), one phrase each."""
+    return tuple(_describe_free(asm, d) for d in _echelon(free_basis.T))
 
 
 def _echelon(basis_rows: FloatArray, tol: float = 1e-9) -> list[FloatArray]:

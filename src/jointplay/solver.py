@@ -21,19 +21,19 @@ convex, so Clarabel's interior-point answer is the global optimum. Then:
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import clarabel
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
-from .assembly import Assembly, ContactRows, assemble
+from .assembly import Assembly, BallStack, IntArray, assemble
 from .errors import SolverError, UnboundedMechanismError
 from .geometry import FloatArray, describe_motion
-from .model import Model
-from .result import Certificate, Result, build_result
+from .model import Load, Model
+from .result import Certificate, Result, build_result, describe_free_motions
 
 
 @dataclass(frozen=True)
@@ -49,6 +49,10 @@ class SolverSettings:
     free_motion_rcond: float = 1e-9
     #: A load component on a free motion below this fraction of the load is taken as 0.
     drive_tolerance: float = 1e-9
+    #: Start each solve after the first from the previous active set, solving
+    #: its KKT equations directly; the interior-point method runs only when
+    #: that answer does not certify as the unique optimum.
+    warm_start: bool = True
     #: Certificate thresholds: feasibility as a fraction of the largest play,
     #: equilibrium residual as a fraction of the load.
     feasibility_tolerance: float = 1e-9
@@ -64,6 +68,15 @@ class _Point:
     method: str = "interior-point"
     iterations: int = 0
     certificate: Certificate | None = None
+    active: tuple[int, ...] | None = None  # the active set that determines x, if any
+
+
+@dataclass(frozen=True)
+class _Face:
+    """An active set: its cones, and whether they pin the position down."""
+
+    stack: BallStack
+    determined: bool  # the active cones and equalities determine x uniquely
 
 
 def solve(model: Model, settings: SolverSettings | None = None) -> Result:
@@ -74,30 +87,41 @@ def solve(model: Model, settings: SolverSettings | None = None) -> Result:
 class Workspace:
     """The solver's side: assembled matrices, free motions and scratch data.
 
-    Built once from an ``Assembly``; the model is never modified.
+    Built once from an ``Assembly``; the model is never modified. ``solve``
+    may be called again with other loads (``loads=``): each call after the
+    first starts from the previous active set (see ``SolverSettings.warm_start``).
     """
 
     def __init__(self, assembly: Assembly, settings: SolverSettings | None = None):
         self.asm = assembly
         self.settings = settings or SolverSettings()
         self.m = assembly.m
-        self.E = assembly.E
         self.balls = assembly.balls
+        self.stack = assembly.stack
+        self.E = assembly.E
         self.N = self._free_motions()
-        self.M = assembly.metric
-        self.K = sp.csr_matrix(np.asarray(self.M @ self.N).T)
-        self._E_dense = self.E.toarray()
-        self._eq = sp.vstack([self.E, self.K], format="csr")
-        self._eq_dense = self._eq.toarray()
-        self._phase1_data: tuple[Any, ...] | None = None
+        self.K = assembly.metric_times(self.N).T
+        self.Eq = np.vstack([self.E, self.K])
+        self._max_radius = float(np.max(self.stack.r)) if len(self.stack.r) else 1.0
+        self._rigid_basis = _range_basis(self.E.T)
+        self._phase1_data: _ConeProgram | None = None
+        self._faces: dict[tuple[int, ...], _Face] = {}
+        self._last: _Point | None = None
+        self._free_words: tuple[str, ...] | None = None
+
+    @classmethod
+    def of(cls, model: Model, settings: SolverSettings | None = None) -> Workspace:
+        return cls(assemble(model), settings)
 
     # -- free motions -------------------------------------------------------
     def _free_motions(self) -> FloatArray:
-        rows = [c.dense() for c in self.asm.contacts]
-        C = np.vstack(rows) if rows else np.zeros((0, self.m))
+        C = np.vstack([self.stack.A, self.E])
         if C.shape[0] == 0:
             return np.eye(self.m)
-        return np.asarray(sla.null_space(C, rcond=self.settings.free_motion_rcond))
+        _, sv, Vt = np.linalg.svd(C, full_matrices=True)
+        tol = self.settings.free_motion_rcond * (sv[0] if sv.size else 0.0)
+        rank = int(np.sum(sv > tol)) if sv.size and sv[0] > 0 else 0
+        return np.ascontiguousarray(Vt[rank:].T)
 
     def _check_driven(self, g: FloatArray) -> None:
         if self.N.shape[1] == 0:
@@ -107,10 +131,17 @@ class Workspace:
             return
         raise _unbounded(self.asm, self.N @ drive)
 
+    def free_motions(self) -> tuple[str, ...]:
+        """The free motions in words (computed once)."""
+        if self._free_words is None:
+            self._free_words = describe_free_motions(self.asm, self.N)
+        return self._free_words
+
     # -- the solve ----------------------------------------------------------
-    def solve(self) -> Result:
+    def solve(self, loads: Sequence[Load] | None = None) -> Result:
+        """The equilibrium under the model's loads, or under ``loads`` instead."""
         start = time.perf_counter()
-        g = self.asm.g
+        g = self.asm.g if loads is None else self.asm.work_of(loads)
         self._check_driven(g)
         g_norm = float(np.linalg.norm(g))
         if g_norm == 0.0:
@@ -118,9 +149,12 @@ class Workspace:
             g_hat = g
         else:
             g_hat = g / g_norm
-            point = self._phase1(g_hat)
-            if self.settings.polish:
-                point = self._polish(g_hat, point)
+            point = self._warm(g_hat) if self.settings.warm_start else None
+            if point is None:
+                point = self._phase1(g_hat)
+                if self.settings.polish:
+                    point = self._polish(g_hat, point)
+            self._last = point if point.active is not None else None
         cert = point.certificate or self._certify(g_hat, point)
         if not cert.certified:
             raise SolverError(
@@ -130,170 +164,137 @@ class Workspace:
                 f"{cert.min_force:.3g} N; please report this model"
             )
         elapsed = time.perf_counter() - start
-        return build_result(
-            self.asm, point.x, point.lam * g_norm / self.asm.s, cert, elapsed, self.N
-        )
+        forces = point.lam * g_norm / self.asm.s
+        return build_result(self.asm, point.x, forces, cert, elapsed, self.free_motions, g)
 
     # -- phase 1: the cone program -----------------------------------------
-    def _equalities(self) -> sp.csr_matrix:
-        return self._eq
-
     def _phase1(self, g_hat: FloatArray) -> _Point:
-        eq = self._equalities()
-        sol = self._clarabel(None, -g_hat, eq, np.zeros(eq.shape[0]), self.balls, cache=True)
-        lam = np.array([sol.z[j] for j in self._soc_starts(eq.shape[0], self.balls)])
+        if self._phase1_data is None:
+            self._phase1_data = self._cone_program(None, self.Eq, np.zeros(len(self.Eq)), self.stack)
+        sol = self._clarabel(self._phase1_data, -g_hat)
         x = np.asarray(sol.x)
+        lam = np.asarray(sol.z)[self._phase1_data.soc_first]
         return _Point(x, lam, iterations=sol.iterations)
 
-    def _soc_starts(self, n_eq: int, balls: tuple[ContactRows, ...]) -> list[int]:
-        starts, row = [], n_eq
-        for c in balls:
-            starts.append(row)
-            row += 1 + c.k
-        return starts
-
-    def _clarabel(
-        self,
-        P: sp.csc_matrix | None,
-        q: FloatArray,
-        eq: sp.csr_matrix,
-        eq_rhs: FloatArray,
-        balls: tuple[ContactRows, ...],
-        cache: bool = False,
-    ) -> clarabel.DefaultSolution:
-        data = self._phase1_data if cache else None
-        if data is None:
-            data = self._cone_data(P, eq, eq_rhs, balls)
-            if cache:
-                self._phase1_data = data
-        P_upper, A, b, cones, settings = data
-        sol = clarabel.DefaultSolver(P_upper, q, A, b, cones, settings).solve()
-        status = str(sol.status)
-        if status.endswith("DualInfeasible"):  # should have been caught by _check_driven
-            raise _unbounded(self.asm, np.asarray(sol.x))
-        if not (status.endswith("Solved")):
-            raise SolverError(f"the cone solver stopped with status {status}")
-        return sol
-
-    # -- phase 2 and polishing ---------------------------------------------
-    def _cone_data(
-        self,
-        P: sp.csc_matrix | None,
-        eq: sp.csr_matrix,
-        eq_rhs: FloatArray,
-        balls: tuple[ContactRows, ...],
-    ) -> tuple[Any, ...]:
-        """Clarabel's (P, A, b, cones, settings): equalities, then one cone per contact."""
-        rows, cols, vals = [], [], []
-        eq_coo = eq.tocoo()
-        rows.append(eq_coo.row)
-        cols.append(eq_coo.col)
-        vals.append(eq_coo.data)
-        rhs = [eq_rhs]
-        cones = []
-        if eq.shape[0]:
-            cones.append(clarabel.ZeroConeT(eq.shape[0]))
-        row = eq.shape[0]
-        for c in balls:
-            k, n = c.k, len(c.cols)
-            rows.append(row + 1 + np.repeat(np.arange(k), n))
-            cols.append(np.tile(c.cols, k))
-            vals.append(c.block.ravel())
-            rhs.append(np.r_[c.radius, np.zeros(k)])
-            cones.append(clarabel.SecondOrderConeT(k + 1))
-            row += k + 1
-        A = sp.csc_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-            shape=(row, self.m),
-        )
-        b = np.concatenate(rhs)
-        P_upper = sp.csc_matrix((self.m, self.m)) if P is None else sp.triu(P, format="csc")
+    def _cone_program(
+        self, P: FloatArray | None, Eq: FloatArray, e: FloatArray, stack: BallStack
+    ) -> _ConeProgram:
+        """Clarabel's data: the equalities, then one cone ``(r_i, -A_i x)`` per contact."""
+        n_eq, n_cones, n_rows = Eq.shape[0], len(stack.k), stack.A.shape[0]
+        A = np.zeros((n_eq + n_rows + n_cones, self.m))
+        b = np.zeros(A.shape[0])
+        A[:n_eq] = Eq
+        b[:n_eq] = e
+        soc_first = n_eq + stack.start + np.arange(n_cones)
+        ball_rows = n_eq + np.arange(n_rows) + np.repeat(np.arange(1, n_cones + 1), stack.k)
+        A[ball_rows] = stack.A
+        b[soc_first] = stack.r
+        cones: list[Any] = [clarabel.ZeroConeT(n_eq)] if n_eq else []
+        cones += [clarabel.SecondOrderConeT(int(k) + 1) for k in stack.k]
+        P_upper = _csc(np.zeros((self.m, self.m)) if P is None else np.triu(P))
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         tol = self.settings.ipm_tolerance
         settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
         settings.max_iter = self.settings.max_iterations
-        return P_upper, A, b, cones, settings
+        return _ConeProgram(P_upper, _csc(A), b, cones, settings, soc_first)
 
-    def _active(
-        self, point: _Point, balls: tuple[ContactRows, ...], lam_scale: float = 0.0
-    ) -> list[int]:
+    def _clarabel(self, prog: _ConeProgram, q: FloatArray) -> Any:
+        sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
+        status = str(sol.status)
+        if status.endswith("DualInfeasible"):  # should have been caught by _check_driven
+            raise _unbounded(self.asm, np.asarray(sol.x))
+        if not status.endswith("Solved"):
+            raise SolverError(f"the cone solver stopped with status {status}")
+        return sol
+
+    # -- warm start, polishing and phase 2 ----------------------------------
+    def _face(self, active: tuple[int, ...]) -> _Face:
+        face = self._faces.get(active)
+        if face is None:
+            sub = self.stack.take(active)
+            rows = np.vstack([self.Eq, sub.A])
+            face = _Face(sub, bool(rows.shape[0]) and _rank(rows) == self.m)
+            self._faces[active] = face
+        return face
+
+    def _newton_on(
+        self, g_hat: FloatArray, active: tuple[int, ...], x0: FloatArray, lam0: FloatArray,
+        iterations: int, method: str, max_iter: int,
+    ) -> _Point | None:
+        """Solve the KKT equations of ``active`` and accept only a certified,
+        unique optimum: feasible, forces balancing the loads, and every active
+        force strictly positive on a face that pins the position down."""
+        face = self._face(active)
+        if not face.determined:
+            return None
+        out = _newton(
+            None, -g_hat, self.Eq, np.zeros(len(self.Eq)), face.stack, x0, lam0, max_iter
+        )
+        if out is None:
+            return None
+        x, lam_active, _nu, its = out
+        if len(lam_active) and float(np.min(lam_active)) <= STRICT * float(np.max(lam_active)):
+            return None
+        lam = np.zeros(len(self.balls))
+        lam[list(active)] = lam_active
+        point = _Point(x, lam, method, iterations + its, active=active)
+        point.certificate = self._certify(g_hat, point)
+        return point if point.certificate.certified else None
+
+    def _warm(self, g_hat: FloatArray) -> _Point | None:
+        last = self._last
+        if last is None or last.active is None:
+            return None
+        return self._newton_on(
+            g_hat, last.active, last.x, last.lam[list(last.active)], 0, "warm-started Newton", 12
+        )
+
+    def _active(self, x: FloatArray, lam: FloatArray, stack: BallStack, lam_scale: float = 0.0) -> tuple[int, ...]:
         """Contacts whose multiplier outweighs their slack (both relative)."""
-        if len(point.lam) == 0:
-            return []
-        lam_max = max(float(np.max(point.lam)), lam_scale, 1e-300)
-        active = []
-        for i, c in enumerate(balls):
-            slack = c.radius - float(np.linalg.norm(c.apply(point.x)))
-            if point.lam[i] / lam_max > max(slack / c.radius, 1e-9):
-                active.append(i)
-        return active
+        if len(lam) == 0:
+            return ()
+        lam_max = max(float(np.max(lam)), lam_scale, 1e-300)
+        _, rho = stack.norms(x)
+        slack = (stack.r - rho) / stack.r
+        return tuple(int(i) for i in np.flatnonzero(lam / lam_max > np.maximum(slack, 1e-9)))
 
     def _polish(self, g_hat: FloatArray, point: _Point) -> _Point:
-        active = self._active(point, self.balls)
-        eq = self._equalities()
-        eq_dense = self._eq_dense
-        face = np.vstack([eq_dense, *[self.balls[i].dense() for i in active]])
-        if face.shape[0] and _rank(face) == self.m:
-            polished = _newton(
-                None,
-                -g_hat,
-                eq_dense,
-                np.zeros(eq.shape[0]),
-                [self.balls[i] for i in active],
-                point.x,
-                point.lam[active],
+        active = self._active(point.x, point.lam, self.stack)
+        if self._face(active).determined:
+            polished = self._newton_on(
+                g_hat, active, point.x, point.lam[list(active)], point.iterations, "polished", 30
             )
-            if polished is not None:
-                x, lam_active, _nu, its = polished
-                lam = np.zeros(len(self.balls))
-                lam[active] = lam_active
-                candidate = _Point(x, lam, method="polished", iterations=point.iterations + its)
-                candidate.certificate = self._certify(g_hat, candidate)
-                if candidate.certificate.certified:
-                    return candidate
-            return point
+            return point if polished is None else polished
         return self._phase2(g_hat, point, active)
 
-    def _phase2(self, g_hat: FloatArray, point: _Point, active: list[int]) -> _Point:
+    def _phase2(self, g_hat: FloatArray, point: _Point, active: tuple[int, ...]) -> _Point:
         """Least-norm point of the optimal face (a tie between positions)."""
-        eq = self._equalities()
-        directions = []
-        for i in active:
-            v = self.balls[i].apply(point.x)
-            directions.append(self.balls[i].radius * v / np.linalg.norm(v))
-        face = sp.vstack([eq, *[self.balls[i].A for i in active]], format="csr")
-        face_rhs = (
-            np.concatenate([np.zeros(eq.shape[0]), *directions])
-            if active
-            else np.zeros(eq.shape[0])
-        )
-        rest = tuple(c for i, c in enumerate(self.balls) if i not in active)
-        rest_index = [i for i in range(len(self.balls)) if i not in active]
-        sol = self._clarabel(self.M, np.zeros(self.m), face, face_rhs, rest)
+        face = self._face(active).stack
+        v = face.A @ point.x
+        rho = np.repeat(np.sqrt(np.add.reduceat(v * v, face.start)), face.k) if active else v
+        directions = np.repeat(face.r, face.k) * v / rho if active else v
+        Eq = np.vstack([self.Eq, face.A])
+        e = np.concatenate([np.zeros(len(self.Eq)), directions])
+        rest_index = [i for i in range(len(self.balls)) if i not in set(active)]
+        rest = self.stack.take(rest_index)
+        prog = self._cone_program(self.asm.metric, Eq, e, rest)
+        sol = self._clarabel(prog, np.zeros(self.m))
         x = np.asarray(sol.x)
-        lam_rest = np.array([sol.z[j] for j in self._soc_starts(face.shape[0], rest)])
-        p2 = _Point(x, lam_rest)
-        active2 = self._active(p2, rest, float(np.max(np.abs(self.M @ x))))
-        polished = _newton(
-            self.M.toarray(),
-            np.zeros(self.m),
-            face.toarray(),
-            face_rhs,
-            [rest[i] for i in active2],
-            x,
-            lam_rest[active2],
-        )
+        lam_rest = np.asarray(sol.z)[prog.soc_first]
+        active2 = self._active(x, lam_rest, rest, float(np.max(np.abs(self.asm.metric @ x))))
+        polished = _newton(self.asm.metric, np.zeros(self.m), Eq, e, rest.take(active2), x, lam_rest[list(active2)])
         if polished is not None:
             x = polished[0]
-        lam = self._forces_at(g_hat, x, sorted(set(active) | {rest_index[i] for i in active2}))
+        touching = sorted(set(active) | {rest_index[i] for i in active2})
+        lam = self._forces_at(g_hat, x, touching)
         return _Point(x, lam, method="least-norm face", iterations=point.iterations)
 
     def _forces_at(self, g_hat: FloatArray, x: FloatArray, active: list[int]) -> FloatArray:
         """Contact multipliers that best balance the loads at ``x`` (least squares)."""
-        cols = [self.balls[i].adjoint(_unit(self.balls[i].apply(x))) for i in active]
-        E = self._E_dense
-        Amat = np.column_stack([*cols, E.T]) if (cols or E.shape[0]) else np.zeros((self.m, 0))
+        sub = self.stack.take(active)
+        J = _gradients(sub, x)
+        Amat = np.vstack([J, self.E]).T
         coef = np.linalg.lstsq(Amat, g_hat, rcond=None)[0] if Amat.shape[1] else np.zeros(0)
         lam = np.zeros(len(self.balls))
         lam[active] = coef[: len(active)]
@@ -302,30 +303,27 @@ class Workspace:
     # -- certificate --------------------------------------------------------
     def _certify(self, g_hat: FloatArray, point: _Point) -> Certificate:
         x, lam = point.x, point.lam
-        s = self.asm.s
-        feas = 0.0
-        max_ball_radius = max([c.radius for c in self.balls], default=1.0)
-        residual_vec = g_hat.copy()
-        comp = 0.0
-        for i, c in enumerate(self.balls):
-            v = c.apply(x)
-            rho = float(np.linalg.norm(v))
-            feas = max(feas, rho - c.radius)
-            if lam[i] != 0.0 and rho > 0.0:
-                residual_vec -= lam[i] * c.adjoint(v / rho)
-                comp = max(comp, abs(lam[i]) * max(c.radius - rho, 0.0) / max_ball_radius)
-        if self.E.shape[0]:
-            E = self._E_dense
-            feas = max(feas, float(np.max(np.abs(E @ x))))
-            nu = np.linalg.lstsq(E.T, residual_vec, rcond=None)[0]
-            residual_vec -= E.T @ nu
-        loaded = bool(np.linalg.norm(g_hat) > 0)
+        stack = self.stack
+        _, rho = stack.norms(x)
+        feas = float(np.max(rho - stack.r)) if len(rho) else 0.0
+        if len(self.E):
+            feas = max(feas, float(np.max(np.abs(self.E @ x))))
+        residual_vec = g_hat - _gradients(stack, x).T @ lam
+        if self._rigid_basis.shape[1]:
+            Q = self._rigid_basis
+            residual_vec -= Q @ (Q.T @ residual_vec)  # rigid joints carry any force
+        loaded = bool(np.any(g_hat))
         residual = float(np.linalg.norm(residual_vec)) if loaded else 0.0
+        comp = (
+            float(np.max(np.abs(lam) * np.maximum(stack.r - rho, 0.0))) / self._max_radius
+            if len(lam)
+            else 0.0
+        )
         min_force = float(np.min(lam)) if len(lam) else 0.0
-        lam_scale = max([1.0, *np.abs(lam)])
+        lam_scale = max(1.0, float(np.max(np.abs(lam)))) if len(lam) else 1.0
         st = self.settings
         certified = (
-            feas <= st.feasibility_tolerance * max_ball_radius
+            feas <= st.feasibility_tolerance * self._max_radius
             and residual <= st.equilibrium_tolerance
             and min_force >= -st.equilibrium_tolerance * lam_scale
             and comp <= st.equilibrium_tolerance * lam_scale
@@ -333,7 +331,7 @@ class Workspace:
         return Certificate(
             certified=bool(certified),
             method=point.method,
-            feasibility_mm=max(feas, 0.0) * s,
+            feasibility_mm=max(feas, 0.0) * self.asm.s,
             equilibrium_residual=residual,
             complementarity=comp,
             min_force=min_force,
@@ -341,9 +339,47 @@ class Workspace:
         )
 
 
-def _unit(v: FloatArray) -> FloatArray:
-    n = float(np.linalg.norm(v))
-    return v / n if n > 0 else v
+@dataclass(frozen=True)
+class _ConeProgram:
+    P: sp.csc_matrix
+    A: sp.csc_matrix
+    b: FloatArray
+    cones: list[Any]
+    settings: Any
+    soc_first: IntArray  # row of each cone's first entry (its multiplier)
+
+
+#: An active force below this fraction of the largest is not "strictly" positive.
+STRICT = 1e-9
+
+
+def _gradients(stack: BallStack, x: FloatArray) -> FloatArray:
+    """Rows ``A_i^T u_i`` (unit ``u_i`` along ``A_i x``; 0 where ``A_i x = 0``)."""
+    if not len(stack.k):
+        return np.zeros((0, stack.A.shape[1]))
+    v = stack.A @ x
+    rho = np.sqrt(np.add.reduceat(v * v, stack.start))
+    safe = np.where(rho > 0.0, rho, 1.0)
+    u = v / np.repeat(safe, stack.k)
+    return np.add.reduceat(stack.A * u[:, None], stack.start, axis=0)
+
+
+def _csc(a: FloatArray) -> sp.csc_matrix:
+    """A dense matrix in compressed-column form, built directly (scipy's
+    general constructors cost more than the small solves they feed)."""
+    col, row = np.nonzero(a.T)
+    indptr = np.zeros(a.shape[1] + 1, dtype=np.int64)
+    np.cumsum(np.bincount(col, minlength=a.shape[1]), out=indptr[1:])
+    return sp.csc_matrix((a[row, col], row.astype(np.int64), indptr), shape=a.shape)
+
+
+def _range_basis(a: FloatArray, rcond: float = 1e-12) -> FloatArray:
+    """Orthonormal basis of the column space of ``a``."""
+    if a.shape[1] == 0:
+        return np.zeros((a.shape[0], 0))
+    U, sv, _ = np.linalg.svd(a, full_matrices=False)
+    keep = sv > rcond * sv[0] if sv.size and sv[0] > 0 else np.zeros(0, dtype=bool)
+    return U[:, keep]
 
 
 def _rank(a: FloatArray, rcond: float = 1e-9) -> int:
@@ -356,7 +392,7 @@ def _newton(
     q: FloatArray,
     Eq: FloatArray,
     e: FloatArray,
-    balls: list[ContactRows],
+    stack: BallStack,
     x0: FloatArray,
     lam0: FloatArray,
     max_iter: int = 30,
@@ -364,50 +400,52 @@ def _newton(
     """Newton's method on the KKT equations of an active set.
 
     Stationarity ``P x + q + sum lam_i A_i^T u_i + Eq^T nu = 0``, active
-    contacts ``|A_i x| = r_i``, equalities ``Eq x = e``. Steps are least-squares
-    solutions, so statically indeterminate contact forces do not stop it.
+    contacts ``|A_i x| = r_i``, equalities ``Eq x = e``. A singular system
+    (statically indeterminate contact forces) takes least-squares steps.
     Returns None when it does not converge to machine precision.
     """
-    m, na, ne = len(x0), len(balls), Eq.shape[0]
-    A = [c.dense() for c in balls]
-    r = np.array([c.radius for c in balls])
+    m, na, ne = len(x0), len(stack.k), Eq.shape[0]
+    A, start, k, r = stack.A, stack.start, stack.k, stack.r
     x, lam = x0.copy(), lam0.astype(float).copy()
     nu = np.zeros(ne)
+    n = m + na + ne
+    K = np.zeros((n, n))
+    K[:m, m + na :] = Eq.T
+    K[m + na :, :m] = Eq
     scale = max(1.0, float(np.linalg.norm(q)))
-    best = None
+    best: tuple[float, FloatArray, FloatArray, FloatArray, int] | None = None
     for it in range(max_iter + 1):
-        grad = q.copy() if P is None else P @ x + q
-        H = np.zeros((m, m)) if P is None else P.copy()
-        Jc = np.zeros((na, m))
-        cres = np.zeros(na)
-        for i in range(na):
-            v = A[i] @ x
-            rho = float(np.linalg.norm(v))
-            if rho == 0.0:
+        grad = q + Eq.T @ nu if P is None else P @ x + q + Eq.T @ nu
+        if na:
+            v = A @ x
+            rho = np.sqrt(np.add.reduceat(v * v, start))
+            if float(np.min(rho)) == 0.0:
                 return None
-            u = v / rho
-            a = A[i].T @ u
-            grad += lam[i] * a
-            H += (lam[i] / rho) * (A[i].T @ (A[i] - np.outer(u, u) @ A[i]))
-            Jc[i] = a
-            cres[i] = rho - r[i]
-        if ne:
-            grad += Eq.T @ nu
-        eres = Eq @ x - e if ne else np.zeros(0)
-        F = np.concatenate([grad, cres, eres])
+            u = v / np.repeat(rho, k)
+            J = np.add.reduceat(A * u[:, None], start, axis=0)
+            grad = grad + J.T @ lam
+            F = np.concatenate([grad, rho - r, Eq @ x - e])
+        else:
+            F = np.concatenate([grad, Eq @ x - e])
         err = float(np.max(np.abs(F))) if F.size else 0.0
         if best is None or err < best[0]:
-            best = (err, x.copy(), lam.copy(), nu.copy(), it)
-        if err <= 1e-14 * scale:
+            best = (err, x, lam, nu, it)
+        if err <= 1e-14 * scale or it == max_iter:
             break
-        K = np.zeros((m + na + ne, m + na + ne))
+        H = np.zeros((m, m)) if P is None else P.copy()
+        if na:
+            c = lam / rho
+            H += (A.T * np.repeat(c, k)) @ A - (J.T * c) @ J
+            K[:m, m : m + na] = J.T
+            K[m : m + na, :m] = J
         K[:m, :m] = H
-        K[:m, m : m + na] = Jc.T
-        K[m : m + na, :m] = Jc
-        if ne:
-            K[:m, m + na :] = Eq.T
-            K[m + na :, :m] = Eq
-        step = np.linalg.lstsq(K, -F, rcond=1e-13)[0]
+        try:
+            step = np.linalg.solve(K, -F)
+            miss = float(np.max(np.abs(K @ step + F)))
+            if not miss <= 1e-8 * err:  # singular: statically indeterminate forces
+                raise np.linalg.LinAlgError
+        except np.linalg.LinAlgError:
+            step = np.linalg.lstsq(K, -F, rcond=1e-13)[0]
         x = x + step[:m]
         lam = lam + step[m : m + na]
         nu = nu + step[m + na :]

@@ -49,8 +49,13 @@ class Contact:
 
 def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:
     """Rows of ``delta(p) = t + w x p = [I, -[p]x] @ tau`` for the chosen joint axes."""
-    full = np.hstack([np.eye(3), -skew(np.asarray(p, dtype=float))])
-    return full[["xyz".index(c) for c in directions], :]
+    minus_p_cross = -skew(np.asarray(p, dtype=float))
+    out = np.zeros((len(directions), 6))
+    for row, axis in enumerate(directions):
+        i = "xyz".index(axis)
+        out[row, i] = 1.0
+        out[row, 3:] = minus_p_cross[i]
+    return out
 
 
 class Joint(BaseModel):
@@ -96,6 +101,11 @@ class Joint(BaseModel):
 
     def contacts(self) -> tuple[Contact, ...]:
         raise NotImplementedError
+
+    @cached_property
+    def cones(self) -> tuple[Contact, ...]:
+        """``contacts()``, computed once (the joint is immutable)."""
+        return self.contacts()
 
     @property
     def size(self) -> float:
