@@ -6,6 +6,7 @@
 >>> result.joints["l1"].translation  # mm, in the joint frame
 """
 
+from .batch import BatchSolution
 from .errors import JointplayError, ModelError, SolverError, UnboundedMechanismError
 from .joints import JOINT_TYPES, Joint
 from .model import Body, Load, Model
@@ -17,6 +18,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "JOINT_TYPES",
+    "BatchSolution",
     "Body",
     "BodyResult",
     "Certificate",

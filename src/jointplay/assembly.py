@@ -185,6 +185,19 @@ class Assembly:
                 raise ValueError(f"load on body {load.body!r}, which is not a moving body")
         return load_work(loads, self.body_index, self.body_ref, self.s, self.ell)
 
+    def wrench_work(self, body: str, at: Sequence[float] | None = None) -> FloatArray:
+        """The (m, 6) map from a wrench ``(force N, torque N*mm)`` acting on
+        ``body`` at point ``at`` (mm, global) to its work ``g``: loads add up
+        linearly, so a study builds many load cases as ``W @ wrench``."""
+        i = self.body_index[body]
+        W = np.zeros((self.m, 6))
+        W[6 * i : 6 * i + 3, :3] = self.s * np.eye(3)
+        W[6 * i + 3 : 6 * i + 6, 3:] = (self.s / self.ell) * np.eye(3)
+        if at is not None:
+            lever = np.asarray(at, dtype=float) - self.body_ref[i]
+            W[6 * i + 3 : 6 * i + 6, :3] = (self.s / self.ell) * skew(lever)
+        return W
+
     @cached_property
     def stack(self) -> BallStack:
         """All clearance cones stacked into dense arrays (see ``BallStack``)."""

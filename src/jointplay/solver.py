@@ -23,7 +23,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import clarabel
 import numpy as np
@@ -34,6 +34,9 @@ from .errors import SolverError, UnboundedMechanismError
 from .geometry import FloatArray, describe_motion
 from .model import Load, Model
 from .result import Certificate, Result, build_result, describe_free_motions
+
+if TYPE_CHECKING:
+    from .batch import BatchSolution
 
 
 @dataclass(frozen=True)
@@ -144,13 +147,30 @@ class Workspace:
         g = self.asm.g if loads is None else self.asm.work_of(loads)
         self._check_driven(g)
         g_norm = float(np.linalg.norm(g))
-        if g_norm == 0.0:
+        point = self._optimum(g / g_norm if g_norm else g)
+        assert point.certificate is not None
+        elapsed = time.perf_counter() - start
+        forces = point.lam * g_norm / self.asm.s
+        return build_result(
+            self.asm, point.x, forces, point.certificate, elapsed, self.free_motions, g
+        )
+
+    def solve_batch(self, work: FloatArray) -> BatchSolution:
+        """Equilibria under many loads at once: ``work`` is (B, m), one row of
+        the loads' work per sample (build rows with ``Assembly.wrench_work``)."""
+        from .batch import solve_batch
+
+        return solve_batch(self, work)
+
+    def _optimum(self, g_hat: FloatArray) -> _Point:
+        """The certified optimum for unit loads ``g_hat`` (or 0 for no load)."""
+        if not np.any(g_hat):
             point = _Point(np.zeros(self.m), np.zeros(len(self.balls)), method="no load")
-            g_hat = g
         else:
-            g_hat = g / g_norm
-            point = self._warm(g_hat) if self.settings.warm_start else None
-            if point is None:
+            warm = self._warm(g_hat) if self.settings.warm_start else None
+            if warm is not None:
+                point = warm
+            else:
                 point = self._phase1(g_hat)
                 if self.settings.polish:
                     point = self._polish(g_hat, point)
@@ -163,14 +183,15 @@ class Workspace:
                 f"{cert.equilibrium_residual:.3g} (relative), smallest contact force "
                 f"{cert.min_force:.3g} N; please report this model"
             )
-        elapsed = time.perf_counter() - start
-        forces = point.lam * g_norm / self.asm.s
-        return build_result(self.asm, point.x, forces, cert, elapsed, self.free_motions, g)
+        point.certificate = cert
+        return point
 
     # -- phase 1: the cone program -----------------------------------------
     def _phase1(self, g_hat: FloatArray) -> _Point:
         if self._phase1_data is None:
-            self._phase1_data = self._cone_program(None, self.Eq, np.zeros(len(self.Eq)), self.stack)
+            self._phase1_data = self._cone_program(
+                None, self.Eq, np.zeros(len(self.Eq)), self.stack
+            )
         sol = self._clarabel(self._phase1_data, -g_hat)
         x = np.asarray(sol.x)
         lam = np.asarray(sol.z)[self._phase1_data.soc_first]
@@ -219,8 +240,14 @@ class Workspace:
         return face
 
     def _newton_on(
-        self, g_hat: FloatArray, active: tuple[int, ...], x0: FloatArray, lam0: FloatArray,
-        iterations: int, method: str, max_iter: int,
+        self,
+        g_hat: FloatArray,
+        active: tuple[int, ...],
+        x0: FloatArray,
+        lam0: FloatArray,
+        iterations: int,
+        method: str,
+        max_iter: int,
     ) -> _Point | None:
         """Solve the KKT equations of ``active`` and accept only a certified,
         unique optimum: feasible, forces balancing the loads, and every active
@@ -228,9 +255,7 @@ class Workspace:
         face = self._face(active)
         if not face.determined:
             return None
-        out = _newton(
-            None, -g_hat, self.Eq, np.zeros(len(self.Eq)), face.stack, x0, lam0, max_iter
-        )
+        out = _newton(None, -g_hat, self.Eq, np.zeros(len(self.Eq)), face.stack, x0, lam0, max_iter)
         if out is None:
             return None
         x, lam_active, _nu, its = out
@@ -250,7 +275,9 @@ class Workspace:
             g_hat, last.active, last.x, last.lam[list(last.active)], 0, "warm-started Newton", 12
         )
 
-    def _active(self, x: FloatArray, lam: FloatArray, stack: BallStack, lam_scale: float = 0.0) -> tuple[int, ...]:
+    def _active(
+        self, x: FloatArray, lam: FloatArray, stack: BallStack, lam_scale: float = 0.0
+    ) -> tuple[int, ...]:
         """Contacts whose multiplier outweighs their slack (both relative)."""
         if len(lam) == 0:
             return ()
@@ -283,7 +310,9 @@ class Workspace:
         x = np.asarray(sol.x)
         lam_rest = np.asarray(sol.z)[prog.soc_first]
         active2 = self._active(x, lam_rest, rest, float(np.max(np.abs(self.asm.metric @ x))))
-        polished = _newton(self.asm.metric, np.zeros(self.m), Eq, e, rest.take(active2), x, lam_rest[list(active2)])
+        polished = _newton(
+            self.asm.metric, np.zeros(self.m), Eq, e, rest.take(active2), x, lam_rest[list(active2)]
+        )
         if polished is not None:
             x = polished[0]
         touching = sorted(set(active) | {rest_index[i] for i in active2})

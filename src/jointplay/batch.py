@@ -1,0 +1,281 @@
+"""Many equilibria of one mechanism at once: the same joints, other loads.
+
+Most samples of a study share their active contact set. For one set, the
+optimality (KKT) equations of all samples are solved together by Newton's
+method with batched linear algebra. A sample is kept only if its own
+certificate holds: feasible, every active force strictly positive, forces
+balancing its loads, on a face that pins the position down (so the optimum
+is unique). The first sample left over goes through the full solver; its
+active set is then tried on the others, until none is left.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from .assembly import Assembly, BallStack, IntArray
+from .errors import SolverError
+from .geometry import FloatArray
+
+BoolArray = NDArray[np.bool_]
+
+if TYPE_CHECKING:
+    from .solver import Workspace
+
+#: Newton steps tried on a batch before its leftovers go to the full solver ...
+MAX_NEWTON = 12
+#: ... and after this many, rows still far from converging are dropped.
+GIVE_UP_AFTER = 6
+#: Samples per batched linear solve (bounds the memory of the (B, n, n) stack).
+CHUNK_ENTRIES = 1 << 22
+
+
+@dataclass(frozen=True)
+class BatchSolution:
+    """Equilibria of B samples; every row passed its certificate.
+
+    ``x``: scaled unknowns (B, m). ``forces``: ball-contact forces (B, n) in N,
+    in the order of ``Assembly.balls``. ``batched[i]`` says whether sample i
+    was solved by the batched Newton path (else by the full solver).
+    """
+
+    asm: Assembly
+    x: FloatArray
+    forces: FloatArray
+    potential_energy: FloatArray  # (B,) N*mm
+    feasibility_mm: FloatArray  # (B,) largest overshoot of a clearance (0: feasible)
+    equilibrium_residual: FloatArray  # (B,) relative
+    batched: BoolArray  # (B,)
+    full_solves: int
+
+    def __len__(self) -> int:
+        return int(self.x.shape[0])
+
+    def joint_torsor(self, name: str) -> FloatArray:
+        """(B, 6): joint ``name``'s relative torsor (t mm, w rad), joint frame."""
+        jdx = [j.name for j in self.asm.model.joints].index(name)
+        G = self.asm.G[jdx]
+        return self.x[:, G.cols] @ G.block.T
+
+    def body_displacement(self, name: str) -> FloatArray:
+        """(B, 6): body ``name``'s translation at the global origin (mm) and rotation (rad)."""
+        out = np.zeros((len(self), 6))
+        if name not in self.asm.body_index:
+            return out  # a ground body
+        i = self.asm.body_index[name]
+        s, ell = self.asm.s, self.asm.ell
+        omega = (s / ell) * self.x[:, 6 * i + 3 : 6 * i + 6]
+        out[:, 3:] = omega
+        out[:, :3] = s * self.x[:, 6 * i : 6 * i + 3] - np.cross(omega, self.asm.body_ref[i])
+        return out
+
+    def gap_used(self) -> FloatArray:
+        """(B, n): fraction of each ball contact's play used."""
+        stack = self.asm.stack
+        v = self.x @ stack.A.T
+        rho = np.sqrt(np.add.reduceat(v * v, stack.start, axis=1)) if len(stack.k) else v
+        return np.clip(rho / stack.r, 0.0, 1.0) if len(stack.k) else rho
+
+
+def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
+    work = np.atleast_2d(np.asarray(work, dtype=float))
+    if work.ndim != 2 or work.shape[1] != ws.m:
+        raise ValueError(f"work must have shape (B, {ws.m}), not {work.shape}")
+    B = work.shape[0]
+    norms = np.linalg.norm(work, axis=1)
+    if not np.all(np.isfinite(work)):
+        raise ValueError("work has non-finite entries")
+    _check_driven(ws, work, norms)
+    g_hat = np.divide(work, norms[:, None], out=np.zeros_like(work), where=norms[:, None] > 0)
+
+    n_balls = len(ws.balls)
+    x = np.zeros((B, ws.m))
+    lam = np.zeros((B, n_balls))
+    batched = np.zeros(B, dtype=bool)
+    pending = np.flatnonzero(norms > 0)
+    solved_by_set: dict[tuple[int, ...], list[IntArray]] = {}  # active set -> solved rows
+    full = 0
+    while pending.size:
+        # Newton from the nearest solved sample of each known active set, while it helps.
+        progress = True
+        while progress and pending.size:
+            progress = False
+            for active, rows in solved_by_set.items():
+                if not pending.size:
+                    break
+                ref = np.concatenate(rows)
+                nearest = ref[cKDTree(g_hat[ref]).query(g_hat[pending])[1]]
+                ok, xs, lams = _newton_batch(ws, active, g_hat[pending], x[nearest], lam[nearest])
+                if np.any(ok):
+                    won = pending[ok]
+                    x[won], lam[won], batched[won] = xs[ok], lams[ok], True
+                    rows.append(won)
+                    pending = pending[~ok]
+                    progress = True
+        if not pending.size:
+            break
+        first, pending = int(pending[0]), pending[1:]
+        ws._last = None
+        point = ws._optimum(g_hat[first])
+        full += 1
+        x[first], lam[first] = point.x, point.lam
+        if point.active is not None:
+            solved_by_set.setdefault(point.active, []).append(np.array([first]))
+
+    feas, residual = _certificates(ws, g_hat, x, lam)
+    st = ws.settings
+    if np.any(feas > st.feasibility_tolerance * ws._max_radius) or np.any(
+        residual > st.equilibrium_tolerance
+    ):  # pragma: no cover - each row was certified on its own path
+        raise SolverError("a batch answer failed its final certificate; please report this model")
+    return BatchSolution(
+        asm=ws.asm,
+        x=x,
+        forces=lam * norms[:, None] / ws.asm.s,
+        potential_energy=-np.einsum("bm,bm->b", work, x),
+        feasibility_mm=np.maximum(feas, 0.0) * ws.asm.s,
+        equilibrium_residual=residual,
+        batched=batched,
+        full_solves=full,
+    )
+
+
+def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
+    if ws.N.shape[1] == 0:
+        return
+    drive = work @ ws.N
+    bad = np.linalg.norm(drive, axis=1) > ws.settings.drive_tolerance * norms
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        ws._check_driven(work[i])  # raises, naming the body and the motion
+
+
+def _norms(stack: BallStack, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+    v = x @ stack.A.T
+    return v, np.sqrt(np.add.reduceat(v * v, stack.start, axis=1))
+
+
+def _newton_batch(
+    ws: Workspace,
+    active: tuple[int, ...],
+    g_hat: FloatArray,
+    x0: FloatArray,
+    lam0: FloatArray,
+) -> tuple[BoolArray, FloatArray, FloatArray]:
+    """KKT equations of ``active`` for every row of ``g_hat``, each from its
+    own start (rows of ``x0``, ``lam0``).
+
+    Returns (accepted mask, x, full multipliers); a row is accepted only if
+    it converged and passes the certificate of a unique optimum.
+    """
+    B, m = g_hat.shape
+    sub = ws._face(active).stack
+    na, ne = len(active), ws.Eq.shape[0]
+    n = m + na + ne
+    x = x0.copy()
+    lam_a = lam0[:, list(active)]
+    conv = np.zeros(B, dtype=bool)
+    chunk = max(1, CHUNK_ENTRIES // (n * n))
+    for lo in range(0, B, chunk):
+        sl = slice(lo, min(B, lo + chunk))
+        conv[sl] = _newton_rows(ws, sub, -g_hat[sl], x[sl], lam_a[sl])
+
+    lam = np.zeros((B, len(ws.balls)))
+    lam[:, list(active)] = lam_a
+    strict = np.min(lam_a, axis=1) > 1e-9 * np.max(lam_a, axis=1) if na else conv
+    feas, residual = _certificates(ws, g_hat, x, lam)
+    st = ws.settings
+    ok = (
+        conv
+        & strict
+        & (feas <= st.feasibility_tolerance * ws._max_radius)
+        & (residual <= st.equilibrium_tolerance)
+    )
+    return ok, x, lam
+
+
+def _newton_rows(
+    ws: Workspace, sub: BallStack, q: FloatArray, x: FloatArray, lam: FloatArray
+) -> BoolArray:
+    """Newton on the KKT equations, rows in place; returns the converged mask."""
+    B, m = q.shape
+    A, start, k, r = sub.A, sub.start, sub.k, sub.r
+    Eq = ws.Eq
+    na, ne = len(k), Eq.shape[0]
+    n = m + na + ne
+    nu = np.zeros((B, ne))
+    K0 = np.zeros((n, n))
+    K0[:m, m + na :] = Eq.T
+    K0[m + na :, :m] = Eq
+    todo = np.arange(B)
+    conv = np.zeros(B, dtype=bool)
+    for it in range(MAX_NEWTON + 1):
+        xs, ls = x[todo], lam[todo]
+        v = xs @ A.T
+        rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
+        if na and not np.all(rho > 0):
+            return conv  # a contact at its centre: no direction; leave to the full solver
+        u = v / np.repeat(rho, k, axis=1) if na else v
+        J = np.add.reduceat(A[None, :, :] * u[:, :, None], start, axis=1) if na else None
+        grad = q[todo] + nu[todo] @ Eq
+        if J is not None:
+            grad += np.einsum("bi,bim->bm", ls, J)
+        F = np.concatenate([grad, rho - r, xs @ Eq.T], axis=1)
+        err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
+        done = err <= 1e-14
+        conv[todo[done]] = True
+        keep = ~done
+        if it >= GIVE_UP_AFTER:  # far from quadratic convergence: a wrong start or set
+            keep &= err <= 1e-4
+        if not np.any(keep):
+            break
+        todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
+        Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
+        if J is not None:
+            J = J[keep]
+            c = ls / rho
+            AtCA = (A.T[None, :, :] * np.repeat(c, k, axis=1)[:, None, :]) @ A
+            Kb[:, :m, :m] = AtCA - np.einsum("bim,bi,bin->bmn", J, c, J)
+            Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
+            Kb[:, m : m + na, :m] = J
+        try:
+            step = np.linalg.solve(Kb, -F[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            return conv  # a singular system in the batch: leave the rest to the full solver
+        x[todo] += step[:, :m]
+        lam[todo] += step[:, m : m + na]
+        nu[todo] += step[:, m + na :]
+    # rows still in ``todo`` did not converge
+    return conv
+
+
+def _certificates(
+    ws: Workspace, g_hat: FloatArray, x: FloatArray, lam: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Per row: feasibility (scaled) and relative equilibrium residual."""
+    B = x.shape[0]
+    stack = ws.stack
+    if len(stack.k):
+        v, rho = _norms(stack, x)
+        feas = np.max(rho - stack.r, axis=1)
+        safe = np.where(rho > 0, rho, 1.0)
+        u = v / np.repeat(safe, stack.k, axis=1)
+        # sum_i lam_i A_i^T u_i, row by row
+        weighted = u * np.repeat(lam, stack.k, axis=1)
+        residual_vec = g_hat - weighted @ stack.A
+    else:
+        feas = np.zeros(B)
+        residual_vec = g_hat.copy()
+    if len(ws.E):
+        feas = np.maximum(feas, np.max(np.abs(x @ ws.E.T), axis=1))
+    Q = ws._rigid_basis
+    if Q.shape[1]:
+        residual_vec -= (residual_vec @ Q) @ Q.T
+    residual = np.linalg.norm(residual_vec, axis=1)
+    residual[~np.any(g_hat, axis=1)] = 0.0
+    return feas, residual

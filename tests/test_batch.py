@@ -1,0 +1,113 @@
+"""Re-solving a prepared mechanism: warm starts and batches agree with fresh solves."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+import jointplay
+from conftest import MM, RAD, spherical_shaft
+from jointplay import Load, Workspace, model_from_dict
+
+
+def rotated_forces(n: int) -> np.ndarray:
+    """The paper's F = (1, 1, 1) N turned about the shaft axis X in n steps."""
+    th = np.linspace(0.0, 2 * np.pi, n, endpoint=False) + np.pi / 4
+    return np.stack([np.ones(n), np.sqrt(2) * np.cos(th), np.sqrt(2) * np.sin(th)], axis=1)
+
+
+def fresh(data: dict[str, Any], loads: list[dict[str, Any]]) -> jointplay.Result:
+    result = jointplay.solve(model_from_dict({**data, "loads": loads}))
+    result.check()
+    return result
+
+
+def test_wrench_work_is_the_work_of_the_same_load() -> None:
+    ws = Workspace.of(model_from_dict(spherical_shaft()))
+    load = Load(body="S1", at=(300.0, 10.0, -5.0), force=(1.0, -2.0, 3.0), torque=(4.0, 5.0, 6.0))
+    W = ws.asm.wrench_work("S1", load.at)
+    np.testing.assert_allclose(W @ np.r_[load.force, load.torque], ws.asm.work_of([load]))
+
+
+def test_warm_started_solves_match_fresh_solves() -> None:
+    data = spherical_shaft()
+    ws = Workspace.of(model_from_dict(data))
+    methods = set()
+    for force in rotated_forces(12):
+        loads = [{"body": "S1", "at": [300, 0, 0], "force": list(force)}]
+        warm = ws.solve(loads=[Load(**loads[0])])
+        warm.check()
+        methods.add(warm.certificate.method)
+        ref = fresh(data, loads)
+        for name in ("l1", "l2"):
+            np.testing.assert_allclose(
+                warm.joints[name].translation, ref.joints[name].translation, atol=MM
+            )
+            np.testing.assert_allclose(
+                warm.joints[name].rotation, ref.joints[name].rotation, atol=RAD
+            )
+        assert warm.potential_energy == pytest.approx(ref.potential_energy, rel=1e-12)
+    assert "warm-started Newton" in methods  # the fast path was taken
+
+
+def test_warm_start_does_not_hide_a_tie() -> None:
+    """After a unique optimum, a load that ties positions still gets the
+    least-norm answer (the warm path refuses faces that do not pin x down)."""
+    data = spherical_shaft()
+    ws = Workspace.of(model_from_dict(data))
+    ws.solve()
+    tie = [{"body": "S1", "at": [220, 0, 0], "force": [0, 1, 0]}]
+    warm = ws.solve(loads=[Load(**tie[0])])
+    ref = fresh(data, tie)
+    np.testing.assert_allclose(warm.joints["l2"].translation, ref.joints["l2"].translation, atol=MM)
+    np.testing.assert_allclose(warm.joints["l2"].rotation, ref.joints["l2"].rotation, atol=RAD)
+
+
+def test_batch_matches_one_by_one_solves() -> None:
+    data = spherical_shaft()
+    ws = Workspace.of(model_from_dict(data))
+    forces = rotated_forces(360)
+    W = ws.asm.wrench_work("S1", [300, 0, 0])
+    batch = ws.solve_batch(np.hstack([forces, np.zeros_like(forces)]) @ W.T)
+    assert len(batch) == 360
+    assert batch.full_solves < 10  # one active set: nearly all rows solved together
+    assert np.all(batch.feasibility_mm <= 1e-9 * 0.1)
+    assert np.all(batch.equilibrium_residual <= 1e-8)
+    for i in range(0, 360, 37):
+        loads = [{"body": "S1", "at": [300, 0, 0], "force": list(forces[i])}]
+        ref = fresh(data, loads)
+        for name in ("l1", "l2"):
+            tau = batch.joint_torsor(name)[i]
+            np.testing.assert_allclose(tau[:3], ref.joints[name].translation, atol=MM)
+            np.testing.assert_allclose(tau[3:], ref.joints[name].rotation, atol=RAD)
+        body = batch.body_displacement("S1")[i]
+        np.testing.assert_allclose(body[:3], ref.bodies["S1"].translation, atol=MM)
+        np.testing.assert_allclose(body[3:], ref.bodies["S1"].rotation, atol=RAD)
+        assert batch.potential_energy[i] == pytest.approx(ref.potential_energy, rel=1e-10)
+        forces_ref = [c.force_magnitude for j in ref.joints.values() for c in j.contacts]
+        np.testing.assert_allclose(batch.forces[i], forces_ref, rtol=1e-8, atol=1e-9)
+    # every contact of the rotating load: l1 and the end of l2 near the load touch
+    np.testing.assert_allclose(batch.gap_used()[:, [0, 2]], 1.0, atol=1e-12)
+
+
+def test_batch_with_ties_and_zero_rows() -> None:
+    data = spherical_shaft()
+    ws = Workspace.of(model_from_dict(data))
+    W = ws.asm.wrench_work("S1", [220, 0, 0])
+    wrenches = np.array([[0, 1, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0], [0, 0, 2, 0, 0, 0]], float)
+    batch = ws.solve_batch(wrenches @ W.T)
+    assert np.all(batch.x[1] == 0)
+    ref = fresh(data, [{"body": "S1", "at": [220, 0, 0], "force": [0, 1, 0]}])
+    np.testing.assert_allclose(
+        batch.joint_torsor("l2")[0, :3], ref.joints["l2"].translation, atol=MM
+    )
+
+
+def test_batch_reports_a_driven_free_motion() -> None:
+    ws = Workspace.of(model_from_dict(spherical_shaft()))
+    W = ws.asm.wrench_work("S1", [300, 0, 0])
+    wrenches = np.array([[1, 1, 1, 0, 0, 0], [0, 0, 0, 5, 0, 0]], float)
+    with pytest.raises(jointplay.UnboundedMechanismError, match="rotation about the global X"):
+        ws.solve_batch(wrenches @ W.T)
