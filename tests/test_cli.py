@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import jointplay
-from conftest import MM, PAPER, RAD
+from conftest import MM, PAPER, RAD, ROOT
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:
@@ -35,16 +35,30 @@ def test_solve_json_has_exactly_the_documented_schema() -> None:
     proc = run("solve", str(PAPER / "6.1.6.1.yaml"), "--json")
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
-    assert set(doc) == {"status", "potential_energy", "bodies", "joints"}
+    # the core schema, plus the force additions (reaction, force, point, residual, points)
+    assert set(doc) == {
+        "status",
+        "potential_energy",
+        "bodies",
+        "joints",
+        "points",
+        "equilibrium_residual",
+    }
+    assert doc["equilibrium_residual"] < 1e-8
+    assert doc["points"] == {}
     assert doc["status"] == "optimal"
     assert set(doc["bodies"]) == {"S0", "S1"}
     for body in doc["bodies"].values():
         assert set(body) == {"translation", "rotation"}
     assert set(doc["joints"]) == {"l1", "l2"}
     l2 = doc["joints"]["l2"]
-    assert set(l2) == {"axes", "translation", "rotation", "contacts"}
+    assert set(l2) == {"axes", "translation", "rotation", "contacts", "reaction"}
+    assert set(l2["reaction"]) == {"force", "moment"}
     assert l2["axes"] == {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
-    assert [set(c) for c in l2["contacts"]] == [{"name", "gap_used", "in_contact"}] * 2
+    keys = {"name", "gap_used", "in_contact", "force", "point"}
+    assert [set(c) for c in l2["contacts"]] == [keys] * 2
+    assert l2["contacts"][0]["force"] == [0.0, 0.0, 0.0]  # free: no force
+    assert l2["contacts"][1]["point"] == [220.0, 0.0, 0.0]
     assert [c["in_contact"] for c in l2["contacts"]] == [False, True]
     assert all(0.0 <= c["gap_used"] <= 1.0 for c in l2["contacts"])
     assert l2["translation"][1] == pytest.approx(6.134259e-2, abs=MM)
@@ -95,3 +109,28 @@ def test_every_bundled_example_solves() -> None:
         proc = run("solve", str(path), "--json")
         assert proc.returncode == 0, (path, proc.stderr)
         assert json.loads(proc.stdout)["status"] == "optimal"
+
+
+def test_load_cases_each_reported_and_one_by_name() -> None:
+    path = ROOT / "examples" / "studies" / "shaft_cases.yaml"
+    proc = run("solve", str(path), "--json")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["status"] == "optimal" and list(doc["cases"]) == ["cutting", "lifting"]
+    model = jointplay.load(path)
+    for name, case in doc["cases"].items():
+        assert case == jointplay.solve(model, case=name).to_dict()
+        assert case["equilibrium_residual"] < 1e-8
+        assert set(case["points"]) == {"tip"}
+    proc = run("solve", str(path), "--case", "lifting")
+    assert proc.returncode == 0, proc.stderr
+    assert "load case 'lifting'" in proc.stdout and "cutting" not in proc.stdout
+    assert "tip" in proc.stdout and "reaction" in proc.stdout
+
+
+def test_unknown_case_exits_2_with_a_suggestion() -> None:
+    path = ROOT / "examples" / "studies" / "shaft_cases.yaml"
+    proc = run("solve", str(path), "--case", "lifitng")
+    assert proc.returncode == 2
+    assert "shaft_cases.yaml" in proc.stderr and "Did you mean 'lifting'?" in proc.stderr
+    assert "Traceback" not in proc.stderr

@@ -12,7 +12,7 @@ from .joints import JOINT_TYPES, Joint
 from .model import Body, Load, Model
 from .modelfile import load, model_from_dict
 from .result import BodyResult, Certificate, ContactResult, JointResult, Result
-from .solver import SolverSettings, Workspace, solve
+from .solver import SolverSettings, Workspace, solve, solve_cases
 
 __version__ = "0.1.0"
 
@@ -38,4 +38,5 @@ __all__ = [
     "load",
     "model_from_dict",
     "solve",
+    "solve_cases",
 ]

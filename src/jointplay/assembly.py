@@ -256,7 +256,7 @@ def assemble(model: Model) -> Assembly:
             block = (contact.rows / s) @ G.block
             contacts.append(ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m))
 
-    g = load_work(model.loads, index, body_ref, s, ell)
+    g = load_work(model.loads_of(None), index, body_ref, s, ell)
     return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g)
 
 

@@ -15,6 +15,7 @@ from rich.console import Console
 
 from . import __version__
 from .errors import JointplayError, ModelError, UnboundedMechanismError
+from .model import suggest
 
 app = typer.Typer(
     add_completion=False,
@@ -45,21 +46,50 @@ def solve(
         Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
     ],
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    case: Annotated[
+        str | None,
+        typer.Option("--case", metavar="NAME", help="Solve only this load case of the model."),
+    ] = None,
 ) -> None:
-    """Solve the equilibrium of MODEL and report joints, contacts and bodies."""
+    """Solve the equilibrium of MODEL: joints, contacts, forces and bodies.
+
+    A model with load cases is solved for each case (or only --case NAME).
+    """
     from .modelfile import load
-    from .solver import solve as solve_model
+    from .solver import Workspace
     from .textreport import render
 
     def run() -> None:
         model = load(model_path)
-        result = solve_model(model)
+        if case is not None and case not in model.case_names:
+            cases = ", ".join(model.case_names) or "(the model has none)"
+            raise ModelError(
+                f"--case: no load case '{case}'; cases are: {cases}."
+                + suggest(case, model.case_names),
+                source=str(model_path),
+            )
+        ws = Workspace.of(model)
+        if not model.case_names:
+            result = ws.solve()
+            if as_json:
+                typer.echo(json.dumps(result.to_dict(), indent=2))
+            else:
+                render(model, result, str(model_path), _console())
+            return
+        names = [case] if case is not None else list(model.case_names)
+        results = {name: ws.solve(loads=model.loads_of(name)) for name in names}
         if as_json:
-            typer.echo(json.dumps(result.to_dict(), indent=2))
+            doc = {"status": "optimal", "cases": {n: r.to_dict() for n, r in results.items()}}
+            typer.echo(json.dumps(doc, indent=2))
         else:
-            render(model, result, str(model_path), Console(highlight=False, soft_wrap=False))
+            for name, result in results.items():
+                render(model, result, str(model_path), _console(), case=name)
 
     _guarded(run, as_json)
+
+
+def _console() -> Console:
+    return Console(highlight=False, soft_wrap=False)
 
 
 def _guarded(run: Any, as_json: bool) -> None:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictBool, model_validator
 
-from .fields import ForceVector, Name, Point, TorqueVector
+from .fields import AccelerationVector, ForceVector, Name, NonNegativeMass, Point, TorqueVector
 from .joints import JOINT_TYPES, Joint
 
 if TYPE_CHECKING:
@@ -50,6 +50,28 @@ class Body(BaseModel):
 
     name: Name
     ground: StrictBool = False
+    mass: NonNegativeMass | None = (
+        None  # kg; with the model's gravity, a weight at the centre of mass
+    )
+    center_of_mass: Point | None = None  # mm, global
+
+    @model_validator(mode="after")
+    def _check_mass(self) -> Body:
+        if self.mass is not None and self.center_of_mass is None:
+            raise ValueError("a body with a 'mass' needs its 'center_of_mass: [x, y, z]' (mm)")
+        if self.center_of_mass is not None and self.mass is None:
+            raise ValueError("'center_of_mass' is given without a 'mass'; add 'mass' (kg)")
+        return self
+
+
+class FunctionalPoint(BaseModel):
+    """A point of a body whose displacement the result reports (a tool tip, say)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    name: Name
+    body: Name
+    at: Point
 
 
 class Load(BaseModel):
@@ -82,6 +104,9 @@ class Model(BaseModel):
     bodies: tuple[Body, ...] = Field(min_length=1)
     joints: tuple[AnyJoint, ...] = Field(min_length=1)
     loads: tuple[Load, ...] = ()
+    load_cases: dict[Name, tuple[Load, ...]] | None = None
+    gravity: AccelerationVector | None = None  # mm/s^2 as plain numbers; "9.81 m/s^2"
+    points: tuple[FunctionalPoint, ...] = ()
 
     @model_validator(mode="after")
     def _check_topology(self) -> Model:
@@ -115,8 +140,10 @@ class Model(BaseModel):
                     f"between: both '{a}' and '{b}' are ground bodies, so the joint "
                     "constrains nothing; connect a moving body",
                 )
-        for i, load in enumerate(self.loads):
-            entry = f"loads[{i}]"
+        sections = [(f"loads[{i}]", load) for i, load in enumerate(self.loads)]
+        for case, loads in (self.load_cases or {}).items():
+            sections += [(f"load_cases.{case}[{i}]", load) for i, load in enumerate(loads)]
+        for entry, load in sections:
             if load.body not in names:
                 raise EntryError(
                     entry,
@@ -128,6 +155,18 @@ class Model(BaseModel):
                     entry,
                     f"body: '{load.body}' is a ground body, which does not move, so the load "
                     "does nothing; put it on a moving body",
+                )
+        if self.load_cases is not None and not self.load_cases:
+            raise EntryError(
+                "load_cases", "no cases given; name at least one case, or leave it out"
+            )
+        _check_unique([p.name for p in self.points], "points", "point")
+        for i, point in enumerate(self.points):
+            if point.body not in names:
+                raise EntryError(
+                    f"points[{i}] '{point.name}'",
+                    f"body: unknown body '{point.body}'; bodies are: {', '.join(names)}."
+                    + suggest(point.body, names),
                 )
         unreached = _unreached_from_ground(names, grounds, [j.between for j in self.joints])
         if unreached:
@@ -142,6 +181,37 @@ class Model(BaseModel):
     @cached_property
     def moving_bodies(self) -> tuple[Body, ...]:
         return tuple(b for b in self.bodies if not b.ground)
+
+    @property
+    def case_names(self) -> tuple[str, ...]:
+        """The load cases, in file order (empty when the model has none)."""
+        return tuple(self.load_cases or ())
+
+    def weights(self) -> tuple[Load, ...]:
+        """Gravity on each moving body with a mass: m * g at its centre of mass (N)."""
+        if self.gravity is None:
+            return ()
+        out = []
+        for b in self.moving_bodies:
+            if b.mass and b.center_of_mass is not None:
+                # kg * mm/s^2 = 1e-3 N
+                force = tuple(1e-3 * b.mass * g for g in self.gravity)
+                out.append(Load(body=b.name, at=b.center_of_mass, force=force))
+        return tuple(out)
+
+    def loads_of(self, case: str | None = None) -> tuple[Load, ...]:
+        """Every load acting in ``case``: the top-level loads (which act in every
+        case), the weights, and the case's own loads."""
+        own: tuple[Load, ...] = ()
+        if case is not None:
+            if case not in (self.load_cases or {}):
+                cases = self.case_names
+                raise KeyError(
+                    f"no load case '{case}'; cases are: {', '.join(cases) or '(none)'}."
+                    + suggest(case, cases)
+                )
+            own = (self.load_cases or {})[case]
+        return self.loads + self.weights() + own
 
     def body(self, name: str) -> Body:
         for b in self.bodies:

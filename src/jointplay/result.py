@@ -18,6 +18,10 @@ from .geometry import FloatArray, cross, describe_motion
 
 if TYPE_CHECKING:
     from .assembly import Assembly
+    from .model import Load
+
+#: Largest relative imbalance of loads and contact forces that ``check`` accepts.
+EQUILIBRIUM_TOLERANCE = 1e-8
 
 #: A contact counts as touching when it uses this much of its play or more.
 TOUCHING = 1.0 - 1e-8
@@ -47,13 +51,32 @@ class Certificate:
 
 @dataclass(frozen=True)
 class ContactResult:
+    """One contact of a joint: how much play it uses and how hard it pushes.
+
+    ``force`` is the force that body a exerts on body b at this contact (N,
+    joint frame), acting at ``point`` (mm, global; on the joint axis for
+    cylindrical ends, as in the paper's modelling). A contact that does not
+    touch carries no force.
+    """
+
     name: str
     gap_used: float  # fraction of the play used, 0..1
     in_contact: bool
-    force_magnitude: float  # N, that body a exerts on body b at this contact
+    force: FloatArray  # N, joint frame, a on b
+    point: FloatArray  # mm, global
+
+    @property
+    def force_magnitude(self) -> float:
+        return float(np.linalg.norm(self.force))
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "gap_used": self.gap_used, "in_contact": self.in_contact}
+        return {
+            "name": self.name,
+            "gap_used": self.gap_used,
+            "in_contact": self.in_contact,
+            "force": _list(self.force),
+            "point": _list(self.point),
+        }
 
 
 @dataclass(frozen=True)
@@ -66,6 +89,8 @@ class JointResult:
     translation: FloatArray  # mm, b relative to a, at the centre, joint frame
     rotation: FloatArray  # rad, joint frame
     contacts: tuple[ContactResult, ...]
+    reaction_force: FloatArray  # N, a on b, joint frame
+    reaction_moment: FloatArray  # N*mm, a on b, about the centre, joint frame
 
     def to_dict(self) -> dict[str, Any]:
         R = self.R_world_joint
@@ -74,7 +99,22 @@ class JointResult:
             "translation": _list(self.translation),
             "rotation": _list(self.rotation),
             "contacts": [c.to_dict() for c in self.contacts],
+            "reaction": {
+                "force": _list(self.reaction_force),
+                "moment": _list(self.reaction_moment),
+            },
         }
+
+
+@dataclass(frozen=True)
+class PointResult:
+    name: str
+    body: str
+    at: FloatArray  # mm, global, before displacement
+    displacement: FloatArray  # mm, global
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"body": self.body, "displacement": _list(self.displacement)}
 
 
 @dataclass(frozen=True)
@@ -97,7 +137,11 @@ class Result:
     potential_energy: float  # N*mm
     bodies: dict[str, BodyResult]
     joints: dict[str, JointResult]
+    points: dict[str, PointResult]
     certificate: Certificate
+    #: Worst imbalance of loads and contact forces over the moving bodies,
+    #: computed in global axes from the reported forces (relative to the loads).
+    equilibrium_residual: float
     solve_time: float  # s
     #: Describes the free motions that no load drives (reported as 0); called lazily.
     describe_free: Callable[[], tuple[str, ...]] = field(repr=False, compare=False)
@@ -113,12 +157,17 @@ class Result:
             "potential_energy": float(self.potential_energy),
             "bodies": {n: b.to_dict() for n, b in self.bodies.items()},
             "joints": {n: j.to_dict() for n, j in self.joints.items()},
+            "points": {n: p.to_dict() for n, p in self.points.items()},
+            "equilibrium_residual": self.equilibrium_residual,
         }
 
     def check(self) -> None:
         """Raise ``AssertionError`` unless the certificate holds."""
         c = self.certificate
         assert c.certified, f"uncertified result: {c}"
+        assert self.equilibrium_residual <= EQUILIBRIUM_TOLERANCE, (
+            f"forces do not balance the loads: residual {self.equilibrium_residual:.3g}"
+        )
 
 
 def _clean(v: FloatArray, scale: float) -> FloatArray:
@@ -135,15 +184,21 @@ def _list(v: FloatArray) -> list[float]:
 def build_result(
     asm: Assembly,
     x: FloatArray,
-    forces: FloatArray,
+    ball_forces: FloatArray,
+    rigid_forces: FloatArray,
     certificate: Certificate,
     solve_time: float,
     describe_free: Callable[[], tuple[str, ...]],
+    loads: tuple[Load, ...],
     g: FloatArray,
 ) -> Result:
-    """Turn scaled unknowns and ball-contact forces (N) into a ``Result``
-    (``g``: the loads' work, for the potential energy)."""
+    """Turn the solver's numbers into a ``Result``.
 
+    ``ball_forces``: the force (N) of each clearance contact (``asm.balls``
+    order); ``rigid_forces``: the multipliers (N, N*mm) of the fixed rows
+    (``asm.fixed`` order, rows stacked); ``loads`` and ``g``: the loads
+    solved for and their work.
+    """
     model = asm.model
     bodies: dict[str, BodyResult] = {}
     index = asm.body_index
@@ -158,20 +213,40 @@ def build_result(
 
     _, rho = asm.stack.norms(x)
     used = np.clip(rho / asm.stack.r, 0.0, 1.0) if len(rho) else rho
-    ball_state = {id(c): i for i, c in enumerate(asm.balls)}
+    ball_index = {id(c): i for i, c in enumerate(asm.balls)}
+    fixed_start = {}
+    row = 0
+    for c in asm.fixed:
+        fixed_start[id(c)] = row
+        row += c.k
+    taus = [asm.G[jdx] @ x for jdx in range(len(model.joints))]
+
     per_joint: dict[int, list[ContactResult]] = {}
+    wrench_sum = [np.zeros(6) for _ in model.joints]
     for c in asm.contacts:
-        i = ball_state.get(id(c))
+        joint = model.joints[c.joint_index]
+        rows = c.contact.rows
+        i = ball_index.get(id(c))
         if i is None:
-            state = ContactResult(c.contact.name, 1.0, True, float("nan"))
+            k0 = fixed_start[id(c)]
+            wrench = -rows.T @ rigid_forces[k0 : k0 + c.k]
+            gap, touching = 1.0, True
         else:
-            u = float(used[i])
-            state = ContactResult(c.contact.name, u, u >= TOUCHING, float(forces[i]))
+            v = rows @ taus[c.joint_index]
+            norm = float(np.linalg.norm(v))
+            u = v / norm if norm > 0 else v
+            wrench = -float(ball_forces[i]) * (rows.T @ u)
+            gap = float(used[i])
+            touching = gap >= TOUCHING
+        wrench_sum[c.joint_index] += wrench
+        point = joint.centre + joint.R_world_joint @ c.contact.point
+        force = _clean(wrench[:3], max(1e-300, float(np.max(np.abs(wrench[:3])))))
+        state = ContactResult(c.contact.name, gap, touching, force + 0.0, point)
         per_joint.setdefault(c.joint_index, []).append(state)
 
     joints: dict[str, JointResult] = {}
     for jdx, joint in enumerate(model.joints):
-        tau = asm.G[jdx] @ x
+        tau = taus[jdx]
         joints[joint.name] = JointResult(
             joint.name,
             joint.type_name,
@@ -181,10 +256,67 @@ def build_result(
             _clean(tau[:3], asm.s),
             _clean(tau[3:], asm.s / asm.ell),
             tuple(per_joint.get(jdx, [])),
+            wrench_sum[jdx][:3],
+            wrench_sum[jdx][3:],
         )
 
+    points = {
+        p.name: PointResult(
+            p.name, p.body, np.array(p.at), bodies[p.body].displacement_of(np.array(p.at))
+        )
+        for p in model.points
+    }
+    residual = equilibrium_residual(asm, joints, loads)
     energy = -float(g @ x)
-    return Result("optimal", energy, bodies, joints, certificate, solve_time, describe_free)
+    return Result(
+        "optimal",
+        energy,
+        bodies,
+        joints,
+        points,
+        certificate,
+        residual,
+        solve_time,
+        describe_free,
+    )
+
+
+def equilibrium_residual(
+    asm: Assembly, joints: dict[str, JointResult], loads: tuple[Load, ...]
+) -> float:
+    """The worst imbalance of each moving body, in global axes: the applied
+    loads plus the reactions of its joints, forces relative to the largest
+    load and moments relative to it times the length scale."""
+    index = asm.body_index
+    n = len(index)
+    F = np.zeros((n, 3))
+    M = np.zeros((n, 3))  # about each body's reference point
+    scale = 0.0
+    for load in loads:
+        i = index[load.body]
+        force = np.zeros(3) if load.force is None else np.array(load.force)
+        moment = np.zeros(3) if load.torque is None else np.array(load.torque)
+        if load.at is not None:
+            moment = moment + cross(np.array(load.at) - asm.body_ref[i], force)
+        F[i] += force
+        M[i] += moment
+        scale = max(scale, float(np.linalg.norm(force)), float(np.linalg.norm(moment)) / asm.ell)
+    if scale == 0.0:
+        return 0.0
+    for jr in joints.values():
+        R = jr.R_world_joint
+        force = R @ jr.reaction_force
+        moment_centre = R @ jr.reaction_moment
+        for sign, name in ((-1.0, jr.between[0]), (1.0, jr.between[1])):
+            if name in index:
+                i = index[name]
+                F[i] += sign * force
+                M[i] += sign * (moment_centre + cross(jr.centre - asm.body_ref[i], force))
+    worst = max(
+        float(np.max(np.linalg.norm(F, axis=1))) if n else 0.0,
+        float(np.max(np.linalg.norm(M, axis=1))) / asm.ell if n else 0.0,
+    )
+    return worst / scale
 
 
 def describe_free_motions(asm: Assembly, free_basis: FloatArray) -> tuple[str, ...]:

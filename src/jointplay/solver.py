@@ -82,9 +82,19 @@ class _Face:
     determined: bool  # the active cones and equalities determine x uniquely
 
 
-def solve(model: Model, settings: SolverSettings | None = None) -> Result:
-    """Find the equilibrium of ``model``: positions, contacts and certificate."""
-    return Workspace(assemble(model), settings).solve()
+def solve(
+    model: Model, settings: SolverSettings | None = None, *, case: str | None = None
+) -> Result:
+    """Find the equilibrium of ``model`` (under load case ``case``, if given):
+    positions, contacts, forces and certificate."""
+    ws = Workspace(assemble(model), settings)
+    return ws.solve() if case is None else ws.solve(loads=model.loads_of(case))
+
+
+def solve_cases(model: Model, settings: SolverSettings | None = None) -> dict[str, Result]:
+    """Every load case of ``model`` on one assembly: ``{case: Result}``."""
+    ws = Workspace(assemble(model), settings)
+    return {case: ws.solve(loads=model.loads_of(case)) for case in model.case_names}
 
 
 class Workspace:
@@ -144,16 +154,41 @@ class Workspace:
     def solve(self, loads: Sequence[Load] | None = None) -> Result:
         """The equilibrium under the model's loads, or under ``loads`` instead."""
         start = time.perf_counter()
-        g = self.asm.g if loads is None else self.asm.work_of(loads)
+        if loads is None:
+            loads = self.asm.model.loads_of(None)
+            g = self.asm.g
+        else:
+            loads = tuple(loads)
+            g = self.asm.work_of(loads)
         self._check_driven(g)
         g_norm = float(np.linalg.norm(g))
-        point = self._optimum(g / g_norm if g_norm else g)
+        g_hat = g / g_norm if g_norm else g
+        point = self._optimum(g_hat)
         assert point.certificate is not None
+        to_newton = g_norm / self.asm.s  # scaled multipliers -> N
+        rigid = self._rigid_multipliers(g_hat, point) * to_newton
         elapsed = time.perf_counter() - start
-        forces = point.lam * g_norm / self.asm.s
         return build_result(
-            self.asm, point.x, forces, point.certificate, elapsed, self.free_motions, g
+            self.asm,
+            point.x,
+            point.lam * to_newton,
+            rigid,
+            point.certificate,
+            elapsed,
+            self.free_motions,
+            loads,
+            g,
         )
+
+    def _rigid_multipliers(self, g_hat: FloatArray, point: _Point) -> FloatArray:
+        """Forces in the rigid rows (scaled): what the contacts leave of the loads.
+
+        Statically indeterminate rigid joints share the load in the least-squares way.
+        """
+        if not len(self.E):
+            return np.zeros(0)
+        rest = g_hat - _gradients(self.stack, point.x).T @ point.lam
+        return np.asarray(np.linalg.lstsq(self.E.T, rest, rcond=None)[0])
 
     def solve_batch(self, work: FloatArray) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of

@@ -3,11 +3,12 @@ vectorial sets per joint, and which contacts touch."""
 
 from __future__ import annotations
 
+import numpy as np
 from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
-from .geometry import fmt_point
+from .geometry import FloatArray, fmt_point
 from .model import Model
 from .result import Result
 
@@ -16,19 +17,30 @@ def _num(v: float, digits: int = 8) -> str:
     return f"{0.0 if abs(v) < 1e-300 else v: .{digits}e}"
 
 
-def render(model: Model, result: Result, source: str, console: Console) -> None:
+def _vec(v: FloatArray, digits: int = 4) -> str:
+    return "[" + ", ".join(f"{float(c) + 0.0:.{digits}g}" for c in v) + "]"
+
+
+def render(
+    model: Model, result: Result, source: str, console: Console, case: str | None = None
+) -> None:
     cert = result.certificate
     title = model.name or source
     header = Text()
-    header.append(f"{title}\n", style="bold")
+    header.append(f"{title}" + (f" - load case '{case}'" if case else "") + "\n", style="bold")
     header.append(f"status: {result.status}\n")
     header.append(
         f"certificate: {'holds' if cert.certified else 'FAILED'} ({cert.method}): "
         f"past clearance {cert.feasibility_mm:.1e} mm, "
         f"imbalance {cert.equilibrium_residual:.1e}\n"
     )
+    header.append(
+        f"equilibrium of every body (loads + contact forces): residual "
+        f"{result.equilibrium_residual:.1e} of the load\n"
+    )
     header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm")
     parts: list[Table | Text] = [header]
+    header.append(f"\ncontact forces are those of {'a on b'} for each joint 'between: [a, b]'")
 
     for joint in model.joints:
         jr = result.joints[joint.name]
@@ -51,6 +63,23 @@ def render(model: Model, result: Result, source: str, console: Console) -> None:
         )
         parts.append(table)
         parts.append(Text(f"  contacts: {contacts}"))
+        forces = Table(show_edge=False, box=None, padding=(0, 1))
+        forces.add_column("  force (N)")
+        forces.add_column("|F|", justify="right")
+        forces.add_column("F (joint frame)")
+        forces.add_column("at (global) or moment")
+        for c in jr.contacts:
+            if c.in_contact:
+                forces.add_row(
+                    f"  {c.name}", f"{c.force_magnitude:.6g}", _vec(c.force, 6), fmt_point(c.point)
+                )
+        forces.add_row(
+            "  reaction",
+            f"{float(np.linalg.norm(jr.reaction_force)):.6g}",
+            _vec(jr.reaction_force, 6),
+            f"{_vec(jr.reaction_moment, 6)} N*mm",
+        )
+        parts.append(forces)
 
     body_table = Table(
         title="bodies: small displacement at the global origin, in global axes",
@@ -67,6 +96,23 @@ def render(model: Model, result: Result, source: str, console: Console) -> None:
         body_table.add_row(name, "translation (mm)", *(_num(v, 6) for v in br.translation))
         body_table.add_row("", "rotation (rad)", *(_num(v, 6) for v in br.rotation))
     parts.append(body_table)
+    if result.points:
+        point_table = Table(
+            title="functional points: displacement in global axes (mm)",
+            title_justify="left",
+            show_edge=False,
+        )
+        point_table.add_column("point")
+        point_table.add_column("body")
+        for axis in "XYZ":
+            point_table.add_column(axis, justify="right")
+        point_table.add_column("|u|", justify="right")
+        for pr in result.points.values():
+            d = pr.displacement
+            point_table.add_row(
+                pr.name, pr.body, *(_num(v, 6) for v in d), _num(float(np.linalg.norm(d)), 6)
+            )
+        parts.append(point_table)
     if result.free_motions:
         parts.append(
             Text(

@@ -1,0 +1,151 @@
+"""Contact forces, reactions and the equilibrium they prove; weights, points, load cases."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import jointplay
+from conftest import MM, PAPER, RAD, spherical_shaft
+from jointplay import model_from_dict
+
+EXAMPLES = sorted(Path(PAPER).parent.rglob("*.yaml"))
+
+
+def solved(data: dict[str, Any], **kw: Any) -> jointplay.Result:
+    result = jointplay.solve(model_from_dict(data), **kw)
+    result.check()
+    return result
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
+def test_every_example_reports_forces_that_balance_the_loads(path: Path) -> None:
+    model = jointplay.load(path)
+    results = (
+        jointplay.solve_cases(model).values() if model.load_cases else [jointplay.solve(model)]
+    )
+    for result in results:
+        assert result.equilibrium_residual < 1e-8
+        for jr in result.joints.values():
+            for c in jr.contacts:
+                if not c.in_contact:
+                    assert c.force_magnitude == 0.0  # a free contact pushes nothing
+            total = sum((c.force for c in jr.contacts), np.zeros(3))
+            np.testing.assert_allclose(jr.reaction_force, total, atol=1e-12)
+
+
+def test_paper_6_1_6_1_forces_closed_form() -> None:
+    """Moments about the ball at O: 220 * F_end+ + 300 * F = 0 across the axis;
+    the ball takes the rest, including all of the axial force."""
+    r = solved(spherical_shaft())
+    end_plus = r.joints["l2"].contacts[1]
+    assert end_plus.in_contact and end_plus.name == "end+"
+    np.testing.assert_allclose(end_plus.force, [0, -300 / 220, -300 / 220], atol=1e-12)
+    np.testing.assert_allclose(end_plus.point, [220, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(r.joints["l2"].contacts[0].force, 0, atol=0)
+    ball = r.joints["l1"].contacts[0]
+    np.testing.assert_allclose(ball.force, [-1, 80 / 220, 80 / 220], atol=1e-12)
+    # the reaction of l2 about its centre (200, 0, 0): the end+ force at x = +20
+    np.testing.assert_allclose(
+        r.joints["l2"].reaction_moment, np.cross([20, 0, 0], end_plus.force), atol=1e-12
+    )
+    # a contact force pushes back against the displacement that closed its play
+    u = r.bodies["S1"].displacement_of(end_plus.point)
+    assert float(np.dot(u[1:], end_plus.force[1:])) < 0
+
+
+def test_forces_scale_with_the_loads_positions_do_not() -> None:
+    a = solved(spherical_shaft())
+    data = spherical_shaft(loads=[{"body": "S1", "at": [300, 0, 0], "force": [7, 7, 7]}])
+    b = solved(data)
+    for name in ("l1", "l2"):
+        np.testing.assert_allclose(b.joints[name].translation, a.joints[name].translation, atol=MM)
+        np.testing.assert_allclose(
+            b.joints[name].reaction_force, 7 * a.joints[name].reaction_force, rtol=1e-10
+        )
+
+
+def test_a_rigid_joint_carries_the_whole_load() -> None:
+    data = {
+        "bodies": [{"name": "G", "ground": True}, {"name": "B"}],
+        "joints": [{"name": "w", "type": "rigid", "between": ["G", "B"], "at": [10, 0, 0]}],
+        "loads": [{"body": "B", "at": [10, 0, 50], "force": [3, 0, 0], "torque": [0, 0, 5]}],
+    }
+    r = solved(data)
+    w = r.joints["w"]
+    np.testing.assert_allclose(w.reaction_force, [-3, 0, 0], atol=1e-12)
+    # moment of the load about the joint centre: (0,0,50) x (3,0,0) + (0,0,5)
+    np.testing.assert_allclose(w.reaction_moment, [0, -150, -5], atol=1e-10)
+
+
+def test_gravity_is_a_weight_at_the_centre_of_mass() -> None:
+    base = spherical_shaft(loads=[])
+    weighed = copy.deepcopy(base)
+    weighed["bodies"][1].update(mass="2 kg", center_of_mass=[300, 0, 0])
+    weighed["gravity"] = [0, 0, "-9.81 m/s^2"]
+    explicit = spherical_shaft(loads=[{"body": "S1", "at": [300, 0, 0], "force": [0, 0, -19.62]}])
+    a, b = solved(weighed), solved(explicit)
+    for name in ("l1", "l2"):
+        np.testing.assert_allclose(a.joints[name].translation, b.joints[name].translation, atol=MM)
+        np.testing.assert_allclose(a.joints[name].rotation, b.joints[name].rotation, atol=RAD)
+        np.testing.assert_allclose(
+            a.joints[name].reaction_force, b.joints[name].reaction_force, atol=1e-9
+        )
+    assert a.potential_energy == pytest.approx(b.potential_energy, rel=1e-12)
+
+
+def test_functional_points_move_with_their_body() -> None:
+    data = spherical_shaft(points=[{"name": "tip", "body": "S1", "at": [300, 0, 0]}])
+    r = solved(data)
+    tip = r.points["tip"]
+    np.testing.assert_allclose(tip.displacement, r.bodies["S1"].displacement_of([300, 0, 0]))
+    assert r.to_dict()["points"] == {"tip": {"body": "S1", "displacement": list(tip.displacement)}}
+    # the tip of the paper's shaft moves by the rotation about the touching end+
+    gamma = r.joints["l2"].rotation[2]
+    assert tip.displacement[1] == pytest.approx(r.bodies["S1"].translation[1] + 300 * gamma)
+
+
+def test_load_cases_add_to_the_common_loads() -> None:
+    data = spherical_shaft(
+        loads=[{"body": "S1", "at": [300, 0, 0], "force": [1, 0, 0]}],
+        load_cases={
+            "up": [{"body": "S1", "at": [300, 0, 0], "force": [0, 0, 5]}],
+            "side": [{"body": "S1", "at": [300, 0, 0], "force": [0, 5, 0]}],
+        },
+    )
+    model = model_from_dict(data)
+    cases = jointplay.solve_cases(model)
+    assert list(cases) == ["up", "side"]
+    for name, force in (("up", [1, 0, 5]), ("side", [1, 5, 0])):
+        alone = solved(spherical_shaft(loads=[{"body": "S1", "at": [300, 0, 0], "force": force}]))
+        np.testing.assert_allclose(
+            cases[name].joints["l2"].translation, alone.joints["l2"].translation, atol=MM
+        )
+        single = jointplay.solve(model, case=name)
+        np.testing.assert_allclose(
+            single.joints["l2"].translation, alone.joints["l2"].translation, atol=MM
+        )
+    with pytest.raises(KeyError, match="Did you mean 'side'"):
+        jointplay.solve(model, case="sied")
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"bodies": [{"name": "S0", "ground": True}, {"name": "S1", "mass": 2}]}, "center_of_mass"),
+        ({"gravity": [0, 0, "9.81 kg"]}, "acceleration"),
+        ({"points": [{"name": "p", "body": "S2", "at": [0, 0, 0]}]}, "Did you mean 'S1'"),
+        (
+            {"load_cases": {"a": [{"body": "S9", "torque": [1, 0, 0]}]}},
+            r"load_cases\.a\[0\]: body: unknown body",
+        ),
+        ({"load_cases": {}}, "no cases given"),
+    ],
+)
+def test_bad_new_entries_are_model_errors(change: dict[str, Any], message: str) -> None:
+    with pytest.raises(jointplay.ModelError, match=message):
+        model_from_dict(spherical_shaft(**change))
