@@ -222,3 +222,82 @@ def test_cylindrical_tie_on_the_end_face_picks_the_least_norm_point() -> None:
     np.testing.assert_allclose(jr.translation, [0, v, 0], atol=MM)
     np.testing.assert_allclose(jr.rotation, [0, 0, gamma], atol=RAD)
     assert jr.translation[1] + jr.rotation[2] * L / 2 == pytest.approx(J / 2, abs=1e-12)
+
+
+PRISM = {
+    "type": "prismatic",
+    "length": 40,
+    "width": 20,
+    "height": 10,
+    "clearance_y": 0.2,
+    "clearance_z": 0.1,
+    "axis": [0, 1, 0],  # joint x = global Y: the frame is not the global one
+}
+
+
+def _prism_loads(force_joint: list[float], torque_joint: list[float]) -> dict[str, object]:
+    """A load given in the prismatic joint's frame (x = Y, z = Z, y = -X), at its centre."""
+    R = (
+        jointplay.model_from_dict(
+            {
+                "bodies": [{"name": "G", "ground": True}, {"name": "B"}],
+                "joints": [{"name": "j", "between": ["G", "B"], "at": AT, **PRISM}],
+            }
+        )
+        .joints[0]
+        .R_world_joint
+    )
+    return {
+        "body": "B",
+        "at": AT,
+        "force": list(R @ np.array(force_joint, float)),
+        "torque": list(R @ np.array(torque_joint, float)),
+    }
+
+
+@pytest.mark.parametrize(
+    ("force", "torque", "translation", "rotation"),
+    [
+        ([0, 1, 0], [0, 0, 0], [0, 0.1, 0], [0, 0, 0]),  # across y: Jy/2
+        ([0, 0, -1], [0, 0, 0], [0, 0, -0.05], [0, 0, 0]),  # across z: Jz/2
+        ([0, 0, 0], [1, 0, 0], [0, 0, 0], [min(0.2 / 10, 0.1 / 20), 0, 0]),  # roll
+        ([0, 0, 0], [0, 0, 1], [0, 0, 0], [0, 0, 0.2 / 40]),  # yaw: y play over L
+        ([0, 0, 0], [0, -1, 0], [0, 0, 0], [0, -0.1 / 40, 0]),  # pitch: z play over L
+    ],
+)
+def test_prismatic_closed_forms(
+    force: list[float], torque: list[float], translation: list[float], rotation: list[float]
+) -> None:
+    r = solved(one_joint(PRISM, _prism_loads(force, torque)))
+    jr = r.joints["j"]
+    np.testing.assert_allclose(jr.translation, translation, atol=MM)
+    np.testing.assert_allclose(jr.rotation, rotation, atol=RAD)
+    assert "translation along the global Y axis" in r.free_motions[0]  # the slide
+    assert len(jr.contacts) == 8
+
+
+def test_prismatic_slide_is_free_and_clearance_sets_both_plays() -> None:
+    with pytest.raises(UnboundedMechanismError, match="translation along the global Y axis"):
+        jointplay.solve(one_joint(PRISM, _prism_loads([1, 0, 0], [0, 0, 0])))
+    both = {k: v for k, v in PRISM.items() if not k.startswith("clearance")}
+    r = solved(one_joint({**both, "clearance": 0.3}, _prism_loads([0, 0, 1], [0, 0, 0])))
+    np.testing.assert_allclose(r.joints["j"].translation, [0, 0, 0.15], atol=MM)
+    with pytest.raises(jointplay.ModelError, match="clearance_z"):
+        one_joint({**both, "clearance_y": 0.3}, _prism_loads([0, 0, 1], [0, 0, 0]))
+
+
+def test_planar_closed_forms() -> None:
+    plate = {"type": "planar", "width": 20, "height": 10, "clearance": 0.2}
+    r = solved(one_joint(plate, {"body": "B", "at": AT, "force": [-2, 0, 0]}))
+    np.testing.assert_allclose(r.joints["j"].translation, [-0.1, 0, 0], atol=MM)
+    np.testing.assert_allclose(r.joints["j"].rotation, 0, atol=RAD)
+    # tilt about y is held by the corners at z = +-h/2: w_y = J / h
+    r = solved(one_joint(plate, {"body": "B", "torque": [0, 3, 0]}))
+    np.testing.assert_allclose(r.joints["j"].rotation, [0, 0.2 / 10, 0], atol=RAD)
+    np.testing.assert_allclose(r.joints["j"].translation, 0, atol=MM)
+    forces = [c.force for c in r.joints["j"].contacts if c.in_contact]
+    assert len(forces) == 4  # a pure tilt presses all four corners (two per face)
+    # sliding in the plane and spinning about the normal are free
+    assert len(r.free_motions) == 3
+    with pytest.raises(UnboundedMechanismError, match="translation along the global Y axis"):
+        jointplay.solve(one_joint(plate, {"body": "B", "at": AT, "force": [0, 1, 0]}))

@@ -3,6 +3,8 @@ package registers them all in ``JOINT_TYPES`` by their ``type`` name."""
 
 from .base import JOINT_TYPES, Contact, Joint
 from .cylindrical import Cylindrical
+from .planar import Planar
+from .prismatic import Prismatic
 from .revolute import Revolute
 from .rigid import Rigid
 from .sphere_in_cylinder import SphereInCylinder
@@ -13,6 +15,8 @@ __all__ = [
     "Contact",
     "Cylindrical",
     "Joint",
+    "Planar",
+    "Prismatic",
     "Revolute",
     "Rigid",
     "SphereInCylinder",
