@@ -60,10 +60,11 @@ class ContactRows:
     block: FloatArray  # (k, len(cols))
     radius: float  # scaled: contact.radius / s
     m: int
+    stiffness: float = 0.0  # N/mm; 0: rigid (the clearance is a hard limit)
 
     @property
     def is_fixed(self) -> bool:
-        return self.contact.kind == "fixed" or self.radius == 0.0
+        return self.contact.kind == "fixed" or (self.radius == 0.0 and self.stiffness == 0.0)
 
     @property
     def k(self) -> int:
@@ -97,6 +98,7 @@ class BallStack:
     start: IntArray  # (n,) first row of each cone
     k: IntArray  # (n,) rows per cone
     r: FloatArray  # (n,)
+    spring: FloatArray  # (n,) contact stiffness N/mm, 0 for a hard limit
 
     @staticmethod
     def of(balls: Sequence[ContactRows], m: int) -> BallStack:
@@ -104,7 +106,8 @@ class BallStack:
         start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
         A = np.vstack([c.dense() for c in balls]) if balls else np.zeros((0, m))
         r = np.array([c.radius for c in balls], dtype=float)
-        return BallStack(A, start, k, r)
+        spring = np.array([c.stiffness for c in balls], dtype=float)
+        return BallStack(A, start, k, r, spring)
 
     def take(self, which: Sequence[int]) -> BallStack:
         """The sub-stack of cones ``which`` (in that order)."""
@@ -116,7 +119,7 @@ class BallStack:
             else np.zeros(0, dtype=np.intp)
         )
         start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
-        return BallStack(self.A[rows], start, k, self.r[idx])
+        return BallStack(self.A[rows], start, k, self.r[idx], self.spring[idx])
 
     def norms(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(A @ x, |A_i x|)``."""
@@ -254,7 +257,10 @@ def assemble(model: Model) -> Assembly:
         G_list.append(G)
         for cdx, contact in enumerate(joint.cones):
             block = (contact.rows / s) @ G.block
-            contacts.append(ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m))
+            spring = 0.0 if contact.kind == "fixed" else (joint.stiffness or 0.0)
+            contacts.append(
+                ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m, spring)
+            )
 
     g = load_work(model.loads_of(None), index, body_ref, s, ell)
     return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g)

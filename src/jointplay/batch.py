@@ -92,6 +92,7 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
         raise ValueError("work has non-finite entries")
     _check_driven(ws, work, norms)
     g_hat = np.divide(work, norms[:, None], out=np.zeros_like(work), where=norms[:, None] > 0)
+    sigma = ws.softness(norms)  # (B, n): compliance makes the answer depend on |g|
 
     n_balls = len(ws.balls)
     x = np.zeros((B, ws.m))
@@ -110,7 +111,9 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
                     break
                 ref = np.concatenate(rows)
                 nearest = ref[cKDTree(g_hat[ref]).query(g_hat[pending])[1]]
-                ok, xs, lams = _newton_batch(ws, active, g_hat[pending], x[nearest], lam[nearest])
+                ok, xs, lams = _newton_batch(
+                    ws, active, g_hat[pending], sigma[pending], x[nearest], lam[nearest]
+                )
                 if np.any(ok):
                     won = pending[ok]
                     x[won], lam[won], batched[won] = xs[ok], lams[ok], True
@@ -121,13 +124,13 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
             break
         first, pending = int(pending[0]), pending[1:]
         ws._last = None
-        point = ws._optimum(g_hat[first])
+        point = ws._optimum(g_hat[first], sigma[first])
         full += 1
         x[first], lam[first] = point.x, point.lam
         if point.active is not None:
             solved_by_set.setdefault(point.active, []).append(np.array([first]))
 
-    feas, residual = _certificates(ws, g_hat, x, lam)
+    feas, residual = _certificates(ws, g_hat, sigma, x, lam)
     st = ws.settings
     if np.any(feas > st.feasibility_tolerance * ws._max_radius) or np.any(
         residual > st.equilibrium_tolerance
@@ -164,6 +167,7 @@ def _newton_batch(
     ws: Workspace,
     active: tuple[int, ...],
     g_hat: FloatArray,
+    sigma: FloatArray,
     x0: FloatArray,
     lam0: FloatArray,
 ) -> tuple[BoolArray, FloatArray, FloatArray]:
@@ -183,12 +187,12 @@ def _newton_batch(
     chunk = max(1, CHUNK_ENTRIES // (n * n))
     for lo in range(0, B, chunk):
         sl = slice(lo, min(B, lo + chunk))
-        conv[sl] = _newton_rows(ws, sub, -g_hat[sl], x[sl], lam_a[sl])
+        conv[sl] = _newton_rows(ws, sub, -g_hat[sl], sigma[sl][:, list(active)], x[sl], lam_a[sl])
 
     lam = np.zeros((B, len(ws.balls)))
     lam[:, list(active)] = lam_a
     strict = np.min(lam_a, axis=1) > 1e-9 * np.max(lam_a, axis=1) if na else conv
-    feas, residual = _certificates(ws, g_hat, x, lam)
+    feas, residual = _certificates(ws, g_hat, sigma, x, lam)
     st = ws.settings
     ok = (
         conv
@@ -200,7 +204,12 @@ def _newton_batch(
 
 
 def _newton_rows(
-    ws: Workspace, sub: BallStack, q: FloatArray, x: FloatArray, lam: FloatArray
+    ws: Workspace,
+    sub: BallStack,
+    q: FloatArray,
+    soft: FloatArray,
+    x: FloatArray,
+    lam: FloatArray,
 ) -> BoolArray:
     """Newton on the KKT equations, rows in place; returns the converged mask."""
     B, m = q.shape
@@ -225,7 +234,7 @@ def _newton_rows(
         grad = q[todo] + nu[todo] @ Eq
         if J is not None:
             grad += np.einsum("bi,bim->bm", ls, J)
-        F = np.concatenate([grad, rho - r, xs @ Eq.T], axis=1)
+        F = np.concatenate([grad, rho - r - soft[todo] * ls, xs @ Eq.T], axis=1)
         err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
         done = err <= 1e-14
         conv[todo[done]] = True
@@ -236,6 +245,7 @@ def _newton_rows(
             break
         todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
         Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
+        Kb[:, m + np.arange(na), m + np.arange(na)] = -soft[todo]
         if J is not None:
             J = J[keep]
             c = ls / rho
@@ -255,14 +265,14 @@ def _newton_rows(
 
 
 def _certificates(
-    ws: Workspace, g_hat: FloatArray, x: FloatArray, lam: FloatArray
+    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, x: FloatArray, lam: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Per row: feasibility (scaled) and relative equilibrium residual."""
     B = x.shape[0]
     stack = ws.stack
     if len(stack.k):
         v, rho = _norms(stack, x)
-        feas = np.max(rho - stack.r, axis=1)
+        feas = np.max(rho - stack.r - sigma * np.maximum(lam, 0.0), axis=1)
         safe = np.where(rho > 0, rho, 1.0)
         u = v / np.repeat(safe, stack.k, axis=1)
         # sum_i lam_i A_i^T u_i, row by row

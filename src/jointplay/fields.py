@@ -71,3 +71,6 @@ ForceVector = Annotated[Vec3, BeforeValidator(_vector("force"))]
 TorqueVector = Annotated[Vec3, BeforeValidator(_vector("torque"))]
 NonNegativeMass = Annotated[float, BeforeValidator(_scalar("mass")), AfterValidator(_non_negative)]
 AccelerationVector = Annotated[Vec3, BeforeValidator(_vector("acceleration"))]
+PositiveStiffness = Annotated[
+    float, BeforeValidator(_scalar("stiffness")), AfterValidator(_positive)
+]

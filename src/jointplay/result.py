@@ -64,6 +64,7 @@ class ContactResult:
     in_contact: bool
     force: FloatArray  # N, joint frame, a on b
     point: FloatArray  # mm, global
+    penetration: float = 0.0  # mm past the clearance (compliant contacts only)
 
     @property
     def force_magnitude(self) -> float:
@@ -76,6 +77,7 @@ class ContactResult:
             "in_contact": self.in_contact,
             "force": _list(self.force),
             "point": _list(self.point),
+            "penetration": self.penetration,
         }
 
 
@@ -212,7 +214,11 @@ def build_result(
             bodies[b.name] = BodyResult(b.name, zero, zero)
 
     _, rho = asm.stack.norms(x)
-    used = np.clip(rho / asm.stack.r, 0.0, 1.0) if len(rho) else rho
+    r = asm.stack.r
+    with np.errstate(divide="ignore", invalid="ignore"):
+        used = np.clip(np.where(r > 0, rho / np.where(r > 0, r, 1.0), rho > 0), 0.0, 1.0)
+    # past the clearance: only compliant contacts may be (hard ones by round-off)
+    penetration = np.where(asm.stack.spring > 0, np.maximum(rho - r, 0.0) * asm.s, 0.0)
     ball_index = {id(c): i for i, c in enumerate(asm.balls)}
     fixed_start = {}
     row = 0
@@ -227,6 +233,7 @@ def build_result(
         joint = model.joints[c.joint_index]
         rows = c.contact.rows
         i = ball_index.get(id(c))
+        past = 0.0
         if i is None:
             k0 = fixed_start[id(c)]
             wrench = -rows.T @ rigid_forces[k0 : k0 + c.k]
@@ -238,10 +245,11 @@ def build_result(
             wrench = -float(ball_forces[i]) * (rows.T @ u)
             gap = float(used[i])
             touching = gap >= TOUCHING
+            past = float(penetration[i])
         wrench_sum[c.joint_index] += wrench
         point = joint.centre + joint.R_world_joint @ c.contact.point
         force = _clean(wrench[:3], max(1e-300, float(np.max(np.abs(wrench[:3])))))
-        state = ContactResult(c.contact.name, gap, touching, force + 0.0, point)
+        state = ContactResult(c.contact.name, gap, touching, force + 0.0, point, past)
         per_joint.setdefault(c.joint_index, []).append(state)
 
     joints: dict[str, JointResult] = {}

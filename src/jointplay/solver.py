@@ -115,12 +115,17 @@ class Workspace:
         self.N = self._free_motions()
         self.K = assembly.metric_times(self.N).T
         self.Eq = np.vstack([self.E, self.K])
-        self._max_radius = float(np.max(self.stack.r)) if len(self.stack.r) else 1.0
+        largest = float(np.max(self.stack.r)) if len(self.stack.r) else 0.0
+        self._max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
         self._rigid_basis = _range_basis(self.E.T)
         self._phase1_data: _ConeProgram | None = None
         self._faces: dict[tuple[int, ...], _Face] = {}
         self._last: _Point | None = None
         self._free_words: tuple[str, ...] | None = None
+        #: Per solve: softness of each contact (scaled penetration per unit of
+        #: scaled force), 0 for a hard limit; see ``softness``.
+        self.sigma = np.zeros(len(self.balls))
+        self._compliant_data: _ConeProgram | None = None
 
     @classmethod
     def of(cls, model: Model, settings: SolverSettings | None = None) -> Workspace:
@@ -163,7 +168,7 @@ class Workspace:
         self._check_driven(g)
         g_norm = float(np.linalg.norm(g))
         g_hat = g / g_norm if g_norm else g
-        point = self._optimum(g_hat)
+        point = self._optimum(g_hat, self.softness(g_norm))
         assert point.certificate is not None
         to_newton = g_norm / self.asm.s  # scaled multipliers -> N
         rigid = self._rigid_multipliers(g_hat, point) * to_newton
@@ -197,8 +202,21 @@ class Workspace:
 
         return solve_batch(self, work)
 
-    def _optimum(self, g_hat: FloatArray) -> _Point:
-        """The certified optimum for unit loads ``g_hat`` (or 0 for no load)."""
+    def softness(self, g_norm: float | FloatArray) -> FloatArray:
+        """Compliant contacts: the elastic energy k p^2 / 2 (p in mm) becomes
+        ``p~^2 / (2 sigma)`` in the scaled problem whose loads have unit norm,
+        with ``sigma = |g| / (k s^2)``: the answer depends on the load's size."""
+        spring = self.stack.spring
+        g_arr = np.asarray(g_norm, dtype=float)
+        out = np.zeros((*g_arr.shape, len(spring)))
+        mask = spring > 0
+        out[..., mask] = g_arr[..., None] / (spring[mask] * self.asm.s**2)
+        return out
+
+    def _optimum(self, g_hat: FloatArray, sigma: FloatArray | None = None) -> _Point:
+        """The certified optimum for unit loads ``g_hat`` (or 0 for no load),
+        with contact softness ``sigma`` (default: every contact hard)."""
+        self.sigma = np.zeros(len(self.balls)) if sigma is None else sigma
         if not np.any(g_hat):
             point = _Point(np.zeros(self.m), np.zeros(len(self.balls)), method="no load")
         else:
@@ -223,6 +241,8 @@ class Workspace:
 
     # -- phase 1: the cone program -----------------------------------------
     def _phase1(self, g_hat: FloatArray) -> _Point:
+        if np.any(self.sigma > 0):
+            return self._phase1_compliant(g_hat)
         if self._phase1_data is None:
             self._phase1_data = self._cone_program(
                 None, self.Eq, np.zeros(len(self.Eq)), self.stack
@@ -230,6 +250,31 @@ class Workspace:
         sol = self._clarabel(self._phase1_data, -g_hat)
         x = np.asarray(sol.x)
         lam = np.asarray(sol.z)[self._phase1_data.soc_first]
+        return _Point(x, lam, iterations=sol.iterations)
+
+    def _phase1_compliant(self, g_hat: FloatArray) -> _Point:
+        """The cone program with a penetration ``p_i >= 0`` per compliant contact:
+        ``|A_i x| <= r_i + p_i`` and energy ``-g_hat x + sum p_i^2 / (2 sigma_i)``."""
+        soft = np.flatnonzero(self.stack.spring > 0)
+        m, nc = self.m, len(soft)
+        if self._compliant_data is None:
+            base = self._cone_program(None, self.Eq, np.zeros(len(self.Eq)), self.stack)
+            A = np.zeros((base.A.shape[0] + nc, m + nc))
+            A[: base.A.shape[0], :m] = base.A.toarray()
+            A[base.soc_first[soft], m + np.arange(nc)] = -1.0  # cone radius r_i + p_i
+            A[base.A.shape[0] + np.arange(nc), m + np.arange(nc)] = -1.0  # p_i >= 0
+            b = np.concatenate([base.b, np.zeros(nc)])
+            cones = [*base.cones, clarabel.NonnegativeConeT(nc)]
+            self._compliant_data = _ConeProgram(
+                base.P, _csc(A), b, cones, base.settings, base.soc_first
+            )
+        prog = self._compliant_data
+        P = np.zeros((m + nc, m + nc))
+        P[m + np.arange(nc), m + np.arange(nc)] = 1.0 / self.sigma[soft]
+        prog = _ConeProgram(_csc(P), prog.A, prog.b, prog.cones, prog.settings, prog.soc_first)
+        sol = self._clarabel(prog, np.concatenate([-g_hat, np.zeros(nc)]))
+        x = np.asarray(sol.x)[:m]
+        lam = np.asarray(sol.z)[prog.soc_first]
         return _Point(x, lam, iterations=sol.iterations)
 
     def _cone_program(
@@ -290,7 +335,17 @@ class Workspace:
         face = self._face(active)
         if not face.determined:
             return None
-        out = _newton(None, -g_hat, self.Eq, np.zeros(len(self.Eq)), face.stack, x0, lam0, max_iter)
+        out = _newton(
+            None,
+            -g_hat,
+            self.Eq,
+            np.zeros(len(self.Eq)),
+            face.stack,
+            x0,
+            lam0,
+            max_iter,
+            self.sigma[list(active)],
+        )
         if out is None:
             return None
         x, lam_active, _nu, its = out
@@ -318,7 +373,8 @@ class Workspace:
             return ()
         lam_max = max(float(np.max(lam)), lam_scale, 1e-300)
         _, rho = stack.norms(x)
-        slack = (stack.r - rho) / stack.r
+        r = np.where(stack.r > 0, stack.r, self._max_radius)
+        slack = (stack.r - rho) / r
         return tuple(int(i) for i in np.flatnonzero(lam / lam_max > np.maximum(slack, 1e-9)))
 
     def _polish(self, g_hat: FloatArray, point: _Point) -> _Point:
@@ -335,7 +391,9 @@ class Workspace:
         face = self._face(active).stack
         v = face.A @ point.x
         rho = np.repeat(np.sqrt(np.add.reduceat(v * v, face.start)), face.k) if active else v
-        directions = np.repeat(face.r, face.k) * v / rho if active else v
+        # a compliant contact keeps its penetration; the others stay on its face
+        reach = face.r + self.sigma[list(active)] * point.lam[list(active)]
+        directions = np.repeat(reach, face.k) * v / rho if active else v
         Eq = np.vstack([self.Eq, face.A])
         e = np.concatenate([np.zeros(len(self.Eq)), directions])
         rest_index = [i for i in range(len(self.balls)) if i not in set(active)]
@@ -369,7 +427,8 @@ class Workspace:
         x, lam = point.x, point.lam
         stack = self.stack
         _, rho = stack.norms(x)
-        feas = float(np.max(rho - stack.r)) if len(rho) else 0.0
+        reach = stack.r + self.sigma * np.maximum(lam, 0.0)  # a compliant contact may go past r
+        feas = float(np.max(rho - reach)) if len(rho) else 0.0
         if len(self.E):
             feas = max(feas, float(np.max(np.abs(self.E @ x))))
         residual_vec = g_hat - _gradients(stack, x).T @ lam
@@ -379,7 +438,7 @@ class Workspace:
         loaded = bool(np.any(g_hat))
         residual = float(np.linalg.norm(residual_vec)) if loaded else 0.0
         comp = (
-            float(np.max(np.abs(lam) * np.maximum(stack.r - rho, 0.0))) / self._max_radius
+            float(np.max(np.abs(lam) * np.maximum(reach - rho, 0.0))) / self._max_radius
             if len(lam)
             else 0.0
         )
@@ -460,20 +519,24 @@ def _newton(
     x0: FloatArray,
     lam0: FloatArray,
     max_iter: int = 30,
+    soft: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
     """Newton's method on the KKT equations of an active set.
 
     Stationarity ``P x + q + sum lam_i A_i^T u_i + Eq^T nu = 0``, active
-    contacts ``|A_i x| = r_i``, equalities ``Eq x = e``. A singular system
+    contacts ``|A_i x| = r_i + soft_i lam_i`` (``soft``: compliance, default 0),
+    equalities ``Eq x = e``. A singular system
     (statically indeterminate contact forces) takes least-squares steps.
     Returns None when it does not converge to machine precision.
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r = stack.A, stack.start, stack.k, stack.r
     x, lam = x0.copy(), lam0.astype(float).copy()
+    soft_na = np.zeros(na) if soft is None else soft
     nu = np.zeros(ne)
     n = m + na + ne
     K = np.zeros((n, n))
+    K[m + np.arange(na), m + np.arange(na)] = -soft_na
     K[:m, m + na :] = Eq.T
     K[m + na :, :m] = Eq
     scale = max(1.0, float(np.linalg.norm(q)))
@@ -488,7 +551,7 @@ def _newton(
             u = v / np.repeat(rho, k)
             J = np.add.reduceat(A * u[:, None], start, axis=0)
             grad = grad + J.T @ lam
-            F = np.concatenate([grad, rho - r, Eq @ x - e])
+            F = np.concatenate([grad, rho - r - soft_na * lam, Eq @ x - e])
         else:
             F = np.concatenate([grad, Eq @ x - e])
         err = float(np.max(np.abs(F))) if F.size else 0.0

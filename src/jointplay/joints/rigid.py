@@ -31,5 +31,15 @@ class Rigid(Joint):
             )
         return value
 
+    @field_validator("stiffness")
+    @classmethod
+    def _no_spring(cls, value: float | None) -> float | None:
+        if value is not None:
+            raise ValueError(
+                "a rigid joint has no contact to make compliant; remove 'stiffness', "
+                "or give the joint a type with play"
+            )
+        return value
+
     def contacts(self) -> tuple[Contact, ...]:
         return (Contact("rigid", "fixed", np.eye(6), 0.0, np.zeros(3)),)
