@@ -145,3 +145,25 @@ def test_rigid_joints_take_no_stiffness() -> None:
         )
     with pytest.raises(jointplay.ModelError, match="stiffness"):
         model_from_dict(mechanism([{**SPHERE, "stiffness": "3 kg"}], []))
+
+
+def test_compliant_shaft_example_by_hand() -> None:
+    """examples/studies/compliant_shaft.yaml: statics give 50 N at l1 and 150 N
+    at l2; each centre moves J/2 + R/k: l1 by -0.15, l2 by +0.25 mm, so the tip
+    at 300 mm moves -0.15 + 0.4 * 300/200 = 0.45 mm (rigid: 0.2 mm)."""
+    from conftest import ROOT
+
+    model = jointplay.load(ROOT / "examples" / "studies" / "compliant_shaft.yaml")
+    r = jointplay.solve(model)
+    r.check()
+    np.testing.assert_allclose(r.points["tip"].displacement, [0, 0.45, 0], atol=MM)
+    np.testing.assert_allclose(r.joints["l1"].contacts[0].force, [0, 50, 0], atol=1e-9)
+    np.testing.assert_allclose(r.joints["l2"].contacts[0].force, [0, -150, 0], atol=1e-9)
+    assert r.joints["l1"].contacts[0].penetration == pytest.approx(0.05, abs=MM)
+    assert r.joints["l2"].contacts[0].penetration == pytest.approx(0.15, abs=MM)
+    rigid = model.replace(
+        joints=[{k: v for k, v in j.model_dump().items() if k != "stiffness"} for j in model.joints]
+    )
+    np.testing.assert_allclose(
+        jointplay.solve(rigid).points["tip"].displacement, [0, 0.2, 0], atol=MM
+    )

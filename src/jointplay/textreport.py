@@ -58,7 +58,8 @@ def render(
             direction = "[" + ", ".join(f"{c:.4g}" for c in jr.R_world_joint[:, i] + 0.0) + "]"
             table.add_row(axis, direction, _num(jr.translation[i]), _num(jr.rotation[i]))
         contacts = ", ".join(
-            f"{c.name}: {'TOUCHING' if c.in_contact else 'free'} ({100 * c.gap_used:.2f}% of play)"
+            f"{c.name}: {'TOUCHING' if c.in_contact else 'free'} ({100 * c.gap_used:.2f}% of play"
+            + (f", {c.penetration:.6g} mm past it)" if c.penetration > 0 else ")")
             for c in jr.contacts
         )
         parts.append(table)
