@@ -190,6 +190,26 @@ CASES: list[tuple[str, Any, str]] = [
     ("not YAML at all", "bodies: [\n  - {name: S0", r"not valid YAML at line"),
     ("duplicate YAML key", "bodies: []\nbodies: []\n", r"duplicate key 'bodies'"),
     ("no joints", spherical_shaft(joints=[]), r"joints: expected at least one entry"),
+    (
+        "functional point without its position",
+        spherical_shaft(points=[{"name": "tip", "body": "S1"}]),
+        r"points\[0\] 'tip': at: the key 'at' is required here; add it",
+    ),
+    (
+        "typo in a load case",
+        spherical_shaft(load_cases={"a": [{"body": "S1", "torqe": [1, 0, 0]}]}),
+        r"load_cases\.a\[0\]: torqe: unknown key 'torqe'\. Did you mean 'torque'\?",
+    ),
+    (
+        "negative mass",
+        spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"name": "S1", "mass": -2}]),
+        r"bodies\[1\] 'S1': mass: expected a value >= 0, got -2",
+    ),
+    (
+        "load cases that are not a mapping",
+        spherical_shaft(load_cases=[1, 2]),
+        r"load_cases: expected a mapping \(NAME: \[\.\.\.\], \.\.\.\), got list",
+    ),
 ]
 
 

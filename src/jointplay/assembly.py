@@ -122,11 +122,17 @@ class BallStack:
         return BallStack(self.A[rows], start, k, self.r[idx], self.spring[idx])
 
     def norms(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """``(A @ x, |A_i x|)``."""
-        v = self.A @ x
+        """``(A @ x, |A_i x|)`` for one x (m,) or a batch of rows (B, m)."""
+        v = x @ self.A.T
         if not len(self.k):
-            return v, np.zeros(0)
-        return v, np.sqrt(np.add.reduceat(v * v, self.start))
+            return v, np.zeros((*x.shape[:-1], 0))
+        return v, np.sqrt(np.add.reduceat(v * v, self.start, axis=-1))
+
+    def gap_used(self, rho: FloatArray) -> FloatArray:
+        """Fraction of each cone's play used by ``rho = |A_i x|``, in [0, 1]
+        (a spring with no play counts as fully used as soon as it moves)."""
+        r = np.where(self.r > 0, self.r, 1.0)
+        return np.clip(np.where(self.r > 0, rho / r, rho > 0), 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -162,16 +168,21 @@ class Assembly:
         under a rigid motion of the whole model or a change of units, and a
         rigid joint (no relative motion) adds nothing to it.
         """
-        w = np.r_[np.full(3, 1.0 / self.s), np.full(3, self.ell / self.s)]
+        w = self._metric_weights
         M = np.zeros((self.m, self.m))
         for G in self.G:
             wb = w[:, None] * G.block
             M[np.ix_(G.cols, G.cols)] += wb.T @ wb
         return M
 
+    @property
+    def _metric_weights(self) -> FloatArray:
+        """Weights of (t, w) in the metric: |t/s|^2 + |w * ell / s|^2."""
+        return np.concatenate([np.full(3, 1.0 / self.s), np.full(3, self.ell / self.s)])
+
     def metric_times(self, X: FloatArray) -> FloatArray:
         """``metric @ X`` without forming the metric."""
-        w2 = np.r_[np.full(3, 1.0 / self.s), np.full(3, self.ell / self.s)] ** 2
+        w2 = self._metric_weights**2
         out = np.zeros((self.m, X.shape[1]))
         for G in self.G:
             out[G.cols] += G.block.T @ (w2[:, None] * (G.block @ X[G.cols]))

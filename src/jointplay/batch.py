@@ -77,9 +77,7 @@ class BatchSolution:
     def gap_used(self) -> FloatArray:
         """(B, n): fraction of each ball contact's play used."""
         stack = self.asm.stack
-        v = self.x @ stack.A.T
-        rho = np.sqrt(np.add.reduceat(v * v, stack.start, axis=1)) if len(stack.k) else v
-        return np.clip(rho / stack.r, 0.0, 1.0) if len(stack.k) else rho
+        return stack.gap_used(stack.norms(self.x)[1])
 
 
 def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
@@ -156,11 +154,6 @@ def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
         ws._check_driven(work[i])  # raises, naming the body and the motion
-
-
-def _norms(stack: BallStack, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-    v = x @ stack.A.T
-    return v, np.sqrt(np.add.reduceat(v * v, stack.start, axis=1))
 
 
 def _newton_batch(
@@ -271,7 +264,7 @@ def _certificates(
     B = x.shape[0]
     stack = ws.stack
     if len(stack.k):
-        v, rho = _norms(stack, x)
+        v, rho = stack.norms(x)
         feas = np.max(rho - stack.r - sigma * np.maximum(lam, 0.0), axis=1)
         safe = np.where(rho > 0, rho, 1.0)
         u = v / np.repeat(safe, stack.k, axis=1)

@@ -15,7 +15,6 @@ from rich.console import Console
 
 from . import __version__
 from .errors import JointplayError, ModelError, UnboundedMechanismError
-from .model import suggest
 
 app = typer.Typer(
     add_completion=False,
@@ -61,13 +60,11 @@ def solve(
 
     def run() -> None:
         model = load(model_path)
-        if case is not None and case not in model.case_names:
-            cases = ", ".join(model.case_names) or "(the model has none)"
-            raise ModelError(
-                f"--case: no load case '{case}'; cases are: {cases}."
-                + suggest(case, model.case_names),
-                source=str(model_path),
-            )
+        if case is not None:
+            try:
+                model.loads_of(case)
+            except KeyError as exc:
+                raise ModelError(f"--case: {exc.args[0]}", source=str(model_path)) from None
         ws = Workspace.of(model)
         if not model.case_names:
             result = ws.solve()

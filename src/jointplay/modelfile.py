@@ -16,13 +16,14 @@ from pydantic import ValidationError
 
 from .errors import ModelError
 from .joints import JOINT_TYPES
-from .model import Body, EntryError, Load, Model, suggest
+from .model import Body, EntryError, FunctionalPoint, Load, Model, suggest
 
 #: Accepted keys per section, for "did you mean" suggestions.
 _SECTION_KEYS = {
     "top": set(Model.model_fields) - {"schema_version"} | {"schema"},
     "bodies": set(Body.model_fields),
     "loads": set(Load.model_fields),
+    "points": set(FunctionalPoint.model_fields),
 }
 
 
@@ -124,7 +125,10 @@ def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> 
 
 def _entry(loc: list[Any], data: dict[str, Any]) -> tuple[str, str]:
     """Split a pydantic location into ('joints[1] 'l2'', 'clearance')."""
-    if len(loc) >= 2 and loc[0] in ("bodies", "joints", "loads") and isinstance(loc[1], int):
+    if len(loc) >= 3 and loc[0] == "load_cases" and isinstance(loc[2], int):
+        return f"load_cases.{loc[1]}[{loc[2]}]", _join_loc(loc[3:])
+    sections = ("bodies", "joints", "loads", "points")
+    if len(loc) >= 2 and loc[0] in sections and isinstance(loc[1], int):
         section, index = loc[0], loc[1]
         rest = loc[2:]
         if section == "joints" and rest and isinstance(rest[0], str) and rest[0] in JOINT_TYPES:
@@ -135,12 +139,16 @@ def _entry(loc: list[Any], data: dict[str, Any]) -> tuple[str, str]:
             item_name = items[index].get("name")
             if isinstance(item_name, str):
                 name = f" '{item_name}'"
-        return f"{section}[{index}]{name}", ".".join(_fmt_loc(p) for p in rest)
-    return "", ".".join(_fmt_loc(p) for p in loc)
+        return f"{section}[{index}]{name}", _join_loc(rest)
+    return "", _join_loc(loc)
 
 
-def _fmt_loc(part: Any) -> str:
-    return f"[{part}]" if isinstance(part, int) else str(part)
+def _join_loc(parts: list[Any]) -> str:
+    """``['a', 0, 'b']`` -> ``a[0].b``."""
+    out = ""
+    for part in parts:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
 
 
 def _problem(err: Any, loc: list[Any], data: dict[str, Any]) -> str:
@@ -172,6 +180,8 @@ def _problem(err: Any, loc: list[Any], data: dict[str, Any]) -> str:
         return f"expected a list of entries, got {type(err.get('input')).__name__}"
     if kind == "model_type" or kind == "model_attributes_type":
         return f"expected a mapping of keys (name: ..., ...), got {err.get('input')!r}"
+    if kind == "dict_type":
+        return f"expected a mapping (NAME: [...], ...), got {type(err.get('input')).__name__}"
     if kind == "string_type":
         return f"expected a text name, got {err.get('input')!r}"
     if kind == "bool_type":
@@ -190,4 +200,6 @@ def _allowed_keys(loc: list[Any], data: dict[str, Any]) -> set[str]:
             return set(JOINT_TYPES[tag].model_fields)
     if section in _SECTION_KEYS and len(loc) == 3:
         return _SECTION_KEYS[section]
+    if section == "load_cases" and len(loc) == 4:
+        return _SECTION_KEYS["loads"]
     return set()

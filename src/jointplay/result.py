@@ -214,11 +214,9 @@ def build_result(
             bodies[b.name] = BodyResult(b.name, zero, zero)
 
     _, rho = asm.stack.norms(x)
-    r = asm.stack.r
-    with np.errstate(divide="ignore", invalid="ignore"):
-        used = np.clip(np.where(r > 0, rho / np.where(r > 0, r, 1.0), rho > 0), 0.0, 1.0)
+    used = asm.stack.gap_used(rho)
     # past the clearance: only compliant contacts may be (hard ones by round-off)
-    penetration = np.where(asm.stack.spring > 0, np.maximum(rho - r, 0.0) * asm.s, 0.0)
+    penetration = np.where(asm.stack.spring > 0, np.maximum(rho - asm.stack.r, 0.0) * asm.s, 0.0)
     ball_index = {id(c): i for i, c in enumerate(asm.balls)}
     fixed_start = {}
     row = 0

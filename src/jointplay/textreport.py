@@ -21,6 +21,16 @@ def _vec(v: FloatArray, digits: int = 4) -> str:
     return "[" + ", ".join(f"{float(c) + 0.0:.{digits}g}" for c in v) + "]"
 
 
+def _xyz_table(title: str, leading: list[str]) -> Table:
+    """A table of global X, Y, Z components after the ``leading`` columns."""
+    table = Table(title=title, title_justify="left", show_edge=False)
+    for name in leading:
+        table.add_column(name)
+    for axis in "XYZ":
+        table.add_column(axis, justify="right")
+    return table
+
+
 def render(
     model: Model, result: Result, source: str, console: Console, case: str | None = None
 ) -> None:
@@ -82,15 +92,9 @@ def render(
         )
         parts.append(forces)
 
-    body_table = Table(
-        title="bodies: small displacement at the global origin, in global axes",
-        title_justify="left",
-        show_edge=False,
+    body_table = _xyz_table(
+        "bodies: small displacement at the global origin, in global axes", ["body", ""]
     )
-    body_table.add_column("body")
-    body_table.add_column("")
-    for axis in "XYZ":
-        body_table.add_column(axis, justify="right")
     for name, br in result.bodies.items():
         if model.body(name).ground:
             continue
@@ -98,15 +102,9 @@ def render(
         body_table.add_row("", "rotation (rad)", *(_num(v, 6) for v in br.rotation))
     parts.append(body_table)
     if result.points:
-        point_table = Table(
-            title="functional points: displacement in global axes (mm)",
-            title_justify="left",
-            show_edge=False,
+        point_table = _xyz_table(
+            "functional points: displacement in global axes (mm)", ["point", "body"]
         )
-        point_table.add_column("point")
-        point_table.add_column("body")
-        for axis in "XYZ":
-            point_table.add_column(axis, justify="right")
         point_table.add_column("|u|", justify="right")
         for pr in result.points.values():
             d = pr.displacement
