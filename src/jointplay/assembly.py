@@ -12,7 +12,8 @@ Everything the solver needs is linear in ``x``:
 
 * ``G_joint @ x`` is a joint's relative torsor ``(t [mm], w [rad])`` of b with
   respect to a, at the joint centre, in the joint frame;
-* each contact is ``|| A @ x || <= radius`` (scaled by ``s``), or ``A @ x = 0``;
+* each contact is ``|| A @ x || + B @ x <= radius`` (scaled by ``s``; ``B``
+  is zero for a plain ball of play), or ``A @ x = 0``;
 * the loads' work is ``g @ x`` (N*mm), so the potential energy is ``-g @ x``.
 """
 
@@ -61,10 +62,13 @@ class ContactRows:
     radius: float  # scaled: contact.radius / s
     m: int
     stiffness: float = 0.0  # N/mm; 0: rigid (the clearance is a hard limit)
+    offset_block: FloatArray | None = None  # (len(cols),): the row B of a face, scaled
 
     @property
     def is_fixed(self) -> bool:
-        return self.contact.kind == "fixed" or (self.radius == 0.0 and self.stiffness == 0.0)
+        if self.contact.kind == "fixed":
+            return True
+        return self.radius == 0.0 and self.stiffness == 0.0 and self.offset_block is None
 
     @property
     def k(self) -> int:
@@ -85,13 +89,24 @@ class ContactRows:
         np.add.at(out.T, self.cols, self.block.T)
         return out
 
+    def dense_offset(self) -> FloatArray:
+        """``B`` as a full m-vector (zero for a plain ball)."""
+        out = np.zeros(self.m)
+        if self.offset_block is not None:
+            np.add.at(out, self.cols, self.offset_block)
+        return out
+
 
 @dataclass(frozen=True)
 class BallStack:
-    """The clearance cones ``|A_i x| <= r_i`` stacked for vectorized work.
+    """The clearance cones ``|A_i x| + B_i x <= r_i`` stacked for vectorized work.
 
     ``A`` holds the rows of every cone one after the other (cone ``i`` is rows
-    ``start[i] : start[i] + k[i]``), ``r`` the radii (scaled).
+    ``start[i] : start[i] + k[i]``; ``k[i]`` is 0 for a one-sided limit),
+    ``B`` one row per cone (zero for a plain ball), ``r`` the radii (scaled).
+    The dual of cone i is a force ``lam_i >= |f_i|`` with a vector ``f_i``
+    (``f`` stacks them like the rows of ``A``); it does the work
+    ``A_i^T f_i + lam_i B_i`` (see ``adjoint``).
     """
 
     A: FloatArray  # (sum k, m)
@@ -99,6 +114,7 @@ class BallStack:
     k: IntArray  # (n,) rows per cone
     r: FloatArray  # (n,)
     spring: FloatArray  # (n,) contact stiffness N/mm, 0 for a hard limit
+    B: FloatArray  # (n, m)
 
     @staticmethod
     def of(balls: Sequence[ContactRows], m: int) -> BallStack:
@@ -107,32 +123,76 @@ class BallStack:
         A = np.vstack([c.dense() for c in balls]) if balls else np.zeros((0, m))
         r = np.array([c.radius for c in balls], dtype=float)
         spring = np.array([c.stiffness for c in balls], dtype=float)
-        return BallStack(A, start, k, r, spring)
+        B = np.array([c.dense_offset() for c in balls]).reshape(len(balls), m)
+        return BallStack(A, start, k, r, spring, B)
+
+    def rows_of(self, which: Sequence[int] | IntArray) -> IntArray:
+        """Rows of ``A`` (and entries of ``f``) of the cones ``which``."""
+        idx = np.asarray(which, dtype=np.intp)
+        if not len(idx):
+            return np.zeros(0, dtype=np.intp)
+        return np.concatenate(
+            [np.arange(a, a + n) for a, n in zip(self.start[idx], self.k[idx], strict=True)]
+        )
 
     def take(self, which: Sequence[int]) -> BallStack:
         """The sub-stack of cones ``which`` (in that order)."""
         idx = np.asarray(which, dtype=np.intp)
         k = self.k[idx]
-        rows = (
-            np.concatenate([np.arange(a, a + n) for a, n in zip(self.start[idx], k, strict=True)])
-            if len(idx)
-            else np.zeros(0, dtype=np.intp)
-        )
         start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
-        return BallStack(self.A[rows], start, k, self.r[idx], self.spring[idx])
+        return BallStack(
+            self.A[self.rows_of(idx)], start, k, self.r[idx], self.spring[idx], self.B[idx]
+        )
+
+    @cached_property
+    def has_offset(self) -> NDArray[np.bool_]:
+        """(n,): the cone has a face row ``B_i`` (a one-sided limit or a tilting face)."""
+        return np.asarray(np.any(self.B != 0.0, axis=1))
+
+    @cached_property
+    def _segments(self) -> FloatArray | None:
+        """(sum k, n) indicator of each row's cone, when some cone has no rows
+        (``reduceat`` cannot sum an empty segment)."""
+        if len(self.k) and np.all(self.k > 0):
+            return None
+        S = np.zeros((int(np.sum(self.k)), len(self.k)))
+        S[np.arange(S.shape[0]), np.repeat(np.arange(len(self.k)), self.k)] = 1.0
+        return S
+
+    def segment_sum(self, w: FloatArray) -> FloatArray:
+        """Per cone, the sum of ``w`` over its rows (last axis)."""
+        if not len(self.k):
+            return np.zeros((*w.shape[:-1], 0))
+        S = self._segments
+        if S is None:
+            return np.add.reduceat(w, self.start, axis=-1)
+        return w @ S
 
     def norms(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(A @ x, |A_i x|)`` for one x (m,) or a batch of rows (B, m)."""
         v = x @ self.A.T
-        if not len(self.k):
-            return v, np.zeros((*x.shape[:-1], 0))
-        return v, np.sqrt(np.add.reduceat(v * v, self.start, axis=-1))
+        return v, np.sqrt(self.segment_sum(v * v))
 
-    def gap_used(self, rho: FloatArray) -> FloatArray:
-        """Fraction of each cone's play used by ``rho = |A_i x|``, in [0, 1]
-        (a spring with no play counts as fully used as soon as it moves)."""
+    def levels(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(A @ x, |A_i x|, |A_i x| + B_i x)``: each cone's level, to compare with r."""
+        v, rho = self.norms(x)
+        return v, rho, rho + x @ self.B.T
+
+    def adjoint(self, f: FloatArray, lam: FloatArray) -> FloatArray:
+        """``sum_i A_i^T f_i + lam_i B_i``: the work of the contact forces (rows batched)."""
+        return f @ self.A + lam @ self.B
+
+    def surface_forces(self, v: FloatArray, rho: FloatArray, lam: FloatArray) -> FloatArray:
+        """``f_i = lam_i A_i x / |A_i x|`` (0 where ``A_i x = 0``): the force vectors
+        of contacts on their cone's surface."""
+        safe = np.where(rho > 0.0, rho, 1.0)
+        return v * np.repeat(lam / safe, self.k, axis=-1)
+
+    def gap_used(self, level: FloatArray) -> FloatArray:
+        """Fraction of each cone's play used at ``level = |A_i x| + B_i x``, in
+        [0, 1] (a limit with no play counts as used as soon as it is reached)."""
         r = np.where(self.r > 0, self.r, 1.0)
-        return np.clip(np.where(self.r > 0, rho / r, rho > 0), 0.0, 1.0)
+        return np.clip(np.where(self.r > 0, level / r, level >= -1e-12), 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -269,8 +329,9 @@ def assemble(model: Model) -> Assembly:
         for cdx, contact in enumerate(joint.cones):
             block = (contact.rows / s) @ G.block
             spring = 0.0 if contact.kind == "fixed" else (joint.stiffness or 0.0)
+            offset = None if contact.offset is None else (contact.offset / s) @ G.block
             contacts.append(
-                ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m, spring)
+                ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m, spring, offset)
             )
 
     g = load_work(model.loads_of(None), index, body_ref, s, ell)

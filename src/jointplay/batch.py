@@ -25,7 +25,7 @@ from .geometry import FloatArray
 BoolArray = NDArray[np.bool_]
 
 if TYPE_CHECKING:
-    from .solver import Workspace
+    from .solver import Workspace, _FaceKey
 
 #: Newton steps tried on a batch before its leftovers go to the full solver ...
 MAX_NEWTON = 12
@@ -77,7 +77,7 @@ class BatchSolution:
     def gap_used(self) -> FloatArray:
         """(B, n): fraction of each ball contact's play used."""
         stack = self.asm.stack
-        return stack.gap_used(stack.norms(self.x)[1])
+        return stack.gap_used(stack.levels(self.x)[2])
 
 
 def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
@@ -95,9 +95,10 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
     n_balls = len(ws.balls)
     x = np.zeros((B, ws.m))
     lam = np.zeros((B, n_balls))
+    f = np.zeros((B, ws.stack.A.shape[0]))
     batched = np.zeros(B, dtype=bool)
     pending = np.flatnonzero(norms > 0)
-    solved_by_set: dict[tuple[int, ...], list[IntArray]] = {}  # active set -> solved rows
+    solved_by_set: dict[_FaceKey, list[IntArray]] = {}  # active set -> solved rows
     full = 0
     while pending.size:
         # Newton from the nearest solved sample of each known active set, while it helps.
@@ -109,12 +110,12 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
                     break
                 ref = np.concatenate(rows)
                 nearest = ref[cKDTree(g_hat[ref]).query(g_hat[pending])[1]]
-                ok, xs, lams = _newton_batch(
+                ok, xs, lams, fs = _newton_batch(
                     ws, active, g_hat[pending], sigma[pending], x[nearest], lam[nearest]
                 )
                 if np.any(ok):
                     won = pending[ok]
-                    x[won], lam[won], batched[won] = xs[ok], lams[ok], True
+                    x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
                     rows.append(won)
                     pending = pending[~ok]
                     progress = True
@@ -124,11 +125,11 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
         ws._last = None
         point = ws._optimum(g_hat[first], sigma[first])
         full += 1
-        x[first], lam[first] = point.x, point.lam
+        x[first], lam[first], f[first] = point.x, point.lam, point.f
         if point.active is not None:
             solved_by_set.setdefault(point.active, []).append(np.array([first]))
 
-    feas, residual = _certificates(ws, g_hat, sigma, x, lam)
+    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f)
     st = ws.settings
     if np.any(feas > st.feasibility_tolerance * ws._max_radius) or np.any(
         residual > st.equilibrium_tolerance
@@ -158,34 +159,64 @@ def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
 
 def _newton_batch(
     ws: Workspace,
-    active: tuple[int, ...],
+    key: _FaceKey,
     g_hat: FloatArray,
     sigma: FloatArray,
     x0: FloatArray,
     lam0: FloatArray,
-) -> tuple[BoolArray, FloatArray, FloatArray]:
-    """KKT equations of ``active`` for every row of ``g_hat``, each from its
-    own start (rows of ``x0``, ``lam0``).
+) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray]:
+    """KKT equations of the active set ``key`` for every row of ``g_hat``,
+    each from its own start (rows of ``x0``, ``lam0``).
 
-    Returns (accepted mask, x, full multipliers); a row is accepted only if
-    it converged and passes the certificate of a unique optimum.
+    Returns (accepted mask, x, full multipliers, force vectors); a row is
+    accepted only if it converged and passes the certificate of a unique optimum.
     """
     B, m = g_hat.shape
-    sub = ws._face(active).stack
-    na, ne = len(active), ws.Eq.shape[0]
-    n = m + na + ne
+    stack = ws.stack
     x = x0.copy()
-    lam_a = lam0[:, list(active)]
+    lam = np.zeros((B, len(ws.balls)))
+    f = np.zeros((B, stack.A.shape[0]))
+    face = ws._face(key)
+    if not face.determined:  # a tie, or a tilting face (uniqueness depends on x)
+        return np.zeros(B, dtype=bool), x, lam, f
+    surface, linear = key
+    ne0 = ws.Eq.shape[0]
+    Eq, e = face.Eq, face.e
+    eq_soft = np.zeros((B, len(Eq)))
+    eq_soft[:, ne0 + face.lam_rows] = sigma[:, list(linear)]
+    na, ne = len(surface), Eq.shape[0]
+    n = m + na + ne
+    lam_s = lam0[:, list(surface)].copy()
+    nu = np.zeros((B, ne))
     conv = np.zeros(B, dtype=bool)
     chunk = max(1, CHUNK_ENTRIES // (n * n))
     for lo in range(0, B, chunk):
         sl = slice(lo, min(B, lo + chunk))
-        conv[sl] = _newton_rows(ws, sub, -g_hat[sl], sigma[sl][:, list(active)], x[sl], lam_a[sl])
+        conv[sl] = _newton_rows(
+            face.stack,
+            Eq,
+            e,
+            eq_soft[sl],
+            -g_hat[sl],
+            sigma[sl][:, list(surface)],
+            x[sl],
+            lam_s[sl],
+            nu[sl],
+        )
 
-    lam = np.zeros((B, len(ws.balls)))
-    lam[:, list(active)] = lam_a
-    strict = np.min(lam_a, axis=1) > 1e-9 * np.max(lam_a, axis=1) if na else conv
-    feas, residual = _certificates(ws, g_hat, sigma, x, lam)
+    lam[:, list(surface)] = lam_s
+    v, rho = face.stack.norms(x)
+    f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
+    lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
+    f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
+    lam_a = lam[:, list(surface) + list(linear)]
+    strict = np.min(lam_a, axis=1) > 1e-9 * np.max(lam_a, axis=1) if lam_a.shape[1] else conv
+    if linear:
+        lin = stack.take(linear)
+        f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
+        inside = (f_norm < (1.0 - 1e-9) * lam[:, list(linear)]) | (lin.k == 0)
+        strict &= np.all(inside, axis=1)
+    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f)
     st = ws.settings
     ok = (
         conv
@@ -193,24 +224,26 @@ def _newton_batch(
         & (feas <= st.feasibility_tolerance * ws._max_radius)
         & (residual <= st.equilibrium_tolerance)
     )
-    return ok, x, lam
+    return ok, x, lam, f
 
 
 def _newton_rows(
-    ws: Workspace,
     sub: BallStack,
+    Eq: FloatArray,
+    e: FloatArray,
+    eq_soft: FloatArray,
     q: FloatArray,
     soft: FloatArray,
     x: FloatArray,
     lam: FloatArray,
+    nu: FloatArray,
 ) -> BoolArray:
-    """Newton on the KKT equations, rows in place; returns the converged mask."""
+    """Newton on the KKT equations (see ``solver._newton``), rows in place;
+    returns the converged mask."""
     B, m = q.shape
-    A, start, k, r = sub.A, sub.start, sub.k, sub.r
-    Eq = ws.Eq
+    A, start, k, r, Bo = sub.A, sub.start, sub.k, sub.r, sub.B
     na, ne = len(k), Eq.shape[0]
     n = m + na + ne
-    nu = np.zeros((B, ne))
     K0 = np.zeros((n, n))
     K0[:m, m + na :] = Eq.T
     K0[m + na :, :m] = Eq
@@ -223,11 +256,18 @@ def _newton_rows(
         if na and not np.all(rho > 0):
             return conv  # a contact at its centre: no direction; leave to the full solver
         u = v / np.repeat(rho, k, axis=1) if na else v
-        J = np.add.reduceat(A[None, :, :] * u[:, :, None], start, axis=1) if na else None
+        Ju = np.add.reduceat(A[None, :, :] * u[:, :, None], start, axis=1) if na else None
         grad = q[todo] + nu[todo] @ Eq
-        if J is not None:
-            grad += np.einsum("bi,bim->bm", ls, J)
-        F = np.concatenate([grad, rho - r - soft[todo] * ls, xs @ Eq.T], axis=1)
+        if Ju is not None:
+            grad += np.einsum("bi,bim->bm", ls, Ju) + ls @ Bo
+        F = np.concatenate(
+            [
+                grad,
+                rho + xs @ Bo.T - r - soft[todo] * ls,
+                xs @ Eq.T - e - eq_soft[todo] * nu[todo],
+            ],
+            axis=1,
+        )
         err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
         done = err <= 1e-14
         conv[todo[done]] = True
@@ -239,11 +279,13 @@ def _newton_rows(
         todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
         Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
         Kb[:, m + np.arange(na), m + np.arange(na)] = -soft[todo]
-        if J is not None:
-            J = J[keep]
+        Kb[:, m + na + np.arange(ne), m + na + np.arange(ne)] = -eq_soft[todo]
+        if Ju is not None:
+            Ju = Ju[keep]
             c = ls / rho
             AtCA = (A.T[None, :, :] * np.repeat(c, k, axis=1)[:, None, :]) @ A
-            Kb[:, :m, :m] = AtCA - np.einsum("bim,bi,bin->bmn", J, c, J)
+            Kb[:, :m, :m] = AtCA - np.einsum("bim,bi,bin->bmn", Ju, c, Ju)
+            J = Ju + Bo
             Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
             Kb[:, m : m + na, :m] = J
         try:
@@ -258,19 +300,20 @@ def _newton_rows(
 
 
 def _certificates(
-    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, x: FloatArray, lam: FloatArray
+    ws: Workspace,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
     """Per row: feasibility (scaled) and relative equilibrium residual."""
     B = x.shape[0]
     stack = ws.stack
     if len(stack.k):
-        v, rho = stack.norms(x)
-        feas = np.max(rho - stack.r - sigma * np.maximum(lam, 0.0), axis=1)
-        safe = np.where(rho > 0, rho, 1.0)
-        u = v / np.repeat(safe, stack.k, axis=1)
-        # sum_i lam_i A_i^T u_i, row by row
-        weighted = u * np.repeat(lam, stack.k, axis=1)
-        residual_vec = g_hat - weighted @ stack.A
+        _, _, level = stack.levels(x)
+        feas = np.max(level - stack.r - sigma * np.maximum(lam, 0.0), axis=1)
+        residual_vec = g_hat - stack.adjoint(f, lam)
     else:
         feas = np.zeros(B)
         residual_vec = g_hat.copy()

@@ -64,12 +64,14 @@ def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:
     return np.column_stack([x, y, z])
 
 
-def describe_direction(direction: FloatArray) -> str:
-    """'the global X axis' style names for axis-aligned directions, else the vector."""
+def describe_direction(direction: FloatArray, signed: bool = False) -> str:
+    """'the global X axis' style names for axis-aligned directions (with its
+    sense, '+X' or '-X', when ``signed``), else the vector."""
     d = unit(direction)
     for name, axis in GLOBAL_AXES.items():
         if is_parallel(d, axis):
-            return f"global {name}"
+            sense = ("+" if float(d @ axis) > 0 else "-") if signed else ""
+            return f"global {sense}{name}"
     return "[" + ", ".join(f"{c:.4g}" for c in d) + "]"
 
 
@@ -77,18 +79,22 @@ def fmt_point(p: FloatArray) -> str:
     return "(" + ", ".join(f"{0.0 if abs(c) < 1e-12 else c:.6g}" for c in p) + ") mm"
 
 
-def describe_motion(omega: FloatArray, v_origin: FloatArray, ell: float) -> str:
-    """A small rigid motion in words: a translation, a rotation about an axis, or a screw."""
+def describe_motion(
+    omega: FloatArray, v_origin: FloatArray, ell: float, signed: bool = False
+) -> str:
+    """A small rigid motion in words: a translation, a rotation about an axis,
+    or a screw (``signed``: name the sense of a translation, for a motion
+    that is free one way only)."""
     w = float(np.linalg.norm(omega))
     v = float(np.linalg.norm(v_origin))
     if w * ell <= 1e-9 * v:
-        return f"translation along {_axis_words(v_origin)}"
+        return f"translation along {_axis_words(v_origin, signed)}"
     axis_point = cross(omega, v_origin) / w**2
     pitch = float(omega @ v_origin) / w**2
     if np.linalg.norm(axis_point) <= 1e-9 * ell:
-        where = f"rotation about {_axis_words(omega)}"
+        where = f"rotation about {_axis_words(omega, signed)}"
     else:
-        name = describe_direction(omega)
+        name = describe_direction(omega, signed)
         along = f"parallel to {name}" if name.startswith("global") else f"along {name}"
         where = f"rotation about an axis {along} through {fmt_point(axis_point)}"
     if abs(pitch) > 1e-9 * ell:
@@ -96,6 +102,6 @@ def describe_motion(omega: FloatArray, v_origin: FloatArray, ell: float) -> str:
     return where
 
 
-def _axis_words(direction: FloatArray) -> str:
-    name = describe_direction(direction)
+def _axis_words(direction: FloatArray, signed: bool = False) -> str:
+    name = describe_direction(direction, signed)
     return f"the {name} axis" if name.startswith("global") else f"the direction {name}"

@@ -187,6 +187,7 @@ def build_result(
     asm: Assembly,
     x: FloatArray,
     ball_forces: FloatArray,
+    ball_vectors: FloatArray,
     rigid_forces: FloatArray,
     certificate: Certificate,
     solve_time: float,
@@ -197,8 +198,9 @@ def build_result(
     """Turn the solver's numbers into a ``Result``.
 
     ``ball_forces``: the force (N) of each clearance contact (``asm.balls``
-    order); ``rigid_forces``: the multipliers (N, N*mm) of the fixed rows
-    (``asm.fixed`` order, rows stacked); ``loads`` and ``g``: the loads
+    order), ``ball_vectors`` their force vectors (N, stacked like the rows
+    of ``asm.stack.A``; see ``Contact``); ``rigid_forces``: the multipliers
+    (N, N*mm) of the fixed rows (``asm.fixed`` order, rows stacked); ``loads`` and ``g``: the loads
     solved for and their work.
     """
     model = asm.model
@@ -213,10 +215,11 @@ def build_result(
         else:
             bodies[b.name] = BodyResult(b.name, zero, zero)
 
-    _, rho = asm.stack.norms(x)
-    used = asm.stack.gap_used(rho)
+    stack = asm.stack
+    _, _, level = stack.levels(x)
+    used = stack.gap_used(level)
     # past the clearance: only compliant contacts may be (hard ones by round-off)
-    penetration = np.where(asm.stack.spring > 0, np.maximum(rho - asm.stack.r, 0.0) * asm.s, 0.0)
+    penetration = np.where(stack.spring > 0, np.maximum(level - stack.r, 0.0) * asm.s, 0.0)
     ball_index = {id(c): i for i, c in enumerate(asm.balls)}
     fixed_start = {}
     row = 0
@@ -232,20 +235,23 @@ def build_result(
         rows = c.contact.rows
         i = ball_index.get(id(c))
         past = 0.0
+        local_point = c.contact.point
         if i is None:
             k0 = fixed_start[id(c)]
             wrench = -rows.T @ rigid_forces[k0 : k0 + c.k]
             gap, touching = 1.0, True
         else:
-            v = rows @ taus[c.joint_index]
-            norm = float(np.linalg.norm(v))
-            u = v / norm if norm > 0 else v
-            wrench = -float(ball_forces[i]) * (rows.T @ u)
+            lam = float(ball_forces[i])
+            f = ball_vectors[stack.start[i] : stack.start[i] + stack.k[i]]
+            wrench = -(rows.T @ f)
+            if c.contact.offset is not None:
+                wrench = wrench - lam * c.contact.offset
             gap = float(used[i])
             touching = gap >= TOUCHING
             past = float(penetration[i])
+            local_point = c.contact.acting_point(f, lam)
         wrench_sum[c.joint_index] += wrench
-        point = joint.centre + joint.R_world_joint @ c.contact.point
+        point = joint.centre + joint.R_world_joint @ local_point
         force = _clean(wrench[:3], max(1e-300, float(np.max(np.abs(wrench[:3])))))
         state = ContactResult(c.contact.name, gap, touching, force + 0.0, point, past)
         per_joint.setdefault(c.joint_index, []).append(state)

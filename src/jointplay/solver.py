@@ -68,18 +68,43 @@ class _Point:
 
     x: FloatArray
     lam: FloatArray  # per ball contact (scaled)
+    f: FloatArray  # force vectors, stacked like the rows of BallStack.A (scaled)
     method: str = "interior-point"
     iterations: int = 0
     certificate: Certificate | None = None
-    active: tuple[int, ...] | None = None  # the active set that determines x, if any
+    active: _FaceKey | None = None  # the active set that determines x, if any
+
+
+#: An active set: (cones on their surface, cones whose rows all hold as equalities).
+_FaceKey = tuple[tuple[int, ...], tuple[int, ...]]
 
 
 @dataclass(frozen=True)
 class _Face:
-    """An active set: its cones, and whether they pin the position down."""
+    """An active set, split by how its cones are held.
 
-    stack: BallStack
-    determined: bool  # the active cones and equalities determine x uniquely
+    ``surface``: cones on their curved surface, ``|A_i x| + B_i x = r_i``
+    with ``A_i x != 0`` (their force is along ``A_i x``). ``linear``: cones
+    whose rows all hold as equalities: one-sided limits (no rows) and faces
+    resting flat at their apex (``A_i x = 0``, ``B_i x = r_i``; their force
+    vector is free inside ``|f_i| <= lam_i``). The linear cones' rows ``L x = l``
+    join the equalities; ``lam_rows`` are the rows of L that carry a cone's
+    ``lam`` (and its compliance), ``f_rows`` the rows that carry its ``f``.
+    """
+
+    key: _FaceKey
+    stack: BallStack  # the surface cones
+    L: FloatArray
+    rhs: FloatArray
+    lam_rows: IntArray
+    f_rows: IntArray
+    Eq: FloatArray  # the workspace's equalities, then L
+    e: FloatArray
+    surface_rows: IntArray  # rows of the full stack's A (and f) of the surface cones
+    linear_rows: IntArray  # ... and of the linear cones
+    #: Whether the active cones and equalities determine x uniquely; None when
+    #: that depends on x (a tilting face: see ``Workspace._determined``).
+    determined: bool | None
 
 
 def solve(
@@ -119,7 +144,7 @@ class Workspace:
         self._max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
         self._rigid_basis = _range_basis(self.E.T)
         self._phase1_data: _ConeProgram | None = None
-        self._faces: dict[tuple[int, ...], _Face] = {}
+        self._faces: dict[_FaceKey, _Face] = {}
         self._last: _Point | None = None
         self._free_words: tuple[str, ...] | None = None
         #: Per solve: softness of each contact (scaled penetration per unit of
@@ -133,7 +158,7 @@ class Workspace:
 
     # -- free motions -------------------------------------------------------
     def _free_motions(self) -> FloatArray:
-        C = np.vstack([self.stack.A, self.E])
+        C = np.vstack([self.stack.A, self.stack.B[self.stack.has_offset], self.E])
         if C.shape[0] == 0:
             return np.eye(self.m)
         _, sv, Vt = np.linalg.svd(C, full_matrices=True)
@@ -148,6 +173,36 @@ class Workspace:
         if np.linalg.norm(drive) <= self.settings.drive_tolerance * np.linalg.norm(g):
             return
         raise _unbounded(self.asm, self.N @ drive)
+
+    def _driven_motion(self, g: FloatArray, fallback: FloatArray) -> FloatArray:
+        """A motion that the joints let go on for ever and the loads ``g``
+        drive (a body lifting off its point contacts, say), in the simplest
+        words found: a translation or a rotation of one body, or of all the
+        moving bodies together, along a global axis; else the solver's own
+        certificate of unboundedness (``fallback``)."""
+        m, n = self.m, len(self.asm.body_names)
+        groups = [[i] for i in range(n)] + ([list(range(n))] if n > 1 else [])
+        candidates = []
+        for group in groups:
+            for part in (0, 3):
+                for axis in range(3):
+                    d = np.zeros(m)
+                    d[[6 * i + part + axis for i in group]] = 1.0
+                    if part == 3 and len(group) > 1:
+                        continue  # a common rotation: about which point is not obvious
+                    candidates.extend([d, -d])
+        best, best_work = fallback[:m], 0.0
+        for d in candidates:
+            d = d / np.linalg.norm(d)
+            work = float(g @ d)
+            if work <= best_work:
+                continue
+            _, _, level = self.stack.levels(d)
+            held = len(level) and float(np.max(level)) > 1e-9
+            if held or (len(self.E) and float(np.max(np.abs(self.E @ d))) > 1e-9):
+                continue
+            best, best_work = d, work
+        return best
 
     def free_motions(self) -> tuple[str, ...]:
         """The free motions in words (computed once)."""
@@ -177,6 +232,7 @@ class Workspace:
             self.asm,
             point.x,
             point.lam * to_newton,
+            point.f * to_newton,
             rigid,
             point.certificate,
             elapsed,
@@ -192,7 +248,7 @@ class Workspace:
         """
         if not len(self.E):
             return np.zeros(0)
-        rest = g_hat - _gradients(self.stack, point.x).T @ point.lam
+        rest = g_hat - self.stack.adjoint(point.f, point.lam)
         return np.asarray(np.linalg.lstsq(self.E.T, rest, rcond=None)[0])
 
     def solve_batch(self, work: FloatArray) -> BatchSolution:
@@ -218,7 +274,9 @@ class Workspace:
         with contact softness ``sigma`` (default: every contact hard)."""
         self.sigma = np.zeros(len(self.balls)) if sigma is None else sigma
         if not np.any(g_hat):
-            point = _Point(np.zeros(self.m), np.zeros(len(self.balls)), method="no load")
+            point = _Point(
+                np.zeros(self.m), np.zeros(len(self.balls)), self._no_f(), method="no load"
+            )
         else:
             warm = self._warm(g_hat) if self.settings.warm_start else None
             if warm is not None:
@@ -247,10 +305,12 @@ class Workspace:
             self._phase1_data = self._cone_program(
                 None, self.Eq, np.zeros(len(self.Eq)), self.stack
             )
-        sol = self._clarabel(self._phase1_data, -g_hat)
-        x = np.asarray(sol.x)
-        lam = np.asarray(sol.z)[self._phase1_data.soc_first]
-        return _Point(x, lam, iterations=sol.iterations)
+        prog = self._phase1_data
+        sol = self._clarabel(prog, -g_hat)
+        z = np.asarray(sol.z)
+        return _Point(
+            np.asarray(sol.x), z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations
+        )
 
     def _phase1_compliant(self, g_hat: FloatArray) -> _Point:
         """The cone program with a penetration ``p_i >= 0`` per compliant contact:
@@ -266,21 +326,25 @@ class Workspace:
             b = np.concatenate([base.b, np.zeros(nc)])
             cones = [*base.cones, clarabel.NonnegativeConeT(nc)]
             self._compliant_data = _ConeProgram(
-                base.P, _csc(A), b, cones, base.settings, base.soc_first
+                base.P, _csc(A), b, cones, base.settings, base.soc_first, base.f_rows
             )
         prog = self._compliant_data
         P = np.zeros((m + nc, m + nc))
         P[m + np.arange(nc), m + np.arange(nc)] = 1.0 / self.sigma[soft]
-        prog = _ConeProgram(_csc(P), prog.A, prog.b, prog.cones, prog.settings, prog.soc_first)
+        prog = _ConeProgram(
+            _csc(P), prog.A, prog.b, prog.cones, prog.settings, prog.soc_first, prog.f_rows
+        )
         sol = self._clarabel(prog, np.concatenate([-g_hat, np.zeros(nc)]))
+        z = np.asarray(sol.z)
         x = np.asarray(sol.x)[:m]
-        lam = np.asarray(sol.z)[prog.soc_first]
-        return _Point(x, lam, iterations=sol.iterations)
+        return _Point(x, z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations)
 
     def _cone_program(
         self, P: FloatArray | None, Eq: FloatArray, e: FloatArray, stack: BallStack
     ) -> _ConeProgram:
-        """Clarabel's data: the equalities, then one cone ``(r_i, -A_i x)`` per contact."""
+        """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, -A_i x)``
+        per contact (a one-sided limit, with no rows, is a non-negative slack).
+        Its dual is ``(lam_i, f_i)``."""
         n_eq, n_cones, n_rows = Eq.shape[0], len(stack.k), stack.A.shape[0]
         A = np.zeros((n_eq + n_rows + n_cones, self.m))
         b = np.zeros(A.shape[0])
@@ -289,166 +353,337 @@ class Workspace:
         soc_first = n_eq + stack.start + np.arange(n_cones)
         ball_rows = n_eq + np.arange(n_rows) + np.repeat(np.arange(1, n_cones + 1), stack.k)
         A[ball_rows] = stack.A
+        A[soc_first] = stack.B
         b[soc_first] = stack.r
         cones: list[Any] = [clarabel.ZeroConeT(n_eq)] if n_eq else []
-        cones += [clarabel.SecondOrderConeT(int(k) + 1) for k in stack.k]
+        cones += [
+            clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
+            for k in stack.k
+        ]
         P_upper = _csc(np.zeros((self.m, self.m)) if P is None else np.triu(P))
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         tol = self.settings.ipm_tolerance
         settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
         settings.max_iter = self.settings.max_iterations
-        return _ConeProgram(P_upper, _csc(A), b, cones, settings, soc_first)
+        return _ConeProgram(P_upper, _csc(A), b, cones, settings, soc_first, ball_rows)
 
     def _clarabel(self, prog: _ConeProgram, q: FloatArray) -> Any:
         sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
         status = str(sol.status)
         if status.endswith("DualInfeasible"):  # should have been caught by _check_driven
-            raise _unbounded(self.asm, np.asarray(sol.x))
+            motion = self._driven_motion(-q[: self.m], np.asarray(sol.x))
+            raise _unbounded(self.asm, motion, one_way=True)
         if not status.endswith("Solved"):
             raise SolverError(f"the cone solver stopped with status {status}")
         return sol
 
     # -- warm start, polishing and phase 2 ----------------------------------
-    def _face(self, active: tuple[int, ...]) -> _Face:
-        face = self._faces.get(active)
+    def _no_f(self) -> FloatArray:
+        return np.zeros(self.stack.A.shape[0])
+
+    def _face(self, key: _FaceKey) -> _Face:
+        face = self._faces.get(key)
         if face is None:
-            sub = self.stack.take(active)
-            rows = np.vstack([self.Eq, sub.A])
-            face = _Face(sub, bool(rows.shape[0]) and _rank(rows) == self.m)
-            self._faces[active] = face
+            surface, linear = key
+            stack = self.stack
+            sub = stack.take(surface)
+            lin = stack.take(linear)
+            k = lin.k
+            L = np.zeros((int(np.sum(k)) + len(k), self.m))
+            rhs = np.zeros(L.shape[0])
+            first = (lin.start + np.arange(len(k))).astype(np.intp)  # each cone's A rows, then B
+            lam_rows = first + k
+            f_rows = lin.rows_of(np.arange(len(k))) + np.repeat(np.arange(len(k)), k)
+            L[f_rows] = lin.A
+            L[lam_rows] = lin.B
+            rhs[lam_rows] = lin.r
+            tilting = bool(np.any(sub.has_offset & (sub.k > 0)))
+            determined = None if tilting else self._determined_rows(np.vstack([L, sub.A]))
+            face = _Face(
+                key,
+                sub,
+                L,
+                rhs,
+                lam_rows,
+                f_rows,
+                np.vstack([self.Eq, L]),
+                np.concatenate([np.zeros(len(self.Eq)), rhs]),
+                stack.rows_of(surface),
+                stack.rows_of(linear),
+                determined,
+            )
+            self._faces[key] = face
         return face
+
+    def _determined_rows(self, rows: FloatArray) -> bool:
+        all_rows = np.vstack([self.Eq, rows])
+        return bool(all_rows.shape[0]) and _rank(all_rows) == self.m
+
+    def _determined(self, face: _Face, x: FloatArray) -> bool:
+        """Whether the optimum on ``face`` is unique. On a tilting face
+        (``|A_i x| + B_i x = r_i`` with ``B_i != 0``) two optima may trade
+        tilt for shift along ``(A_i d, B_i d) ~ (u_i, -1)``, so only the rows
+        of ``(A_i; B_i)`` across that direction count; they depend on x."""
+        if face.determined is not None:
+            return face.determined
+        sub = face.stack
+        v, rho = sub.norms(x)
+        rows = [face.L]
+        for i in range(len(sub.k)):
+            Ai = sub.A[sub.start[i] : sub.start[i] + sub.k[i]]
+            if not sub.has_offset[i]:
+                rows.append(Ai)
+                continue
+            if rho[i] == 0.0:
+                return False
+            w = np.append(v[sub.start[i] : sub.start[i] + sub.k[i]] / rho[i], -1.0) / np.sqrt(2)
+            M = np.vstack([Ai, sub.B[i]])
+            rows.append(M - np.outer(w, w @ M))
+        return self._determined_rows(np.vstack(rows))
 
     def _newton_on(
         self,
         g_hat: FloatArray,
-        active: tuple[int, ...],
+        key: _FaceKey,
         x0: FloatArray,
         lam0: FloatArray,
         iterations: int,
         method: str,
         max_iter: int,
     ) -> _Point | None:
-        """Solve the KKT equations of ``active`` and accept only a certified,
-        unique optimum: feasible, forces balancing the loads, and every active
-        force strictly positive on a face that pins the position down."""
-        face = self._face(active)
-        if not face.determined:
+        """Solve the KKT equations of the active set ``key`` and accept only a
+        certified, unique optimum: feasible, forces balancing the loads, every
+        active force strictly positive (strictly inside its cone for a face at
+        its apex), on a face that pins the position down."""
+        face = self._face(key)
+        if not self._determined(face, x0):
             return None
+        surface, linear = key
+        ne = len(self.Eq)
+        eq_soft = None
+        if linear and np.any(self.sigma[list(linear)]):
+            eq_soft = np.zeros(len(face.Eq))
+            eq_soft[ne + face.lam_rows] = self.sigma[list(linear)]
         out = _newton(
             None,
             -g_hat,
-            self.Eq,
-            np.zeros(len(self.Eq)),
+            face.Eq,
+            face.e,
             face.stack,
             x0,
-            lam0,
+            lam0[list(surface)],
             max_iter,
-            self.sigma[list(active)],
+            self.sigma[list(surface)],
+            eq_soft,
         )
         if out is None:
             return None
-        x, lam_active, _nu, its = out
-        if len(lam_active) and float(np.min(lam_active)) <= STRICT * float(np.max(lam_active)):
+        x, lam_s, nu, its = out
+        if not self._determined(face, x):
             return None
-        lam = np.zeros(len(self.balls))
-        lam[list(active)] = lam_active
-        point = _Point(x, lam, method, iterations + its, active=active)
+        point = self._assemble_point(x, face, lam_s, nu[ne:], method, iterations + its)
+        lam_a = point.lam[list(surface) + list(linear)]
+        if len(lam_a) and float(np.min(lam_a)) <= STRICT * float(np.max(lam_a)):
+            return None
+        if linear:
+            lin = self.stack.take(linear)
+            f_norm = np.sqrt(lin.segment_sum(point.f[face.linear_rows] ** 2))
+            at_apex = lin.k > 0
+            if np.any(f_norm[at_apex] >= (1.0 - STRICT) * point.lam[list(linear)][at_apex]):
+                return None
         point.certificate = self._certify(g_hat, point)
         return point if point.certificate.certified else None
+
+    def _assemble_point(
+        self,
+        x: FloatArray,
+        face: _Face,
+        lam_surface: FloatArray,
+        nu_linear: FloatArray,
+        method: str,
+        iterations: int,
+    ) -> _Point:
+        """The full multipliers from a face's: ``lam`` and ``f`` of every cone."""
+        surface, linear = face.key
+        lam = np.zeros(len(self.balls))
+        f = self._no_f()
+        lam[list(surface)] = lam_surface
+        v, rho = face.stack.norms(x)
+        f[face.surface_rows] = face.stack.surface_forces(v, rho, lam_surface)
+        lam[list(linear)] = nu_linear[face.lam_rows]
+        f[face.linear_rows] = nu_linear[face.f_rows]
+        return _Point(x, lam, f, method, iterations, active=face.key)
 
     def _warm(self, g_hat: FloatArray) -> _Point | None:
         last = self._last
         if last is None or last.active is None:
             return None
-        return self._newton_on(
-            g_hat, last.active, last.x, last.lam[list(last.active)], 0, "warm-started Newton", 12
-        )
+        return self._newton_on(g_hat, last.active, last.x, last.lam, 0, "warm-started Newton", 12)
 
     def _active(
-        self, x: FloatArray, lam: FloatArray, stack: BallStack, lam_scale: float = 0.0
-    ) -> tuple[int, ...]:
-        """Contacts whose multiplier outweighs their slack (both relative)."""
+        self,
+        x: FloatArray,
+        lam: FloatArray,
+        f: FloatArray,
+        stack: BallStack,
+        lam_scale: float = 0.0,
+    ) -> _FaceKey:
+        """Contacts whose multiplier outweighs their slack (both relative),
+        split into those on their cone's surface and those at its apex (or
+        with no rows): see ``_Face``."""
         if len(lam) == 0:
-            return ()
+            return (), ()
         lam_max = max(float(np.max(lam)), lam_scale, 1e-300)
-        _, rho = stack.norms(x)
+        _, rho, level = stack.levels(x)
         r = np.where(stack.r > 0, stack.r, self._max_radius)
-        slack = (stack.r - rho) / r
-        return tuple(int(i) for i in np.flatnonzero(lam / lam_max > np.maximum(slack, 1e-9)))
+        slack = (stack.r - level) / r
+        active = np.flatnonzero(lam / lam_max > np.maximum(slack, 1e-9))
+        f_norm = np.sqrt(stack.segment_sum(f * f))
+        apex = (stack.k == 0) | ((rho <= 1e-6 * r) & (f_norm < (1.0 - 1e-6) * np.maximum(lam, 0.0)))
+        surface = tuple(int(i) for i in active if not apex[i])
+        linear = tuple(int(i) for i in active if apex[i])
+        return surface, linear
 
     def _polish(self, g_hat: FloatArray, point: _Point) -> _Point:
-        active = self._active(point.x, point.lam, self.stack)
-        if self._face(active).determined:
+        key = self._active(point.x, point.lam, point.f, self.stack)
+        if self._determined(self._face(key), point.x):
             polished = self._newton_on(
-                g_hat, active, point.x, point.lam[list(active)], point.iterations, "polished", 30
+                g_hat, key, point.x, point.lam, point.iterations, "polished", 30
             )
             return point if polished is None else polished
-        return self._phase2(g_hat, point, active)
+        return self._phase2(g_hat, point, key)
 
-    def _phase2(self, g_hat: FloatArray, point: _Point, active: tuple[int, ...]) -> _Point:
+    def _face_equalities(
+        self, stack: BallStack, which: _FaceKey, x: FloatArray, reach: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Linear rows that keep the cones ``which`` where they are at ``x``:
+        a surface cone keeps its direction ``u`` (``A_i x`` along ``u`` and
+        ``u . A_i x + B_i x = reach_i``); a linear cone ``A_i x = 0``,
+        ``B_i x = reach_i``. ``reach`` is per cone of ``which`` (surface first)."""
+        surface, linear = which
+        rows: list[FloatArray] = []
+        rhs: list[FloatArray] = []
+        v, rho = stack.norms(x)
+        for j, i in enumerate((*surface, *linear)):
+            Ai = stack.A[stack.start[i] : stack.start[i] + stack.k[i]]
+            if j < len(surface) and stack.k[i]:
+                u = v[stack.start[i] : stack.start[i] + stack.k[i]] / max(rho[i], 1e-300)
+                if not stack.has_offset[i]:
+                    rows.append(Ai)
+                    rhs.append(reach[j] * u)
+                    continue
+                across = np.linalg.svd(u[None, :])[2][1:]  # directions across u
+                rows.append(np.vstack([across @ Ai, u @ Ai + stack.B[i]]))
+            else:
+                rows.append(np.vstack([Ai, stack.B[i]]))
+            rhs.append(np.append(np.zeros(len(rows[-1]) - 1), reach[j]))
+        if not rows:
+            return np.zeros((0, self.m)), np.zeros(0)
+        return np.vstack(rows), np.concatenate(rhs)
+
+    def _phase2(self, g_hat: FloatArray, point: _Point, key: _FaceKey) -> _Point:
         """Least-norm point of the optimal face (a tie between positions)."""
-        face = self._face(active).stack
-        v = face.A @ point.x
-        rho = np.repeat(np.sqrt(np.add.reduceat(v * v, face.start)), face.k) if active else v
+        surface, linear = key
+        both = [*surface, *linear]
         # a compliant contact keeps its penetration; the others stay on its face
-        reach = face.r + self.sigma[list(active)] * point.lam[list(active)]
-        directions = np.repeat(reach, face.k) * v / rho if active else v
-        Eq = np.vstack([self.Eq, face.A])
-        e = np.concatenate([np.zeros(len(self.Eq)), directions])
-        rest_index = [i for i in range(len(self.balls)) if i not in set(active)]
+        reach = self.stack.r[both] + self.sigma[both] * point.lam[both]
+        L, L_rhs = self._face_equalities(self.stack, key, point.x, reach)
+        Eq = np.vstack([self.Eq, L])
+        e = np.concatenate([np.zeros(len(self.Eq)), L_rhs])
+        rest_index = [i for i in range(len(self.balls)) if i not in set(both)]
         rest = self.stack.take(rest_index)
         prog = self._cone_program(self.asm.metric, Eq, e, rest)
         sol = self._clarabel(prog, np.zeros(self.m))
         x = np.asarray(sol.x)
-        lam_rest = np.asarray(sol.z)[prog.soc_first]
-        active2 = self._active(x, lam_rest, rest, float(np.max(np.abs(self.asm.metric @ x))))
+        z = np.asarray(sol.z)
+        lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
+        key2 = self._active(x, lam_rest, f_rest, rest, float(np.max(np.abs(self.asm.metric @ x))))
+        L2, l2 = self._face_equalities(rest, ((), key2[1]), x, rest.r[list(key2[1])])
         polished = _newton(
-            self.asm.metric, np.zeros(self.m), Eq, e, rest.take(active2), x, lam_rest[list(active2)]
+            self.asm.metric,
+            np.zeros(self.m),
+            np.vstack([Eq, L2]),
+            np.concatenate([e, l2]),
+            rest.take(key2[0]),
+            x,
+            lam_rest[list(key2[0])],
         )
         if polished is not None:
             x = polished[0]
-        touching = sorted(set(active) | {rest_index[i] for i in active2})
-        lam = self._forces_at(g_hat, x, touching)
-        return _Point(x, lam, method="least-norm face", iterations=point.iterations)
+        touching = sorted(set(both) | {rest_index[i] for i in (*key2[0], *key2[1])})
+        lam, f = self._forces_at(g_hat, x, touching)
+        return _Point(x, lam, f, method="least-norm face", iterations=point.iterations)
 
-    def _forces_at(self, g_hat: FloatArray, x: FloatArray, active: list[int]) -> FloatArray:
-        """Contact multipliers that best balance the loads at ``x`` (least squares)."""
-        sub = self.stack.take(active)
-        J = _gradients(sub, x)
-        Amat = np.vstack([J, self.E]).T
+    def _forces_at(
+        self, g_hat: FloatArray, x: FloatArray, touching: list[int]
+    ) -> tuple[FloatArray, FloatArray]:
+        """Contact multipliers that best balance the loads at ``x`` (least
+        squares): a cone on its surface pushes along ``A_i x``; one at its apex
+        (or with no rows) may push with any ``f_i`` (checked by the certificate)."""
+        stack = self.stack
+        v, rho = stack.norms(x)
+        r = np.where(stack.r > 0, stack.r, self._max_radius)
+        cols: list[FloatArray] = []
+        slots: list[tuple[int, bool]] = []  # (cone, along u) per block of columns
+        for i in touching:
+            Ai = stack.A[stack.start[i] : stack.start[i] + stack.k[i]]
+            if stack.k[i] and rho[i] > 1e-9 * r[i]:
+                u = v[stack.start[i] : stack.start[i] + stack.k[i]] / rho[i]
+                cols.append((u @ Ai + stack.B[i])[:, None])
+                slots.append((i, True))
+            else:
+                cols.append(np.vstack([Ai, stack.B[i]]).T)
+                slots.append((i, False))
+        Amat = np.hstack([*cols, self.E.T]) if cols or len(self.E) else np.zeros((self.m, 0))
         coef = np.linalg.lstsq(Amat, g_hat, rcond=None)[0] if Amat.shape[1] else np.zeros(0)
         lam = np.zeros(len(self.balls))
-        lam[active] = coef[: len(active)]
-        return lam
+        f = self._no_f()
+        at = 0
+        for i, along in slots:
+            rows = slice(stack.start[i], stack.start[i] + stack.k[i])
+            if along:
+                lam[i] = coef[at]
+                f[rows] = lam[i] * v[rows] / rho[i]
+                at += 1
+            else:
+                f[rows] = coef[at : at + stack.k[i]]
+                lam[i] = coef[at + stack.k[i]]
+                at += stack.k[i] + 1
+        return lam, f
 
     # -- certificate --------------------------------------------------------
     def _certify(self, g_hat: FloatArray, point: _Point) -> Certificate:
-        x, lam = point.x, point.lam
+        x, lam, f = point.x, point.lam, point.f
         stack = self.stack
-        _, rho = stack.norms(x)
+        v, rho, level = stack.levels(x)
         reach = stack.r + self.sigma * np.maximum(lam, 0.0)  # a compliant contact may go past r
-        feas = float(np.max(rho - reach)) if len(rho) else 0.0
+        feas = float(np.max(level - reach)) if len(level) else 0.0
         if len(self.E):
             feas = max(feas, float(np.max(np.abs(self.E @ x))))
-        residual_vec = g_hat - _gradients(stack, x).T @ lam
+        residual_vec = g_hat - stack.adjoint(f, lam)
         if self._rigid_basis.shape[1]:
             Q = self._rigid_basis
             residual_vec -= Q @ (Q.T @ residual_vec)  # rigid joints carry any force
         loaded = bool(np.any(g_hat))
         residual = float(np.linalg.norm(residual_vec)) if loaded else 0.0
-        comp = (
-            float(np.max(np.abs(lam) * np.maximum(reach - rho, 0.0))) / self._max_radius
-            if len(lam)
-            else 0.0
-        )
-        min_force = float(np.min(lam)) if len(lam) else 0.0
+        if len(lam):
+            # lam_i (reach_i - B_i x) - f_i . A_i x: zero iff the force is
+            # complementary to the slack and along the contact's direction
+            gap = np.abs(lam) * np.abs(reach - level) + np.abs(lam * rho - stack.segment_sum(f * v))
+            comp = float(np.max(gap)) / self._max_radius
+            min_force = float(np.min(lam))
+            # the force lies in its cone: |f_i| <= lam_i
+            outside = float(np.max(np.sqrt(stack.segment_sum(f * f)) - lam))
+        else:
+            comp = min_force = outside = 0.0
         lam_scale = max(1.0, float(np.max(np.abs(lam)))) if len(lam) else 1.0
         st = self.settings
         certified = (
             feas <= st.feasibility_tolerance * self._max_radius
             and residual <= st.equilibrium_tolerance
             and min_force >= -st.equilibrium_tolerance * lam_scale
+            and outside <= st.equilibrium_tolerance * lam_scale
             and comp <= st.equilibrium_tolerance * lam_scale
         )
         return Certificate(
@@ -469,22 +704,12 @@ class _ConeProgram:
     b: FloatArray
     cones: list[Any]
     settings: Any
-    soc_first: IntArray  # row of each cone's first entry (its multiplier)
+    soc_first: IntArray  # row of each cone's first entry (its multiplier lam)
+    f_rows: IntArray  # rows of the cones' other entries (their force vectors f)
 
 
 #: An active force below this fraction of the largest is not "strictly" positive.
 STRICT = 1e-9
-
-
-def _gradients(stack: BallStack, x: FloatArray) -> FloatArray:
-    """Rows ``A_i^T u_i`` (unit ``u_i`` along ``A_i x``; 0 where ``A_i x = 0``)."""
-    if not len(stack.k):
-        return np.zeros((0, stack.A.shape[1]))
-    v = stack.A @ x
-    rho = np.sqrt(np.add.reduceat(v * v, stack.start))
-    safe = np.where(rho > 0.0, rho, 1.0)
-    u = v / np.repeat(safe, stack.k)
-    return np.add.reduceat(stack.A * u[:, None], stack.start, axis=0)
 
 
 def _csc(a: FloatArray) -> sp.csc_matrix:
@@ -520,23 +745,27 @@ def _newton(
     lam0: FloatArray,
     max_iter: int = 30,
     soft: FloatArray | None = None,
+    eq_soft: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
     """Newton's method on the KKT equations of an active set.
 
-    Stationarity ``P x + q + sum lam_i A_i^T u_i + Eq^T nu = 0``, active
-    contacts ``|A_i x| = r_i + soft_i lam_i`` (``soft``: compliance, default 0),
-    equalities ``Eq x = e``. A singular system
-    (statically indeterminate contact forces) takes least-squares steps.
-    Returns None when it does not converge to machine precision.
+    Stationarity ``P x + q + sum lam_i (A_i^T u_i + B_i) + Eq^T nu = 0``,
+    active contacts on their surface ``|A_i x| + B_i x = r_i + soft_i lam_i``
+    (``soft``: compliance, default 0), equalities ``Eq x = e + eq_soft nu``.
+    A singular system (statically indeterminate contact forces) takes
+    least-squares steps. Returns None when it does not converge to machine
+    precision.
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
-    A, start, k, r = stack.A, stack.start, stack.k, stack.r
+    A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
     x, lam = x0.copy(), lam0.astype(float).copy()
     soft_na = np.zeros(na) if soft is None else soft
+    soft_eq = np.zeros(ne) if eq_soft is None else eq_soft
     nu = np.zeros(ne)
     n = m + na + ne
     K = np.zeros((n, n))
     K[m + np.arange(na), m + np.arange(na)] = -soft_na
+    K[m + na + np.arange(ne), m + na + np.arange(ne)] = -soft_eq
     K[:m, m + na :] = Eq.T
     K[m + na :, :m] = Eq
     scale = max(1.0, float(np.linalg.norm(q)))
@@ -549,11 +778,11 @@ def _newton(
             if float(np.min(rho)) == 0.0:
                 return None
             u = v / np.repeat(rho, k)
-            J = np.add.reduceat(A * u[:, None], start, axis=0)
+            J = np.add.reduceat(A * u[:, None], start, axis=0) + Bo
             grad = grad + J.T @ lam
-            F = np.concatenate([grad, rho - r - soft_na * lam, Eq @ x - e])
+            F = np.concatenate([grad, rho + Bo @ x - r - soft_na * lam, Eq @ x - e - soft_eq * nu])
         else:
-            F = np.concatenate([grad, Eq @ x - e])
+            F = np.concatenate([grad, Eq @ x - e - soft_eq * nu])
         err = float(np.max(np.abs(F))) if F.size else 0.0
         if best is None or err < best[0]:
             best = (err, x, lam, nu, it)
@@ -562,7 +791,8 @@ def _newton(
         H = np.zeros((m, m)) if P is None else P.copy()
         if na:
             c = lam / rho
-            H += (A.T * np.repeat(c, k)) @ A - (J.T * c) @ J
+            Ju = J - Bo
+            H += (A.T * np.repeat(c, k)) @ A - (Ju.T * c) @ Ju
             K[:m, m : m + na] = J.T
             K[m : m + na, :m] = J
         K[:m, :m] = H
@@ -583,8 +813,11 @@ def _newton(
     return x, lam, nu, its
 
 
-def _unbounded(asm: Assembly, direction: FloatArray) -> UnboundedMechanismError:
-    """Describe a driven free motion (scaled unknowns) in words."""
+def _unbounded(
+    asm: Assembly, direction: FloatArray, one_way: bool = False
+) -> UnboundedMechanismError:
+    """Describe a driven free motion (scaled unknowns) in words (``one_way``:
+    a motion the joints stop in one sense only, such as lifting off)."""
     moves = []
     for i, name in enumerate(asm.body_names):
         omega, v_origin = asm.body_motion(direction, i)
@@ -596,7 +829,7 @@ def _unbounded(asm: Assembly, direction: FloatArray) -> UnboundedMechanismError:
     biggest = moves[0][0]
     moving = [mv for mv in moves if mv[0] > 1e-6 * biggest]
     _, body, omega, v_origin = moving[0]
-    motion = describe_motion(omega, v_origin, asm.ell)
+    motion = describe_motion(omega, v_origin, asm.ell, signed=one_way)
     others = [mv[1] for mv in moving[1:]]
     with_others = f" (together with {', '.join(repr(o) for o in others)})" if others else ""
     message = (

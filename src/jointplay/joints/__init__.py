@@ -4,6 +4,7 @@ package registers them all in ``JOINT_TYPES`` by their ``type`` name."""
 from .base import JOINT_TYPES, Contact, Joint
 from .cylindrical import Cylindrical
 from .planar import Planar
+from .point import PointOnPlane
 from .prismatic import Prismatic
 from .revolute import Revolute
 from .rigid import Rigid
@@ -16,6 +17,7 @@ __all__ = [
     "Cylindrical",
     "Joint",
     "Planar",
+    "PointOnPlane",
     "Prismatic",
     "Revolute",
     "Rigid",

@@ -7,9 +7,11 @@ relative translation of the centre, ``w`` the relative rotation. The point at
 local position ``p`` moves by ``delta(p) = t + w x p``.
 
 Each joint type turns ``tau`` into its *contacts*: named clearance cones
-``|| rows @ tau || <= radius`` (a ball of the play, in 1, 2 or 3 directions),
-or fixed rows ``rows @ tau = 0``. Nothing else about the joint reaches the
-solver, so a new joint type is one new module in this package.
+``|| rows @ tau || + offset @ tau <= radius`` (a ball of the play, in 1, 2
+or 3 directions, when there is no offset; a one-sided limit ``offset @ tau
+<= radius`` when there are no rows; a tilting face in between), or fixed
+rows ``rows @ tau = 0``. Nothing else about the joint reaches the solver, so
+a new joint type is one new module in this package.
 """
 
 from __future__ import annotations
@@ -34,10 +36,15 @@ JOINT_TYPES: dict[str, type[Joint]] = {}
 class Contact:
     """One clearance cone of a joint, in the joint frame.
 
-    ``kind == "ball"``: ``|| rows @ tau || <= radius`` (mm); the contact
-    touches when the norm reaches the radius. ``kind == "fixed"``:
-    ``rows @ tau == 0``. ``point`` is where the contact acts, in joint-frame
-    coordinates relative to the joint centre (mm).
+    ``kind == "ball"``: ``|| rows @ tau || + offset @ tau <= radius`` (mm);
+    the contact touches when the left side reaches the radius. ``kind ==
+    "fixed"``: ``rows @ tau == 0``. ``point`` is where the contact acts, in
+    joint-frame coordinates relative to the joint centre (mm).
+
+    The contact's dual is a force ``lam`` (N) with a vector ``f`` in the row
+    space, ``|f| <= lam``; it acts on b with the wrench ``-(rows.T @ f + lam
+    * offset)`` (force, moment at the centre). For a face that may tilt, the
+    centre of pressure moves with the force: it is ``point + lever @ f / lam``.
     """
 
     name: str
@@ -45,6 +52,19 @@ class Contact:
     rows: FloatArray
     radius: float
     point: FloatArray
+    offset: FloatArray | None = None  # (6,): a face's normal row; None for a plain ball
+    lever: FloatArray | None = None  # (3, k): where the centre of pressure goes
+
+    @property
+    def one_sided(self) -> bool:
+        """A limit with no rows: ``offset @ tau <= radius`` (a point on a plane)."""
+        return self.offset is not None and self.rows.shape[0] == 0
+
+    def acting_point(self, f: FloatArray, lam: float) -> FloatArray:
+        """Where the force acts (joint frame, mm), given its dual ``(lam, f)``."""
+        if self.lever is None or lam <= 0.0:
+            return self.point
+        return self.point + self.lever @ (np.asarray(f) / lam)
 
 
 def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:

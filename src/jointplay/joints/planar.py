@@ -1,18 +1,22 @@
 """Planar joint: a plate between two parallel faces (normal = joint x axis).
 
-The plate's contact face is a rectangle of ``width`` (along y) and
-``height`` (along z) centred on the joint centre; the faces leave a total
-play ``clearance`` J along x. Each corner of the rectangle stays within the
-play, so the plate may slide in y and z and spin about x freely, while its
-tilt about y and z is limited by the corners::
+The faces leave a total play ``clearance`` J along x. The plate's contact
+face is centred on the joint centre and is either a rectangle of ``width``
+(along y) and ``height`` (along z), or a disc of ``diameter`` D. The plate
+may slide in y and z and spin about x freely; its shift along x and its tilt
+about y and z are limited by the face's edge::
 
         |<-J->|
-        |  |  |          |delta_x(0, +-w/2, +-h/2)| <= J/2
-        |  |  |  plate   slide along y, z and spin about x free
-        |  |  |
+        |  |  |     rectangle: each corner, |delta_x(0, +-w/2, +-h/2)| <= J/2
+        |  |  |     disc: every rim point,  |delta_x(0, R cos t, R sin t)| <= J/2
+        |  |  |           i.e. R |(w_y, w_z)| +- t_x <= J/2   (R = D/2)
       face   face
 
-Each corner contact is two-sided (|.| <= J/2 covers both faces).
+Rectangle: four two-sided corner contacts (|.| <= J/2 covers both faces).
+Disc: one contact per face, a cone: the rim point that touches is the one
+the tilt pushes furthest, and when the plate lies flat on a face the force
+spreads over it; the reported point is the centre of pressure, which stays
+inside the disc.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+from pydantic import model_validator
 
 from ..fields import PositiveLength
 from .base import Contact, Joint, point_rows
@@ -27,10 +32,29 @@ from .base import Contact, Joint, point_rows
 
 class Planar(Joint):
     type: Literal["planar"] = "planar"
-    width: PositiveLength
-    height: PositiveLength
+    width: PositiveLength | None = None
+    height: PositiveLength | None = None
+    diameter: PositiveLength | None = None
+
+    @model_validator(mode="after")
+    def _check_face(self) -> Planar:
+        rectangle = self.width is not None or self.height is not None
+        if self.diameter is not None and rectangle:
+            raise ValueError(
+                "a planar joint's face is a rectangle ('width' and 'height') or a disc "
+                "('diameter'), not both; remove one"
+            )
+        if self.diameter is None and (self.width is None or self.height is None):
+            raise ValueError(
+                "a planar joint needs its contact face: 'width' and 'height' (mm) for a "
+                "rectangle, or 'diameter' (mm) for a disc"
+            )
+        return self
 
     def contacts(self) -> tuple[Contact, ...]:
+        if self.diameter is not None:
+            return self._disc(self.diameter / 2)
+        assert self.width is not None and self.height is not None
         out = []
         for y in (-self.width / 2, self.width / 2):
             for z in (-self.height / 2, self.height / 2):
@@ -39,6 +63,25 @@ class Planar(Joint):
                 out.append(Contact(name, "ball", point_rows(p, "x"), self.clearance / 2, p))
         return tuple(out)
 
+    def _disc(self, R: float) -> tuple[Contact, ...]:
+        # rim point p(t) = (0, R cos t, R sin t): delta_x = t_x + a . (cos t, sin t)
+        # with a = R (-w_z, w_y); the face at +x is reached first where a points.
+        tilt = np.zeros((2, 6))
+        tilt[0, 5], tilt[1, 4] = -R, R
+        lever = np.zeros((3, 2))
+        lever[1, 0] = lever[2, 1] = R  # centre of pressure = R f / lam, in the face plane
+        if self.clearance == 0.0 and self.stiffness is None:
+            rows = np.vstack([point_rows(np.zeros(3), "x"), tilt / R])
+            return (Contact("face", "fixed", rows, 0.0, np.zeros(3)),)
+        e_x = np.eye(6)[0]
+        return tuple(
+            Contact(name, "ball", sign * tilt, self.clearance / 2, np.zeros(3), sign * e_x, lever)
+            for name, sign in (("face x+", 1.0), ("face x-", -1.0))
+        )
+
     @property
     def size(self) -> float:
+        if self.diameter is not None:
+            return self.diameter
+        assert self.width is not None and self.height is not None
         return max(self.width, self.height)

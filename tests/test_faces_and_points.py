@@ -1,0 +1,281 @@
+"""The planar joint's disc face and the one-sided point joint, against closed forms.
+
+Both are cones with a face row (``|A tau| + B tau <= r``): the disc tilts
+about its rim or lies flat (its force then spreads, with a centre of
+pressure inside the disc); the point is a one-sided limit that may lift off.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+import jointplay
+from conftest import MM, RAD
+from jointplay import UnboundedMechanismError, Workspace, model_from_dict
+
+AT = np.array([10.0, 20.0, 30.0])
+# a skew joint frame, so that the tests also check the frames
+AXIS = np.array([1.0, 2.0, 2.0]) / 3.0
+Z_AXIS = np.array([0.0, 1.0, -1.0]) / np.sqrt(2.0)  # 'up' pins the joint z axis
+Y_AXIS = np.cross(Z_AXIS, AXIS)
+J, R = 0.2, 20.0  # play, disc radius
+DISC = {
+    "name": "j",
+    "type": "planar",
+    "between": ["G", "B"],
+    "at": list(AT),
+    "axis": list(AXIS),
+    "up": list(Z_AXIS),
+    "diameter": 2 * R,
+    "clearance": J,
+}
+
+
+def model(joints: list[dict[str, Any]], loads: list[dict[str, Any]]) -> jointplay.Model:
+    return model_from_dict(
+        {
+            "bodies": [{"name": "G", "ground": True}, {"name": "B"}],
+            "joints": joints,
+            "loads": loads,
+        }
+    )
+
+
+def solved(m: jointplay.Model) -> jointplay.Result:
+    result = jointplay.solve(m)
+    result.check()
+    return result
+
+
+def contact(r: jointplay.Result, joint: str, name: str) -> Any:
+    return next(c for c in r.joints[joint].contacts if c.name == name)
+
+
+def test_disc_pushed_inside_its_rim_lies_flat_with_the_centre_of_pressure_under_the_load() -> None:
+    where = AT + 7.0 * Y_AXIS + 5.0 * Z_AXIS  # 8.6 mm from the centre, inside R
+    r = solved(model([DISC], [{"body": "B", "at": list(where), "force": list(3.0 * AXIS)}]))
+    jr = r.joints["j"]
+    np.testing.assert_allclose(jr.translation, [J / 2, 0, 0], atol=MM)
+    np.testing.assert_allclose(jr.rotation, 0, atol=RAD)
+    push = contact(r, "j", "face x+")
+    assert push.in_contact and not contact(r, "j", "face x-").in_contact
+    np.testing.assert_allclose(push.force, [-3.0, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(push.point, where, atol=1e-9)  # the centre of pressure
+    assert contact(r, "j", "face x-").force_magnitude == 0.0
+
+
+def test_disc_pushed_beyond_its_rim_tilts_onto_both_faces() -> None:
+    # a force F along x at e > R from the centre (along the joint y axis):
+    # the disc tilts about z by J / (2R), centred, rim points on each face;
+    # lever rule: F (e + R) / 2R on the near face, F (e - R) / 2R on the far one
+    F, e = 4.0, 30.0
+    r = solved(model([DISC], [{"body": "B", "at": list(AT + e * Y_AXIS), "force": list(F * AXIS)}]))
+    jr = r.joints["j"]
+    np.testing.assert_allclose(jr.translation, 0, atol=MM)
+    np.testing.assert_allclose(jr.rotation, [0, 0, -J / (2 * R)], atol=RAD)
+    near, far = contact(r, "j", "face x+"), contact(r, "j", "face x-")
+    np.testing.assert_allclose(near.force, [-F * (e + R) / (2 * R), 0, 0], atol=1e-9)
+    np.testing.assert_allclose(far.force, [F * (e - R) / (2 * R), 0, 0], atol=1e-9)
+    np.testing.assert_allclose(near.point, AT + R * Y_AXIS, atol=1e-9)
+    np.testing.assert_allclose(far.point, AT - R * Y_AXIS, atol=1e-9)
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.7, 2.0])
+def test_disc_under_a_moment_tilts_about_the_moment_axis(angle: float) -> None:
+    M = 50.0
+    axis_local = np.array([0.0, np.cos(angle), np.sin(angle)])
+    torque = M * (axis_local[1] * Y_AXIS + axis_local[2] * Z_AXIS)
+    r = solved(model([DISC], [{"body": "B", "torque": list(torque)}]))
+    jr = r.joints["j"]
+    np.testing.assert_allclose(jr.translation, 0, atol=MM)
+    np.testing.assert_allclose(jr.rotation, J / (2 * R) * axis_local, atol=RAD)
+    for c in jr.contacts:
+        assert c.in_contact
+        assert c.force_magnitude == pytest.approx(M / (2 * R), rel=1e-9)
+    np.testing.assert_allclose(jr.reaction_moment, -M * axis_local, atol=1e-9)
+
+
+def test_compliant_disc_goes_past_its_play_by_force_over_stiffness() -> None:
+    F, k = 300.0, 1000.0
+    soft = {**DISC, "stiffness": k}
+    r = solved(model([soft], [{"body": "B", "at": list(AT), "force": list(F * AXIS)}]))
+    np.testing.assert_allclose(r.joints["j"].translation, [J / 2 + F / k, 0, 0], atol=MM)
+    assert contact(r, "j", "face x+").penetration == pytest.approx(F / k, rel=1e-9)
+
+
+def test_disc_with_no_play_holds_its_normal_and_tilts() -> None:
+    tight = {**DISC, "clearance": 0}
+    r = solved(
+        model([tight], [{"body": "B", "at": list(AT + 40 * Y_AXIS), "force": list(5 * AXIS)}])
+    )
+    np.testing.assert_allclose(r.joints["j"].translation, 0, atol=MM)
+    np.testing.assert_allclose(r.joints["j"].rotation, 0, atol=RAD)
+    assert r.joints["j"].reaction_force == pytest.approx([-5, 0, 0])
+
+
+def test_planar_face_is_a_rectangle_or_a_disc() -> None:
+    with pytest.raises(jointplay.ModelError, match="not both"):
+        model([{**DISC, "width": 10, "height": 10}], [])
+    with pytest.raises(jointplay.ModelError, match="'diameter'"):
+        model([{**DISC, "diameter": None, "width": 10}], [])
+
+
+def test_disc_warm_and_batch_solves_match_fresh_solves() -> None:
+    # the disc plus a ball joint that holds the plate's slide: flat and tilted answers
+    ball = {
+        "name": "s",
+        "type": "spherical",
+        "between": ["G", "B"],
+        "at": list(AT),
+        "clearance": 0.1,
+    }
+    joints = [DISC, ball]
+    ws = Workspace.of(model(joints, []))
+    where = AT + 10.0 * Y_AXIS
+    W = ws.asm.wrench_work("B", list(where))
+    rng = np.random.default_rng(4)
+    wrenches = np.zeros((40, 6))
+    wrenches[:, :3] = rng.normal(size=(40, 3)) + 3.0 * AXIS
+    wrenches[:, 3:] = 60.0 * rng.normal(size=(40, 3))
+    spin = (wrenches[:, 3:] + np.cross(where - AT, wrenches[:, :3])) @ AXIS
+    wrenches[:, 3:] -= np.outer(spin, AXIS)  # nothing holds the spin about the normal
+    batch = ws.solve_batch(wrenches @ W.T)
+    methods = set()
+    for i, wrench in enumerate(wrenches):
+        loads = [
+            {"body": "B", "at": list(where), "force": list(wrench[:3]), "torque": list(wrench[3:])}
+        ]
+        ref = solved(model(joints, loads))
+        warm = ws.solve(loads=[jointplay.Load(**loads[0])])
+        warm.check()
+        methods.add(warm.certificate.method)
+        for name in ("j", "s"):
+            for other in (warm.joints[name], None):
+                got_t = (
+                    batch.joint_torsor(name)[i]
+                    if other is None
+                    else np.r_[other.translation, other.rotation]
+                )
+                np.testing.assert_allclose(got_t[:3], ref.joints[name].translation, atol=MM)
+                np.testing.assert_allclose(got_t[3:], ref.joints[name].rotation, atol=RAD)
+    assert "warm-started Newton" in methods  # the Newton path handles these faces too
+
+
+# -- the point joint -------------------------------------------------------------------
+
+
+def point_joint(name: str, at: list[float], axis: list[float], **more: Any) -> dict[str, Any]:
+    return {"name": name, "type": "point", "between": ["G", "B"], "at": at, "axis": axis, **more}
+
+
+def test_lever_on_a_ball_and_a_point_closed_form() -> None:
+    # a beam on a ball joint (play J = 0.2) at x = 0 and a point contact at
+    # x = L with gap g below it; a downward load at x = a pivots it about the point
+    L, a, g, F = 100.0, 40.0, 0.05, 7.0
+    joints = [
+        {
+            "name": "ball",
+            "type": "spherical",
+            "between": ["G", "B"],
+            "at": [0, 0, 0],
+            "clearance": 0.2,
+        },
+        point_joint("tip", [L, 0, 0], [0, 1, 0], gap=g),
+    ]
+    r = solved(model(joints, [{"body": "B", "at": [a, 0, 0], "force": [0, -F, 0]}]))
+    body = r.bodies["B"]
+    np.testing.assert_allclose(body.translation, [0, -0.1, 0], atol=MM)
+    np.testing.assert_allclose(body.rotation, [0, 0, (0.1 - g) / L], atol=RAD)
+    tip = contact(r, "tip", "plane")
+    assert tip.in_contact
+    np.testing.assert_allclose(tip.force, [F * a / L, 0, 0], atol=1e-9)  # along the normal
+    np.testing.assert_allclose(tip.point, [L, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(r.joints["tip"].translation, [-g, 0, 0], atol=MM)
+    np.testing.assert_allclose(contact(r, "ball", "ball").force, [0, F * (1 - a / L), 0], atol=1e-9)
+
+
+def test_point_lifts_off_freely() -> None:
+    joints = [
+        {
+            "name": "ball",
+            "type": "spherical",
+            "between": ["G", "B"],
+            "at": [0, 0, 0],
+            "clearance": 0.2,
+        },
+        point_joint("tip", [100, 0, 0], [0, 1, 0], gap=0.05),
+    ]
+    r = solved(model(joints, [{"body": "B", "at": [0, 0, 0], "force": [0, 7, 0]}]))
+    tip = contact(r, "tip", "plane")
+    assert not tip.in_contact and tip.force_magnitude == 0.0
+    np.testing.assert_allclose(r.joints["ball"].translation, [0, 0.1, 0], atol=MM)
+    np.testing.assert_allclose(contact(r, "ball", "ball").force, [0, -7, 0], atol=1e-9)
+    # the tip may rise anywhere above its plane (a tie): it is off the plane,
+    # at the least-norm point of the joint metric (docs/conventions.md)
+    assert r.joints["tip"].translation[0] > -0.05
+    # lifting it anywhere else turns the beam about the ball, and nothing stops that
+    with pytest.raises(
+        UnboundedMechanismError, match=r"rotation about the global \+Z axis is not held"
+    ):
+        jointplay.solve(model(joints, [{"body": "B", "at": [40, 0, 0], "force": [0, 7, 0]}]))
+
+
+def table(gap: float, **more: Any) -> list[dict[str, Any]]:
+    feet = [
+        point_joint(f"foot{i}", [0, 50 * np.cos(t), 50 * np.sin(t)], [1, 0, 0], gap=gap, **more)
+        for i, t in enumerate([0.0, 2.0, 4.0])
+    ]
+    centring = {
+        "name": "pin",
+        "type": "sphere_in_cylinder",
+        "between": ["G", "B"],
+        "at": [0, 0, 0],
+        "clearance": 0.1,
+    }
+    return [*feet, centring]
+
+
+def test_a_plate_on_three_feet_shares_its_weight_by_statics() -> None:
+    where = np.array([0.0, 6.0, -4.0])
+    r = solved(model(table(0.03), [{"body": "B", "at": list(where), "force": [-12, 0, 0]}]))
+    feet = np.array([r.joints[f"foot{i}"].centre for i in range(3)])
+    # sum f_i = 12 and sum f_i (y_i, z_i) = 12 (y, z) of the load
+    statics = np.vstack([np.ones(3), feet[:, 1], feet[:, 2]])
+    expected = np.linalg.solve(statics, 12.0 * np.array([1.0, where[1], where[2]]))
+    got = [contact(r, f"foot{i}", "plane").force[0] for i in range(3)]
+    np.testing.assert_allclose(got, expected, atol=1e-9)
+    np.testing.assert_allclose(r.bodies["B"].translation, [-0.03, 0, 0], atol=MM)
+    np.testing.assert_allclose(r.bodies["B"].rotation, 0, atol=RAD)
+
+
+def test_compliant_feet_sink_by_their_share_over_stiffness() -> None:
+    # three feet carry a rigid plate statically determinately: the shares of
+    # the statics, each foot sinking by its share over k
+    k = 500.0
+    feet = table(0.0, stiffness=k)
+    where = np.mean([f["at"] for f in feet[:3]], axis=0)  # the load at the feet's centroid
+    r = solved(model(feet, [{"body": "B", "at": list(where), "force": [-30, 0, 0]}]))
+    for i in range(3):
+        c = contact(r, f"foot{i}", "plane")
+        assert c.force[0] == pytest.approx(10.0, rel=1e-9)
+        assert c.penetration == pytest.approx(10.0 / k, rel=1e-9)
+    np.testing.assert_allclose(r.bodies["B"].displacement_of(where), [-10.0 / k, 0, 0], atol=MM)
+
+
+def test_a_load_that_lifts_the_plate_is_a_free_motion_with_its_sense() -> None:
+    with pytest.raises(
+        UnboundedMechanismError,
+        match=r"body 'B': translation along the global \+X axis is not held by any joint",
+    ):
+        jointplay.solve(model(table(0.0), [{"body": "B", "at": [0, 6, -4], "force": [12, 0, 0]}]))
+    # a load outside the feet tips the plate over an edge
+    with pytest.raises(UnboundedMechanismError, match="body 'B'"):
+        jointplay.solve(model(table(0.0), [{"body": "B", "at": [0, 200, 0], "force": [-12, 0, 0]}]))
+
+
+def test_a_point_joint_has_a_gap_not_a_clearance() -> None:
+    with pytest.raises(jointplay.ModelError, match=r"gap: 0\.1"):
+        model([point_joint("p", [0, 0, 0], [1, 0, 0], clearance=0.1)], [])
