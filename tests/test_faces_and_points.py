@@ -279,3 +279,41 @@ def test_a_load_that_lifts_the_plate_is_a_free_motion_with_its_sense() -> None:
 def test_a_point_joint_has_a_gap_not_a_clearance() -> None:
     with pytest.raises(jointplay.ModelError, match=r"gap: 0\.1"):
         model([point_joint("p", [0, 0, 0], [1, 0, 0], clearance=0.1)], [])
+
+
+def test_wobbly_table_example_rocks_onto_the_short_foot_by_hand() -> None:
+    """examples/studies/wobbly_table.yaml: four feet, foot4 50 um short. At
+    rest the weight (117.72 N at (-10, 5)) is on foot2's side of the diagonal
+    foot1-foot3, so feet 1, 2, 3 carry it; leaning 200 N on foot4's corner
+    rocks the table about that diagonal until foot4 lands (foot2 lifts)."""
+    from conftest import ROOT
+
+    m = jointplay.load(ROOT / "examples" / "studies" / "wobbly_table.yaml")
+    feet = {f"foot{i}": np.array(m.joints[i - 1].at[:2]) for i in range(1, 5)}
+
+    def statics(carrying: list[str], loads: list[tuple[float, np.ndarray]]) -> np.ndarray:
+        P = np.array([feet[n] for n in carrying])
+        lhs = np.vstack([np.ones(3), P[:, 0], P[:, 1]])
+        rhs = sum(w * np.array([1.0, *at]) for w, at in loads)
+        return np.linalg.solve(lhs, rhs)
+
+    weight = (12 * 9.81, np.array([-10.0, 5.0]))
+    cases = jointplay.solve_cases(m)
+    rest, lean = cases["resting"], cases["leaning on foot4"]
+    for r in cases.values():
+        r.check()
+    got = [contact(rest, n, "plane").force[0] for n in ("foot1", "foot2", "foot3")]
+    np.testing.assert_allclose(got, statics(["foot1", "foot2", "foot3"], [weight]), atol=1e-9)
+    assert not contact(rest, "foot4", "plane").in_contact
+    np.testing.assert_allclose(rest.points["probe"].displacement, 0, atol=MM)
+
+    push = (200.0, np.array([100.0, -100.0]))
+    got = [contact(lean, n, "plane").force[0] for n in ("foot1", "foot3", "foot4")]
+    np.testing.assert_allclose(got, statics(["foot1", "foot3", "foot4"], [weight, push]), atol=1e-9)
+    assert not contact(lean, "foot2", "plane").in_contact
+    # foot4 sinks 0.05 mm: a turn about the diagonal, omega = (2.5e-4, 2.5e-4, 0) rad
+    omega = np.array([2.5e-4, 2.5e-4, 0.0])
+    np.testing.assert_allclose(lean.bodies["table"].rotation, omega, atol=RAD)
+    np.testing.assert_allclose(
+        lean.points["probe"].displacement, np.cross(omega, [0, 150, 80]), atol=MM
+    )
