@@ -36,6 +36,7 @@ def test_solve_json_has_exactly_the_documented_schema() -> None:
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     # the core schema, plus the force additions (reaction, force, point, residual, points)
+    # and the exact-rotation check (linearization error and its warnings)
     assert set(doc) == {
         "status",
         "potential_energy",
@@ -43,7 +44,10 @@ def test_solve_json_has_exactly_the_documented_schema() -> None:
         "joints",
         "points",
         "equilibrium_residual",
+        "linearization_error",
+        "warnings",
     }
+    assert 0.0 <= doc["linearization_error"] < 1e-4 and doc["warnings"] == []
     assert doc["equilibrium_residual"] < 1e-8
     assert doc["points"] == {}
     assert doc["status"] == "optimal"

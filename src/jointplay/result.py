@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .finite import Linearization, linearization
 from .geometry import FloatArray, cross, describe_motion
 
 if TYPE_CHECKING:
@@ -147,6 +148,28 @@ class Result:
     solve_time: float  # s
     #: Describes the free motions that no load drives (reported as 0); called lazily.
     describe_free: Callable[[], tuple[str, ...]] = field(repr=False, compare=False)
+    #: The exact-rotation check of this answer (see ``jointplay.finite``); called lazily.
+    linearize: Callable[[], Linearization] | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def linearization(self) -> Linearization:
+        """How far the contacts, placed with exact rotations, go past their play."""
+        if self._linearization is None:
+            value = self.linearize() if self.linearize else Linearization(0.0, None, ())
+            object.__setattr__(self, "_linearization", value)
+        assert self._linearization is not None
+        return self._linearization
+
+    _linearization: Linearization | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def linearization_error(self) -> float:
+        """mm: the largest overshoot of a clearance under exact rotations."""
+        return self.linearization.error_mm
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        return self.linearization.warnings
 
     @property
     def free_motions(self) -> tuple[str, ...]:
@@ -161,6 +184,8 @@ class Result:
             "joints": {n: j.to_dict() for n, j in self.joints.items()},
             "points": {n: p.to_dict() for n, p in self.points.items()},
             "equilibrium_residual": self.equilibrium_residual,
+            "linearization_error": self.linearization_error,
+            "warnings": list(self.warnings),
         }
 
     def check(self) -> None:
@@ -280,6 +305,7 @@ def build_result(
     }
     residual = equilibrium_residual(asm, joints, loads)
     energy = -float(g @ x)
+    reach_mm = stack.r * asm.s + penetration
     return Result(
         "optimal",
         energy,
@@ -290,6 +316,7 @@ def build_result(
         residual,
         solve_time,
         describe_free,
+        lambda: linearization(asm, x, reach_mm),
     )
 
 

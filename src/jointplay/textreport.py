@@ -48,7 +48,13 @@ def render(
         f"equilibrium of every body (loads + contact forces): residual "
         f"{result.equilibrium_residual:.1e} of the load\n"
     )
-    header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm")
+    header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm\n")
+    header.append(
+        f"linearization error (contacts placed with exact rotations, past their play): "
+        f"{result.linearization_error:.2e} mm"
+    )
+    for warning in result.warnings:
+        header.append(f"\nwarning: {warning}", style="bold yellow")
     parts: list[Table | Text] = [header]
     header.append(f"\ncontact forces are those of {'a on b'} for each joint 'between: [a, b]'")
 

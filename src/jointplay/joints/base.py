@@ -60,6 +60,21 @@ class Contact:
         """A limit with no rows: ``offset @ tau <= radius`` (a point on a plane)."""
         return self.offset is not None and self.rows.shape[0] == 0
 
+    def exact_level(self, R_rel: FloatArray, t_rel: FloatArray) -> float:
+        """The left side of the cone (mm) for a *finite* relative placement of
+        b in a's joint frame (``q = R_rel @ p + t_rel``).
+
+        The rows of a contact are those of the displacement of its point:
+        ``rows = [S, -S [point]x]`` (``point_rows``), so the exact level puts
+        the exact displacement ``d = q(point) - point`` in ``S`` (and in the
+        offset's first three entries). A contact that is not a point's
+        overrides this (the disc face)."""
+        d = t_rel + R_rel @ self.point - self.point
+        level = float(np.linalg.norm(self.rows[:, :3] @ d))
+        if self.offset is not None:
+            level += float(self.offset[:3] @ d)
+        return level
+
     def acting_point(self, f: FloatArray, lam: float) -> FloatArray:
         """Where the force acts (joint frame, mm), given its dual ``(lam, f)``."""
         if self.lever is None or lam <= 0.0:

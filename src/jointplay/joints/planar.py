@@ -21,13 +21,28 @@ inside the disc.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from pydantic import model_validator
 
 from ..fields import PositiveLength
+from ..geometry import FloatArray
 from .base import Contact, Joint, point_rows
+
+
+@dataclass(frozen=True)
+class RimContact(Contact):
+    """A disc face's contact: its rim point furthest along the normal."""
+
+    def exact_level(self, R_rel: FloatArray, t_rel: FloatArray) -> float:
+        # rim point p(t) = R (0, cos t, sin t) moves along x by
+        # t_x + R ((R_rel)_xy cos t + (R_rel)_xz sin t): its largest excursion
+        assert self.offset is not None and self.lever is not None
+        sign = float(self.offset[0])
+        radius = float(self.lever[1, 0])
+        return sign * float(t_rel[0]) + radius * float(np.hypot(R_rel[0, 1], R_rel[0, 2]))
 
 
 class Planar(Joint):
@@ -75,7 +90,9 @@ class Planar(Joint):
             return (Contact("face", "fixed", rows, 0.0, np.zeros(3)),)
         e_x = np.eye(6)[0]
         return tuple(
-            Contact(name, "ball", sign * tilt, self.clearance / 2, np.zeros(3), sign * e_x, lever)
+            RimContact(
+                name, "ball", sign * tilt, self.clearance / 2, np.zeros(3), sign * e_x, lever
+            )
             for name, sign in (("face x+", 1.0), ("face x-", -1.0))
         )
 
