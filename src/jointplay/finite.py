@@ -80,14 +80,15 @@ def placements(asm: Assembly, x: FloatArray) -> dict[str, Placement]:
 
 def relative_in_joint(
     asm: Assembly, place: dict[str, Placement], joint_index: int
-) -> tuple[FloatArray, FloatArray]:
-    """(R_rel, t_rel): b placed relative to a, in a's joint frame at the centre."""
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """(R_rel, phi, t_rel): b placed relative to a, in a's joint frame at the
+    centre (``phi``: the rotation vector of ``R_rel``)."""
     joint = asm.model.joints[joint_index]
     a, b = (place.get(name, IDENTITY) for name in joint.between)
     Rw, C = joint.R_world_joint, joint.centre
     R_rel = Rw.T @ a.R.T @ b.R @ Rw
     t_rel = Rw.T @ (a.inverse()(b(C)) - C)
-    return R_rel, t_rel
+    return R_rel, rotation_vector(R_rel), t_rel
 
 
 @dataclass(frozen=True)
@@ -119,15 +120,15 @@ def linearization(asm: Assembly, x: FloatArray, reach_mm: FloatArray) -> Lineari
         jdx = c.joint_index
         if jdx not in relative:
             relative[jdx] = relative_in_joint(asm, place, jdx)
-        R_rel, t_rel = relative[jdx]
+        R_rel, phi, t_rel = relative[jdx]
         joint = model.joints[jdx]
         i = ball_index.get(id(c))
-        if i is None:  # fixed rows: any exact relative motion of its point is past
+        if i is None:  # fixed rows: any exact relative displacement of its point is past
             d = t_rel + R_rel @ c.contact.point - c.contact.point
             past = float(np.linalg.norm(c.contact.rows[:, :3] @ d))
             play = 0.0
         else:
-            past = max(c.contact.exact_level(R_rel, t_rel) - float(reach_mm[i]), 0.0)
+            past = max(c.contact.exact_level(R_rel, phi, t_rel) - float(reach_mm[i]), 0.0)
             play = 2.0 * c.contact.radius
         if past > worst:
             worst, where = past, (joint.name, c.contact.name)

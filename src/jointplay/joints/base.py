@@ -27,6 +27,8 @@ from ..fields import Direction, Name, NonNegativeLength, Point, PositiveStiffnes
 from ..geometry import FloatArray, is_parallel, joint_frame, skew
 
 ContactKind = Literal["ball", "fixed"]
+#: A cone's vector part (k,) and scalar part.
+Parts = tuple[FloatArray, float]
 
 #: Registered joint classes by their ``type`` name, filled by subclassing.
 JOINT_TYPES: dict[str, type[Joint]] = {}
@@ -60,20 +62,31 @@ class Contact:
         """A limit with no rows: ``offset @ tau <= radius`` (a point on a plane)."""
         return self.offset is not None and self.rows.shape[0] == 0
 
-    def exact_level(self, R_rel: FloatArray, t_rel: FloatArray) -> float:
-        """The left side of the cone (mm) for a *finite* relative placement of
-        b in a's joint frame (``q = R_rel @ p + t_rel``).
+    def exact_parts(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> Parts:
+        """The cone's vector and scalar parts ``(rows @ tau, offset @ tau)``
+        for a *finite* relative placement of b in a's joint frame: the point
+        at p goes to ``R_rel @ p + t_rel``; ``phi`` is ``R_rel``'s rotation vector.
 
-        The rows of a contact are those of the displacement of its point:
-        ``rows = [S, -S [point]x]`` (``point_rows``), so the exact level puts
-        the exact displacement ``d = q(point) - point`` in ``S`` (and in the
-        offset's first three entries). A contact that is not a point's
+        Rows are those of the displacement of the contact's point,
+        ``rows = [S, -S [point]x]`` (``point_rows``), plus rows of the
+        rotation itself (a rigid joint); the exact parts put the exact
+        displacement ``d = R_rel @ point + t_rel - point`` in ``S`` and
+        ``phi`` in the rotation rows. A contact that is not a point's
         overrides this (the disc face)."""
-        d = t_rel + R_rel @ self.point - self.point
-        level = float(np.linalg.norm(self.rows[:, :3] @ d))
-        if self.offset is not None:
-            level += float(self.offset[:3] @ d)
-        return level
+        p = self.point
+        d = t_rel + R_rel @ p - p
+        turn = skew(p)
+
+        def part(row: FloatArray) -> FloatArray:
+            return np.asarray(row[..., :3] @ d + (row[..., 3:] + row[..., :3] @ turn) @ phi)
+
+        scalar = 0.0 if self.offset is None else float(part(self.offset))
+        return part(self.rows), scalar
+
+    def exact_level(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> float:
+        """``|a| + b`` of ``exact_parts``: compare with ``radius``."""
+        vector, scalar = self.exact_parts(R_rel, phi, t_rel)
+        return float(np.linalg.norm(vector)) + scalar
 
     def acting_point(self, f: FloatArray, lam: float) -> FloatArray:
         """Where the force acts (joint frame, mm), given its dual ``(lam, f)``."""

@@ -29,20 +29,22 @@ from pydantic import model_validator
 
 from ..fields import PositiveLength
 from ..geometry import FloatArray
-from .base import Contact, Joint, point_rows
+from .base import Contact, Joint, Parts, point_rows
 
 
 @dataclass(frozen=True)
 class RimContact(Contact):
     """A disc face's contact: its rim point furthest along the normal."""
 
-    def exact_level(self, R_rel: FloatArray, t_rel: FloatArray) -> float:
+    def exact_parts(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> Parts:
         # rim point p(t) = R (0, cos t, sin t) moves along x by
         # t_x + R ((R_rel)_xy cos t + (R_rel)_xz sin t): its largest excursion
+        # is the norm of the vector part plus the scalar part
         assert self.offset is not None and self.lever is not None
         sign = float(self.offset[0])
         radius = float(self.lever[1, 0])
-        return sign * float(t_rel[0]) + radius * float(np.hypot(R_rel[0, 1], R_rel[0, 2]))
+        vector = sign * radius * np.array([R_rel[0, 1], R_rel[0, 2]])
+        return vector, sign * float(t_rel[0])
 
 
 class Planar(Joint):
