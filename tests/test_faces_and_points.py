@@ -171,20 +171,18 @@ def point_joint(name: str, at: list[float], axis: list[float], **more: Any) -> d
     return {"name": name, "type": "point", "between": ["G", "B"], "at": at, "axis": axis, **more}
 
 
+def lever(length: float, gap: float) -> list[dict[str, Any]]:
+    """A beam on a ball joint (play 0.2) at the origin and a point contact at
+    x = length, its plane's normal along +Y."""
+    ball = {"type": "spherical", "between": ["G", "B"], "at": [0, 0, 0], "clearance": 0.2}
+    return [{"name": "ball", **ball}, point_joint("tip", [length, 0, 0], [0, 1, 0], gap=gap)]
+
+
 def test_lever_on_a_ball_and_a_point_closed_form() -> None:
     # a beam on a ball joint (play J = 0.2) at x = 0 and a point contact at
     # x = L with gap g below it; a downward load at x = a pivots it about the point
     L, a, g, F = 100.0, 40.0, 0.05, 7.0
-    joints = [
-        {
-            "name": "ball",
-            "type": "spherical",
-            "between": ["G", "B"],
-            "at": [0, 0, 0],
-            "clearance": 0.2,
-        },
-        point_joint("tip", [L, 0, 0], [0, 1, 0], gap=g),
-    ]
+    joints = lever(L, g)
     r = solved(model(joints, [{"body": "B", "at": [a, 0, 0], "force": [0, -F, 0]}]))
     body = r.bodies["B"]
     np.testing.assert_allclose(body.translation, [0, -0.1, 0], atol=MM)
@@ -198,16 +196,7 @@ def test_lever_on_a_ball_and_a_point_closed_form() -> None:
 
 
 def test_point_lifts_off_freely() -> None:
-    joints = [
-        {
-            "name": "ball",
-            "type": "spherical",
-            "between": ["G", "B"],
-            "at": [0, 0, 0],
-            "clearance": 0.2,
-        },
-        point_joint("tip", [100, 0, 0], [0, 1, 0], gap=0.05),
-    ]
+    joints = lever(100.0, 0.05)
     r = solved(model(joints, [{"body": "B", "at": [0, 0, 0], "force": [0, 7, 0]}]))
     tip = contact(r, "tip", "plane")
     assert not tip.in_contact and tip.force_magnitude == 0.0

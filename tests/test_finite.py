@@ -8,7 +8,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import jointplay
-from conftest import PAPER
+from conftest import PAPER, spherical_shaft
 from test_cli import run
 
 
@@ -49,34 +49,15 @@ def test_a_large_turn_warns_and_names_the_contact(tmp_path: object) -> None:
     # that does not touch: the part turns by 0.025 rad about its reference
     # point (the centroid of its joint centres, 207 mm from the ball), and the
     # exactly placed ball centre goes about 2 % past its play
-    data = {
-        "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
-        "joints": [
-            {
-                "name": "l1",
-                "type": "spherical",
-                "between": ["S0", "S1"],
-                "at": [0, 0, 0],
-                "clearance": 3,
-            },
-            {
-                "name": "l2",
-                "type": "cylindrical",
-                "between": ["S0", "S1"],
-                "at": [20, 0, 0],
-                "length": 4,
-                "clearance": 0.1,
-            },
-            {
-                "name": "stop",
-                "type": "spherical",
-                "between": ["S0", "S1"],
-                "at": [600, 0, 0],
-                "clearance": 40,
-            },
-        ],
-        "loads": [{"body": "S1", "at": [30, 0, 0], "force": [1, 1, 0]}],
-    }
+    data = spherical_shaft()
+    ball, bore = data["joints"]  # type: ignore[misc]
+    stop = {**ball, "name": "stop", "at": [600, 0, 0], "clearance": 40}
+    data["joints"] = [
+        {**ball, "clearance": 3},
+        {**bore, "at": [20, 0, 0], "length": 4, "clearance": 0.1},
+        stop,
+    ]
+    data["loads"] = [{"body": "S1", "at": [30, 0, 0], "force": [1, 1, 0]}]
     r = jointplay.solve(jointplay.model_from_dict(data))
     assert r.linearization_error > 0.01 * 3
     assert len(r.warnings) >= 1
