@@ -124,11 +124,17 @@ class PointResult:
 class BodyResult:
     name: str
     translation: FloatArray  # mm, of the body point at the global origin, global axes
-    rotation: FloatArray  # rad, global axes
+    rotation: FloatArray  # rad, global axes (a rotation vector)
+    #: The exact rotation matrix, for an answer with exact rotations (``--exact``);
+    #: None: small displacements (a point P moves by translation + rotation x P).
+    R: FloatArray | None = None
 
     def displacement_of(self, point: FloatArray) -> FloatArray:
         """Displacement (mm) of the body point at ``point`` (mm, global)."""
-        return self.translation + cross(self.rotation, np.asarray(point, dtype=float))
+        P = np.asarray(point, dtype=float)
+        if self.R is not None:
+            return np.asarray(self.translation + self.R @ P - P)
+        return self.translation + cross(self.rotation, P)
 
     def to_dict(self) -> dict[str, Any]:
         return {"translation": _list(self.translation), "rotation": _list(self.rotation)}

@@ -1,0 +1,454 @@
+"""``--exact``: the equilibrium with exact rotations, by re-linearization.
+
+Start from the small-displacement answer. At the current placement of every
+body (``finite.placements``: P -> c_b + V + R(Omega)(P - c_b)), linearize
+each contact's exact cone (``Contact.exact_parts``) and the loads' virtual
+work, and solve that cone program for a step; repeat until the step and the
+exact overshoot of every clearance are below 1e-9 mm. A small proximal term
+(the joint metric) makes each step unique; it vanishes at the fixed point,
+where the step is 0, so the answer is an exact-geometry equilibrium: its
+contact forces (the last program's duals) balance the loads at the displaced
+points, which ``Result.equilibrium_residual`` checks in global axes.
+
+Free motions keep the value of the small-displacement answer (0). The loads'
+derivatives are taken by central differences (step 1e-6 of the scaled
+unknowns, truncation ~1e-12).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import clarabel
+import numpy as np
+
+from .assembly import Assembly
+from .errors import SolverError
+from .finite import (
+    IDENTITY,
+    Linearization,
+    Placement,
+    placements,
+    relative_in_joint,
+    rotation_vector,
+)
+from .geometry import FloatArray, cross
+from .model import Load
+from .result import (
+    BodyResult,
+    Certificate,
+    ContactResult,
+    JointResult,
+    PointResult,
+    Result,
+    _clean,
+)
+
+if TYPE_CHECKING:
+    from .solver import Workspace
+
+#: Converged when the step and every exact overshoot are below this (mm).
+EXACT_TOLERANCE = 1e-9
+MAX_ITERATIONS = 60
+#: Weight of the proximal term (the loads are scaled to unit norm).
+PROXIMAL = 1e-3
+STEP = 1e-6
+
+
+def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
+    """The equilibrium of ``ws``'s model with exact rotations (see module doc)."""
+    start = time.perf_counter()
+    asm = ws.asm
+    loads = tuple(asm.model.loads_of(None) if loads is None else loads)
+    linear = ws.solve(loads=loads)
+    x = _x_of(asm, linear)
+    m = asm.m
+    iterations = 0
+    for iterations in range(1, MAX_ITERATIONS + 1):  # noqa: B007 - reported below
+        parts = _contact_parts(asm, x)
+        g = _virtual_work(asm, x, loads)
+        g_norm = float(np.linalg.norm(g))
+        step, lam, f, nu = _step(ws, x, parts, g, g_norm)
+        x = x + step
+        moved = float(np.max(np.abs(step))) * max(asm.s, asm.s / asm.ell * asm.ell)
+        if moved <= EXACT_TOLERANCE * 1e-2:
+            break
+    else:
+        raise SolverError(
+            f"--exact: the re-linearization did not settle in {MAX_ITERATIONS} steps "
+            f"(last step {moved:.3g} mm); the small-displacement answer is the one printed "
+            "without --exact"
+        )
+    parts = _contact_parts(asm, x)
+    g = _virtual_work(asm, x, loads)
+    g_norm = float(np.linalg.norm(g))
+    _, lam, f, nu = _step(ws, x, parts, g, g_norm)
+    to_newton = g_norm / asm.s
+    result = _build(ws, x, lam * to_newton, f * to_newton, nu * to_newton, loads)
+    feas = max(
+        [float(np.linalg.norm(a) + b) - r for (a, b), r in zip(parts.balls, _reach(ws, lam, asm), strict=True)]
+        + [0.0]
+    )
+    fixed = max([float(np.max(np.abs(a))) for a, _ in parts.fixed if len(a)] + [0.0])
+    feas_mm = max(feas, fixed)
+    cert = Certificate(
+        certified=feas_mm <= EXACT_TOLERANCE and result.equilibrium_residual <= 1e-8,
+        method=f"exact rotations ({iterations} re-linearizations)",
+        feasibility_mm=max(feas_mm, 0.0),
+        equilibrium_residual=result.equilibrium_residual,
+        complementarity=0.0,
+        min_force=float(np.min(lam)) * to_newton if len(lam) else 0.0,
+        iterations=iterations,
+    )
+    if not cert.certified:
+        raise SolverError(
+            "--exact: the exact-geometry answer could not be certified: "
+            f"{cert.feasibility_mm:.3g} mm past a clearance, equilibrium residual "
+            f"{cert.equilibrium_residual:.3g}; please report this model"
+        )
+    object.__setattr__(result, "certificate", cert)
+    object.__setattr__(result, "solve_time", time.perf_counter() - start)
+    worst = max(feas_mm, 0.0)
+    object.__setattr__(result, "_linearization", Linearization(worst, None, ()))
+    return result
+
+
+def _x_of(asm: Assembly, result: Result) -> FloatArray:
+    """Scaled unknowns of a small-displacement result."""
+    x = np.zeros(asm.m)
+    for i, name in enumerate(asm.body_names):
+        body = result.bodies[name]
+        x[6 * i : 6 * i + 3] = body.displacement_of(asm.body_ref[i]) / asm.s
+        x[6 * i + 3 : 6 * i + 6] = body.rotation * asm.ell / asm.s
+    return x
+
+
+class _Parts:
+    """Every contact's exact cone parts at one placement, in mm (balls, fixed)."""
+
+    def __init__(self, balls: list[tuple[FloatArray, float]], fixed: list[tuple[FloatArray, float]]):
+        self.balls = balls
+        self.fixed = fixed
+
+    def flat(self) -> FloatArray:
+        out: list[float] = []
+        for a, b in (*self.balls, *self.fixed):
+            out.extend(a)
+            out.append(b)
+        return np.array(out)
+
+
+def _contact_parts(asm: Assembly, x: FloatArray) -> _Parts:
+    place = placements(asm, x)
+    relative: dict[int, tuple[FloatArray, FloatArray, FloatArray]] = {}
+    balls, fixed = [], []
+    for c in (*asm.balls, *asm.fixed):
+        if c.joint_index not in relative:
+            relative[c.joint_index] = relative_in_joint(asm, place, c.joint_index)
+        a, b = c.contact.exact_parts(*relative[c.joint_index])
+        (fixed if c.is_fixed else balls).append((np.asarray(a, dtype=float), b))
+    return _Parts(balls, fixed)
+
+
+def _derivative(fun: Any, x: FloatArray) -> FloatArray:
+    """Central differences of a vector function of the scaled unknowns (columns)."""
+    cols = []
+    for j in range(len(x)):
+        e = np.zeros(len(x))
+        e[j] = STEP
+        cols.append((fun(x + e) - fun(x - e)) / (2 * STEP))
+    return np.array(cols).T
+
+
+def _virtual_work(asm: Assembly, x: FloatArray, loads: Sequence[Load]) -> FloatArray:
+    """The loads' generalized forces at the placement ``x``: forces follow their
+    points, torques do work on the spatial rotation increment."""
+    base = placements(asm, x)
+    g = np.zeros(asm.m)
+    for j in range(asm.m):
+        e = np.zeros(asm.m)
+        e[j] = STEP
+        plus, minus = placements(asm, x + e), placements(asm, x - e)
+        for load in loads:
+            p, q, now = plus[load.body], minus[load.body], base[load.body]
+            if load.force is not None:
+                at = np.array(load.at if load.at is not None else asm.body_ref[asm.body_index[load.body]])
+                g[j] += np.array(load.force) @ (p(at) - q(at)) / (2 * STEP)
+            if load.torque is not None:
+                turn = rotation_vector(p.R @ now.R.T) - rotation_vector(q.R @ now.R.T)
+                g[j] += np.array(load.torque) @ turn / (2 * STEP)
+    return g
+
+
+def _reach(ws: Workspace, lam: FloatArray, asm: Assembly) -> FloatArray:
+    return (ws.stack.r + ws.sigma * np.maximum(lam, 0.0)) * asm.s
+
+
+def _step(
+    ws: Workspace, x: FloatArray, parts: _Parts, g: FloatArray, g_norm: float
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """One linearized cone program: (step, lam, f, fixed multipliers), scaled."""
+    asm, m, s = ws.asm, ws.m, ws.asm.s
+    J = _derivative(lambda z: _contact_parts(asm, z).flat(), x) / s
+    now = parts.flat() / s
+    ws.sigma = ws.softness(g_norm)
+    soft = np.flatnonzero(ws.stack.spring > 0)
+    n_soft = len(soft)
+    # rows: zero cone (fixed contacts, then K), then one cone per ball, then p >= 0
+    A_rows: list[FloatArray] = []
+    b_rows: list[float] = []
+    cones: list[Any] = []
+    row = 0
+    ball_first, ball_vec = [], []
+    cursor = 0
+    fixed_rows = []
+    for a, _ in parts.balls:
+        cursor += len(a) + 1
+    ball_offsets = []
+    cursor_b = 0
+    for a, _ in parts.balls:
+        ball_offsets.append(cursor_b)
+        cursor_b += len(a) + 1
+    for a, _ in parts.fixed:
+        fixed_rows.extend(range(cursor, cursor + len(a)))
+        cursor += len(a) + 1
+    n_var = m + n_soft
+    Z = [np.hstack([J[fixed_rows], np.zeros((len(fixed_rows), n_soft))])] if fixed_rows else []
+    z_rhs = [-now[fixed_rows]] if fixed_rows else []
+    # free motions of the current placement (no cone or fixed row moves them):
+    # the step leaves them alone, as the small-displacement answer did
+    _, sv, Vt = np.linalg.svd(J, full_matrices=True)
+    rank = int(np.sum(sv > 1e-9 * sv[0])) if sv.size and sv[0] > 0 else 0
+    K = (asm.metric @ Vt[rank:].T).T
+    if len(K):
+        Z.append(np.hstack([K, np.zeros((len(K), n_soft))]))
+        z_rhs.append(np.zeros(len(K)))
+    if Z:
+        A_rows.append(np.vstack(Z))
+        b_rows.extend(np.concatenate(z_rhs))
+        cones.append(clarabel.ZeroConeT(int(sum(len(z) for z in Z))))
+        row += int(sum(len(z) for z in Z))
+    soft_of = {int(i): k for k, i in enumerate(soft)}
+    for i, (a, _) in enumerate(parts.balls):
+        o = ball_offsets[i]
+        k = len(a)
+        vec_rows, scal_row = list(range(o, o + k)), o + k
+        block = np.zeros((k + 1, n_var))
+        block[0, :m] = J[scal_row]
+        if i in soft_of:
+            block[0, m + soft_of[i]] = -1.0
+        block[1:, :m] = -J[vec_rows]
+        A_rows.append(block)
+        b_rows.extend([ws.stack.r[i] - now[scal_row], *now[vec_rows]])
+        ball_first.append(row)
+        ball_vec.append(np.arange(row + 1, row + 1 + k))
+        cones.append(clarabel.SecondOrderConeT(k + 1) if k else clarabel.NonnegativeConeT(1))
+        row += k + 1
+    if n_soft:
+        block = np.zeros((n_soft, n_var))
+        block[:, m:] = -np.eye(n_soft)
+        A_rows.append(block)
+        b_rows.extend(np.zeros(n_soft))
+        cones.append(clarabel.NonnegativeConeT(n_soft))
+    P = np.zeros((n_var, n_var))
+    P[:m, :m] = PROXIMAL * asm.metric
+    if n_soft:
+        P[m + np.arange(n_soft), m + np.arange(n_soft)] = 1.0 / ws.sigma[soft]
+    q = np.zeros(n_var)
+    q[:m] = -g / g_norm if g_norm else 0.0
+    from .solver import _csc
+
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-12
+    settings.max_iter = 400
+    A = np.vstack(A_rows) if A_rows else np.zeros((0, n_var))
+    sol = clarabel.DefaultSolver(
+        _csc(np.triu(P)), q, _csc(A), np.array(b_rows, dtype=float), cones, settings
+    ).solve()
+    status = str(sol.status)
+    if not status.endswith("Solved"):
+        raise SolverError(f"--exact: the cone solver stopped with status {status}")
+    z = np.asarray(sol.z)
+    lam = z[np.array(ball_first, dtype=np.intp)] if ball_first else np.zeros(0)
+    f = -np.concatenate(ball_vec and [z[v] for v in ball_vec]) if ball_vec else np.zeros(0)
+    n_fixed = len(fixed_rows)
+    nu = z[:n_fixed] if n_fixed else np.zeros(0)
+    return np.asarray(sol.x)[:m], lam, f, nu
+
+
+def _twist_jacobian(contact: Any, R_rel: FloatArray, t_rel: FloatArray) -> FloatArray:
+    """d(exact parts)/d(virtual twist of b in a's joint frame, about the centre):
+    (k + 1, 6). Its transpose turns the contact's dual into the wrench on b."""
+
+    def parts(delta: FloatArray) -> FloatArray:
+        from .finite import rotation_matrix
+
+        R = rotation_matrix(delta[3:]) @ R_rel
+        t = t_rel + delta[:3] + cross(delta[3:], t_rel)
+        vector, scalar = contact.exact_parts(R, rotation_vector(R), t)
+        return np.append(vector, scalar)
+
+    h = STEP * 1e-1
+    cols = []
+    for j in range(6):
+        e = np.zeros(6)
+        e[j] = h
+        cols.append((parts(e) - parts(-e)) / (2 * h))
+    return np.array(cols).T
+
+
+def _build(
+    ws: Workspace,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    nu: FloatArray,
+    loads: tuple[Load, ...],
+) -> Result:
+    """The exact answer as a ``Result``: bodies with their exact rotations,
+    joint torsors of the exact relative placement, forces at the displaced points."""
+    asm = ws.asm
+    model = asm.model
+    place = placements(asm, x)
+    bodies = {}
+    for b in model.bodies:
+        pl = place.get(b.name, IDENTITY)
+        bodies[b.name] = BodyResult(
+            b.name, _clean(pl.shift, asm.s), _clean(rotation_vector(pl.R), asm.s / asm.ell), pl.R
+        )
+    ball_index = {id(c): i for i, c in enumerate(asm.balls)}
+    fixed_index: dict[int, int] = {}
+    row = 0
+    for c in asm.fixed:
+        fixed_index[id(c)] = row
+        row += c.k
+    f_start = np.concatenate([[0], np.cumsum([c.k for c in asm.balls])]).astype(int)
+    joints = {}
+    # per joint: (a, b, force, moment about a's displaced joint centre, that centre), global
+    wrenches: list[tuple[str, str, FloatArray, FloatArray, FloatArray]] = []
+    for jdx, joint in enumerate(model.joints):
+        R_rel, phi, t_rel = relative_in_joint(asm, place, jdx)
+        a_place = place.get(joint.between[0], IDENTITY)
+        Rw = joint.R_world_joint
+        to_global = a_place.R @ Rw
+        contacts = []
+        total = np.zeros(6)
+        for c in asm.contacts:
+            if c.joint_index != jdx:
+                continue
+            G = _twist_jacobian(c.contact, R_rel, t_rel)
+            i = ball_index.get(id(c))
+            if i is None:
+                k0 = fixed_index[id(c)]
+                wrench = -G[: c.k].T @ nu[k0 : k0 + c.k]
+                local_point = c.contact.point
+                gap, touching, past = 1.0, True, 0.0
+            else:
+                fi = f[f_start[i] : f_start[i + 1]]
+                wrench = -(G[: c.k].T @ fi + lam[i] * G[c.k])
+                local_point = c.contact.acting_point(fi, float(lam[i]))
+                level = c.contact.exact_level(R_rel, phi, t_rel)
+                r = c.contact.radius
+                gap = float(np.clip(level / r, 0.0, 1.0)) if r > 0 else float(level >= -1e-12)
+                touching = gap >= 1.0 - 1e-8
+                past = max(level - r, 0.0) if c.stiffness > 0 else 0.0
+            total += wrench
+            q = t_rel + R_rel @ local_point  # where b's contact point is, in a's joint frame
+            contacts.append(
+                ContactResult(
+                    c.contact.name,
+                    gap,
+                    touching,
+                    wrench[:3] + 0.0,
+                    a_place(joint.centre + Rw @ q),
+                    past,
+                )
+            )
+        wrenches.append(
+            (
+                joint.between[0],
+                joint.between[1],
+                to_global @ total[:3],
+                to_global @ total[3:],
+                a_place(joint.centre),
+            )
+        )
+        joints[joint.name] = JointResult(
+            joint.name,
+            joint.type_name,
+            joint.between,
+            joint.centre,
+            Rw,
+            _clean(t_rel, asm.s),
+            _clean(phi, asm.s / asm.ell),
+            tuple(contacts),
+            total[:3],
+            total[3:],
+        )
+    points = {
+        p.name: PointResult(
+            p.name, p.body, np.array(p.at), bodies[p.body].displacement_of(np.array(p.at))
+        )
+        for p in model.points
+    }
+    energy = 0.0
+    for ld in loads:
+        if ld.force is not None:
+            i = asm.body_index[ld.body]
+            at = np.array(ld.at) if ld.at is not None else asm.body_ref[i]
+            energy -= float(np.array(ld.force) @ (place[ld.body](at) - at))
+    return Result(
+        "optimal",
+        energy,
+        bodies,
+        joints,
+        points,
+        Certificate(True, "exact", 0.0, 0.0, 0.0, 0.0, 0),
+        _residual(asm, place, loads, wrenches),
+        0.0,
+        ws.free_motions,
+    )
+
+
+def _residual(
+    asm: Assembly,
+    place: dict[str, Placement],
+    loads: tuple[Load, ...],
+    wrenches: list[tuple[str, str, FloatArray, FloatArray, FloatArray]],
+) -> float:
+    """Worst imbalance per moving body, in global axes at the displaced points
+    (moments about the body's displaced reference point), relative to the loads."""
+    index = asm.body_index
+    n = len(index)
+    F = np.zeros((n, 3))
+    M = np.zeros((n, 3))
+    ref = {name: place[name](asm.body_ref[i]) for name, i in index.items()}
+    scale = 0.0
+    for load in loads:
+        i = index[load.body]
+        pl = place[load.body]
+        if load.force is not None:
+            force = np.array(load.force)
+            at = np.array(load.at) if load.at is not None else asm.body_ref[i]
+            F[i] += force
+            M[i] += cross(pl(at) - ref[load.body], force)
+            scale = max(scale, float(np.linalg.norm(force)))
+        if load.torque is not None:
+            M[i] += np.array(load.torque)
+            scale = max(scale, float(np.linalg.norm(load.torque)) / asm.ell)
+    if scale == 0.0:
+        return 0.0
+    for a, b, force, moment, centre in wrenches:
+        for sign, name in ((-1.0, a), (1.0, b)):
+            if name in index:
+                i = index[name]
+                F[i] += sign * force
+                M[i] += sign * (moment + cross(centre - ref[name], force))
+    worst = max(
+        float(np.max(np.linalg.norm(F, axis=1))),
+        float(np.max(np.linalg.norm(M, axis=1))) / asm.ell,
+    )
+    return worst / scale
