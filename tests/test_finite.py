@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 import jointplay
@@ -71,3 +72,56 @@ def test_a_large_turn_warns_and_names_the_contact(tmp_path: object) -> None:
     assert doc["warnings"] == list(r.warnings)
     text = run("solve", str(path)).stdout
     assert "warning: joint 'l1'" in text
+
+
+def _exact_place(result: jointplay.Result, P: np.ndarray) -> np.ndarray:
+    body = result.bodies["S1"]
+    R = Rotation.from_rotvec(body.rotation).as_matrix()  # scipy, independent of ours
+    return body.translation + R @ P
+
+
+@pytest.mark.parametrize("name", ["6.1.6.1.yaml", "6.1.6.1-J1_3.yaml"])
+def test_exact_answer_holds_the_exact_geometry_and_balances(name: str) -> None:
+    model = jointplay.load(PAPER / name)
+    linear = jointplay.solve(model)
+    exact = jointplay.solve(model, exact=True)
+    exact.check()
+    assert exact.linearization_error <= 1e-9
+    J1, J2 = (3.0, 0.1) if "J1_3" in name else (0.2, 0.2)
+    # placed with scipy's rotation: the ball centre stays in its 1.5 mm ball,
+    # the shaft axis at both bore ends within the bore (joint frames = global)
+    ball = _exact_place(exact, np.zeros(3))
+    assert np.linalg.norm(ball) <= J1 / 2 + 1e-9
+    for x in (180.0, 220.0):
+        end = _exact_place(exact, np.array([x, 0.0, 0.0]))
+        assert np.hypot(end[1], end[2]) <= J2 / 2 + 1e-9
+    # the contact forces, at their displaced points, balance the load at its
+    # displaced point: forces and moments about the origin
+    F_load = np.array([1.0, 1.0, 1.0])
+    total_force = F_load.copy()
+    total_moment = np.cross(_exact_place(exact, np.array([300.0, 0, 0])), F_load)
+    for jr in exact.joints.values():
+        for c in jr.contacts:
+            total_force += jr.R_world_joint @ c.force
+            total_moment += np.cross(c.point, jr.R_world_joint @ c.force)
+    np.testing.assert_allclose(total_force, 0, atol=1e-9)
+    np.testing.assert_allclose(total_moment, 0, atol=1e-9 * 300)
+    # how much exact and linear differ: on the J1 = 3 mm shaft, the ball stays
+    # where it was and the bore centre slides back by the turn's second-order
+    # term, -theta^2 / 2 * 200 mm along the axis (6.25e-4 mm here)
+    theta = float(np.linalg.norm(linear.bodies["S1"].rotation))
+    if "J1_3" in name:
+        np.testing.assert_allclose(
+            exact.joints["l1"].translation, linear.joints["l1"].translation, atol=1e-9
+        )
+        shift = exact.joints["l2"].translation - linear.joints["l2"].translation
+        np.testing.assert_allclose(shift, [-(theta**2) / 2 * 200, 0, 0], atol=1e-9)
+
+
+def test_exact_from_the_command_line() -> None:
+    proc = run("solve", str(PAPER / "6.1.6.1-J1_3.yaml"), "--exact", "--json")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["linearization_error"] <= 1e-9 and doc["equilibrium_residual"] < 1e-8
+    text = run("solve", str(PAPER / "6.1.6.1-J1_3.yaml"), "--exact").stdout
+    assert "exact rotations" in text and "exact placement" in text

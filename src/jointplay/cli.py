@@ -49,6 +49,14 @@ def solve(
         str | None,
         typer.Option("--case", metavar="NAME", help="Solve only this load case of the model."),
     ] = None,
+    exact: Annotated[
+        bool,
+        typer.Option(
+            "--exact",
+            help="Refine with exact rotations (re-linearized until the exact geometry "
+            "holds within 1e-9 mm).",
+        ),
+    ] = False,
 ) -> None:
     """Solve the equilibrium of MODEL: joints, contacts, forces and bodies.
 
@@ -67,14 +75,14 @@ def solve(
                 raise ModelError(f"--case: {exc.args[0]}", source=str(model_path)) from None
         ws = Workspace.of(model)
         if not model.case_names:
-            result = ws.solve()
+            result = ws.solve(exact=exact)
             if as_json:
                 typer.echo(json.dumps(result.to_dict(), indent=2))
             else:
                 render(model, result, str(model_path), _console())
             return
         names = [case] if case is not None else list(model.case_names)
-        results = {name: ws.solve(loads=model.loads_of(name)) for name in names}
+        results = {name: ws.solve(loads=model.loads_of(name), exact=exact) for name in names}
         if as_json:
             doc = {"status": "optimal", "cases": {n: r.to_dict() for n, r in results.items()}}
             typer.echo(json.dumps(doc, indent=2))

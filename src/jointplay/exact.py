@@ -10,9 +10,11 @@ where the step is 0, so the answer is an exact-geometry equilibrium: its
 contact forces (the last program's duals) balance the loads at the displaced
 points, which ``Result.equilibrium_residual`` checks in global axes.
 
-Free motions keep the value of the small-displacement answer (0). The loads'
-derivatives are taken by central differences (step 1e-6 of the scaled
-unknowns, truncation ~1e-12).
+Free motions of the current placement keep the value of the small-displacement
+answer (0). Derivatives are analytic: each contact's parts with respect to a
+virtual twist of b in a's joint frame (``Contact.exact_jacobian``), each
+body's twist with respect to its unknowns through the rotation's left
+Jacobian, and the loads' virtual work likewise.
 """
 
 from __future__ import annotations
@@ -30,11 +32,13 @@ from .finite import (
     IDENTITY,
     Linearization,
     Placement,
+    left_jacobian,
     placements,
     relative_in_joint,
+    rotation_matrix,
     rotation_vector,
 )
-from .geometry import FloatArray, cross
+from .geometry import FloatArray, cross, skew
 from .model import Load
 from .result import (
     BodyResult,
@@ -54,7 +58,6 @@ EXACT_TOLERANCE = 1e-9
 MAX_ITERATIONS = 60
 #: Weight of the proximal term (the loads are scaled to unit norm).
 PROXIMAL = 1e-3
-STEP = 1e-6
 
 
 def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
@@ -64,7 +67,6 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     loads = tuple(asm.model.loads_of(None) if loads is None else loads)
     linear = ws.solve(loads=loads)
     x = _x_of(asm, linear)
-    m = asm.m
     iterations = 0
     for iterations in range(1, MAX_ITERATIONS + 1):  # noqa: B007 - reported below
         parts = _contact_parts(asm, x)
@@ -72,7 +74,7 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
         g_norm = float(np.linalg.norm(g))
         step, lam, f, nu = _step(ws, x, parts, g, g_norm)
         x = x + step
-        moved = float(np.max(np.abs(step))) * max(asm.s, asm.s / asm.ell * asm.ell)
+        moved = float(np.max(np.abs(step))) * asm.s  # mm (a turn: mm at the length scale)
         if moved <= EXACT_TOLERANCE * 1e-2:
             break
     else:
@@ -88,7 +90,10 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     to_newton = g_norm / asm.s
     result = _build(ws, x, lam * to_newton, f * to_newton, nu * to_newton, loads)
     feas = max(
-        [float(np.linalg.norm(a) + b) - r for (a, b), r in zip(parts.balls, _reach(ws, lam, asm), strict=True)]
+        [
+            float(np.linalg.norm(a) + b) - r
+            for (a, b), r in zip(parts.balls, _reach(ws, lam, asm), strict=True)
+        ]
         + [0.0]
     )
     fixed = max([float(np.max(np.abs(a))) for a, _ in parts.fixed if len(a)] + [0.0])
@@ -128,7 +133,9 @@ def _x_of(asm: Assembly, result: Result) -> FloatArray:
 class _Parts:
     """Every contact's exact cone parts at one placement, in mm (balls, fixed)."""
 
-    def __init__(self, balls: list[tuple[FloatArray, float]], fixed: list[tuple[FloatArray, float]]):
+    def __init__(
+        self, balls: list[tuple[FloatArray, float]], fixed: list[tuple[FloatArray, float]]
+    ):
         self.balls = balls
         self.fixed = fixed
 
@@ -143,7 +150,8 @@ class _Parts:
 def _contact_parts(asm: Assembly, x: FloatArray) -> _Parts:
     place = placements(asm, x)
     relative: dict[int, tuple[FloatArray, FloatArray, FloatArray]] = {}
-    balls, fixed = [], []
+    balls: list[tuple[FloatArray, float]] = []
+    fixed: list[tuple[FloatArray, float]] = []
     for c in (*asm.balls, *asm.fixed):
         if c.joint_index not in relative:
             relative[c.joint_index] = relative_in_joint(asm, place, c.joint_index)
@@ -152,34 +160,57 @@ def _contact_parts(asm: Assembly, x: FloatArray) -> _Parts:
     return _Parts(balls, fixed)
 
 
-def _derivative(fun: Any, x: FloatArray) -> FloatArray:
-    """Central differences of a vector function of the scaled unknowns (columns)."""
-    cols = []
-    for j in range(len(x)):
-        e = np.zeros(len(x))
-        e[j] = STEP
-        cols.append((fun(x + e) - fun(x - e)) / (2 * STEP))
-    return np.array(cols).T
-
-
 def _virtual_work(asm: Assembly, x: FloatArray, loads: Sequence[Load]) -> FloatArray:
     """The loads' generalized forces at the placement ``x``: forces follow their
-    points, torques do work on the spatial rotation increment."""
-    base = placements(asm, x)
+    points, torques do work on the spatial rotation increment ``J_l dOmega``."""
     g = np.zeros(asm.m)
-    for j in range(asm.m):
-        e = np.zeros(asm.m)
-        e[j] = STEP
-        plus, minus = placements(asm, x + e), placements(asm, x - e)
-        for load in loads:
-            p, q, now = plus[load.body], minus[load.body], base[load.body]
-            if load.force is not None:
-                at = np.array(load.at if load.at is not None else asm.body_ref[asm.body_index[load.body]])
-                g[j] += np.array(load.force) @ (p(at) - q(at)) / (2 * STEP)
-            if load.torque is not None:
-                turn = rotation_vector(p.R @ now.R.T) - rotation_vector(q.R @ now.R.T)
-                g[j] += np.array(load.torque) @ turn / (2 * STEP)
+    for load in loads:
+        i = asm.body_index[load.body]
+        omega = (asm.s / asm.ell) * x[6 * i + 3 : 6 * i + 6]
+        R = rotation_matrix(omega)
+        moment = np.zeros(3) if load.torque is None else np.array(load.torque, dtype=float)
+        if load.force is not None:
+            force = np.array(load.force, dtype=float)
+            at = np.array(load.at) if load.at is not None else asm.body_ref[i]
+            g[6 * i : 6 * i + 3] += asm.s * force
+            moment = moment + cross(R @ (at - asm.body_ref[i]), force)
+        g[6 * i + 3 : 6 * i + 6] += (asm.s / asm.ell) * left_jacobian(omega).T @ moment
     return g
+
+
+def _twist_map(asm: Assembly, x: FloatArray, place: dict[str, Placement], jdx: int) -> FloatArray:
+    """(6, m): scaled unknowns' variation -> virtual twist of b relative to a,
+    in a's joint frame, about a's displaced joint centre."""
+    joint = asm.model.joints[jdx]
+    a_place = place.get(joint.between[0], IDENTITY)
+    R_ga = a_place.R @ joint.R_world_joint
+    O_a = a_place(joint.centre)
+    T = np.zeros((6, asm.m))
+    for sign, name in ((-1.0, joint.between[0]), (1.0, joint.between[1])):
+        if name not in asm.body_index:
+            continue
+        i = asm.body_index[name]
+        omega = (asm.s / asm.ell) * x[6 * i + 3 : 6 * i + 6]
+        turn = (asm.s / asm.ell) * left_jacobian(omega)  # dtheta per unit scaled x
+        lever = O_a - place[name](asm.body_ref[i])
+        T[:3, 6 * i : 6 * i + 3] = sign * R_ga.T * asm.s
+        T[:3, 6 * i + 3 : 6 * i + 6] = sign * R_ga.T @ (-skew(lever) @ turn)
+        T[3:, 6 * i + 3 : 6 * i + 6] = sign * R_ga.T @ turn
+    return T
+
+
+def _parts_jacobian(asm: Assembly, x: FloatArray) -> FloatArray:
+    """d(exact parts)/dx, stacked like ``_Parts.flat`` (mm per scaled unit)."""
+    place = placements(asm, x)
+    rows = []
+    maps: dict[int, FloatArray] = {}
+    for c in (*asm.balls, *asm.fixed):
+        jdx = c.joint_index
+        if jdx not in maps:
+            maps[jdx] = _twist_map(asm, x, place, jdx)
+        G = c.contact.exact_jacobian(*relative_in_joint(asm, place, jdx))
+        rows.append(G @ maps[jdx])
+    return np.vstack(rows) if rows else np.zeros((0, asm.m))
 
 
 def _reach(ws: Workspace, lam: FloatArray, asm: Assembly) -> FloatArray:
@@ -191,7 +222,7 @@ def _step(
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """One linearized cone program: (step, lam, f, fixed multipliers), scaled."""
     asm, m, s = ws.asm, ws.m, ws.asm.s
-    J = _derivative(lambda z: _contact_parts(asm, z).flat(), x) / s
+    J = _parts_jacobian(asm, x) / s
     now = parts.flat() / s
     ws.sigma = ws.softness(g_norm)
     soft = np.flatnonzero(ws.stack.spring > 0)
@@ -202,15 +233,13 @@ def _step(
     cones: list[Any] = []
     row = 0
     ball_first, ball_vec = [], []
-    cursor = 0
-    fixed_rows = []
-    for a, _ in parts.balls:
-        cursor += len(a) + 1
+    # where each cone's parts sit in ``flat``: balls (vector rows, scalar), then fixed
     ball_offsets = []
-    cursor_b = 0
+    cursor = 0
     for a, _ in parts.balls:
-        ball_offsets.append(cursor_b)
-        cursor_b += len(a) + 1
+        ball_offsets.append(cursor)
+        cursor += len(a) + 1
+    fixed_rows: list[int] = []
     for a, _ in parts.fixed:
         fixed_rows.extend(range(cursor, cursor + len(a)))
         cursor += len(a) + 1
@@ -279,27 +308,6 @@ def _step(
     return np.asarray(sol.x)[:m], lam, f, nu
 
 
-def _twist_jacobian(contact: Any, R_rel: FloatArray, t_rel: FloatArray) -> FloatArray:
-    """d(exact parts)/d(virtual twist of b in a's joint frame, about the centre):
-    (k + 1, 6). Its transpose turns the contact's dual into the wrench on b."""
-
-    def parts(delta: FloatArray) -> FloatArray:
-        from .finite import rotation_matrix
-
-        R = rotation_matrix(delta[3:]) @ R_rel
-        t = t_rel + delta[:3] + cross(delta[3:], t_rel)
-        vector, scalar = contact.exact_parts(R, rotation_vector(R), t)
-        return np.append(vector, scalar)
-
-    h = STEP * 1e-1
-    cols = []
-    for j in range(6):
-        e = np.zeros(6)
-        e[j] = h
-        cols.append((parts(e) - parts(-e)) / (2 * h))
-    return np.array(cols).T
-
-
 def _build(
     ws: Workspace,
     x: FloatArray,
@@ -339,7 +347,7 @@ def _build(
         for c in asm.contacts:
             if c.joint_index != jdx:
                 continue
-            G = _twist_jacobian(c.contact, R_rel, t_rel)
+            G = c.contact.exact_jacobian(R_rel, phi, t_rel)
             i = ball_index.get(id(c))
             if i is None:
                 k0 = fixed_index[id(c)]

@@ -49,6 +49,26 @@ def rotation_vector(R: FloatArray) -> FloatArray:
     return np.asarray(axis_sin * theta / np.sin(theta))
 
 
+def left_jacobian(phi: FloatArray) -> FloatArray:
+    """``J_l``: exp(phi + d) = exp(J_l d) exp(phi) to first order."""
+    theta = float(np.linalg.norm(phi))
+    K = skew(np.asarray(phi, dtype=float))
+    if theta < 1e-6:
+        return np.asarray(np.eye(3) + 0.5 * K + K @ K / 6.0)
+    a = (1.0 - np.cos(theta)) / theta**2
+    b = (theta - np.sin(theta)) / theta**3
+    return np.asarray(np.eye(3) + a * K + b * K @ K)
+
+
+def left_jacobian_inverse(phi: FloatArray) -> FloatArray:
+    theta = float(np.linalg.norm(phi))
+    K = skew(np.asarray(phi, dtype=float))
+    if theta < 1e-6:
+        return np.asarray(np.eye(3) - 0.5 * K + K @ K / 12.0)
+    c = 1.0 / theta**2 - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
+    return np.asarray(np.eye(3) - 0.5 * K + c * K @ K)
+
+
 @dataclass(frozen=True)
 class Placement:
     """An exact rigid placement ``P -> R @ P + shift`` (global, mm)."""

@@ -108,18 +108,25 @@ class _Face:
 
 
 def solve(
-    model: Model, settings: SolverSettings | None = None, *, case: str | None = None
+    model: Model,
+    settings: SolverSettings | None = None,
+    *,
+    case: str | None = None,
+    exact: bool = False,
 ) -> Result:
     """Find the equilibrium of ``model`` (under load case ``case``, if given):
-    positions, contacts, forces and certificate."""
+    positions, contacts, forces and certificate. ``exact``: with exact
+    rotations, refined from the small-displacement answer (``jointplay.exact``)."""
     ws = Workspace(assemble(model), settings)
-    return ws.solve() if case is None else ws.solve(loads=model.loads_of(case))
+    return ws.solve(loads=None if case is None else model.loads_of(case), exact=exact)
 
 
-def solve_cases(model: Model, settings: SolverSettings | None = None) -> dict[str, Result]:
+def solve_cases(
+    model: Model, settings: SolverSettings | None = None, *, exact: bool = False
+) -> dict[str, Result]:
     """Every load case of ``model`` on one assembly: ``{case: Result}``."""
     ws = Workspace(assemble(model), settings)
-    return {case: ws.solve(loads=model.loads_of(case)) for case in model.case_names}
+    return {case: ws.solve(loads=model.loads_of(case), exact=exact) for case in model.case_names}
 
 
 class Workspace:
@@ -211,8 +218,13 @@ class Workspace:
         return self._free_words
 
     # -- the solve ----------------------------------------------------------
-    def solve(self, loads: Sequence[Load] | None = None) -> Result:
-        """The equilibrium under the model's loads, or under ``loads`` instead."""
+    def solve(self, loads: Sequence[Load] | None = None, *, exact: bool = False) -> Result:
+        """The equilibrium under the model's loads, or under ``loads`` instead
+        (``exact``: with exact rotations, see ``jointplay.exact``)."""
+        if exact:
+            from .exact import solve_exact
+
+            return solve_exact(self, loads)
         start = time.perf_counter()
         if loads is None:
             loads = self.asm.model.loads_of(None)

@@ -98,8 +98,12 @@ def render(
         )
         parts.append(forces)
 
+    exact = any(br.R is not None for br in result.bodies.values())
     body_table = _xyz_table(
-        "bodies: small displacement at the global origin, in global axes", ["body", ""]
+        "bodies: "
+        + ("exact placement (rotation vector)" if exact else "small displacement")
+        + " at the global origin, in global axes",
+        ["body", ""],
     )
     for name, br in result.bodies.items():
         if model.body(name).ground:

@@ -83,6 +83,22 @@ class Contact:
         scalar = 0.0 if self.offset is None else float(part(self.offset))
         return part(self.rows), scalar
 
+    def exact_jacobian(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> FloatArray:
+        """(k + 1, 6): derivative of ``exact_parts`` (vector rows, then the
+        scalar) with respect to a virtual twist of b in a's joint frame,
+        ``(dt at the centre, dtheta)``. Its transpose turns the contact's dual
+        into the wrench on b (force, moment about the centre)."""
+        from ..finite import left_jacobian_inverse
+
+        p = self.point
+        q = R_rel @ p + t_rel
+        d_point = np.hstack([np.eye(3), -skew(q)])  # the point's displacement
+        d_phi = np.hstack([np.zeros((3, 3)), left_jacobian_inverse(phi)])
+        turn = skew(p)
+        offset = np.zeros(6) if self.offset is None else self.offset
+        rows = np.vstack([self.rows, offset])
+        return np.asarray(rows[:, :3] @ d_point + (rows[:, 3:] + rows[:, :3] @ turn) @ d_phi)
+
     def exact_level(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> float:
         """``|a| + b`` of ``exact_parts``: compare with ``radius``."""
         vector, scalar = self.exact_parts(R_rel, phi, t_rel)

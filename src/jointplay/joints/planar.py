@@ -46,6 +46,19 @@ class RimContact(Contact):
         vector = sign * radius * np.array([R_rel[0, 1], R_rel[0, 2]])
         return vector, sign * float(t_rel[0])
 
+    def exact_jacobian(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> FloatArray:
+        assert self.offset is not None and self.lever is not None
+        sign = float(self.offset[0])
+        radius = float(self.lever[1, 0])
+        out = np.zeros((3, 6))
+        for k in range(3):  # d R_rel = [e_k]x R_rel per unit turn about e_k
+            turned = np.cross(np.eye(3)[k], R_rel.T).T  # e_k x (each column)
+            out[0, 3 + k] = sign * radius * turned[0, 1]
+            out[1, 3 + k] = sign * radius * turned[0, 2]
+        out[2, 0] = sign  # t_x; a turn about the centre moves t by dtheta x t
+        out[2, 3:] = -sign * np.cross(t_rel, np.eye(3))[:, 0]
+        return out
+
 
 class Planar(Joint):
     type: Literal["planar"] = "planar"
