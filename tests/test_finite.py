@@ -125,3 +125,13 @@ def test_exact_from_the_command_line() -> None:
     assert doc["linearization_error"] <= 1e-9 and doc["equilibrium_residual"] < 1e-8
     text = run("solve", str(PAPER / "6.1.6.1-J1_3.yaml"), "--exact").stdout
     assert "exact rotations" in text and "exact placement" in text
+
+
+@pytest.mark.parametrize("path", sorted(PAPER.parent.rglob("*.yaml")), ids=lambda p: p.name)
+def test_every_bundled_example_solves_exactly(path: object) -> None:
+    model = jointplay.load(path)  # type: ignore[arg-type]
+    for case in model.case_names or (None,):
+        exact = jointplay.solve(model, case=case, exact=True)
+        exact.check()
+        assert exact.linearization_error <= 1e-9
+        assert exact.equilibrium_residual < 1e-8
