@@ -29,6 +29,8 @@ def joint(index: int, **changes: Any) -> dict[str, Any]:
     return data
 
 
+FACE = {"name": "f", "type": "planar", "between": ["S0", "S1"], "at": [0, 0, 0], "clearance": 0.1}
+
 CASES: list[tuple[str, Any, str]] = [
     (
         "unknown body in a joint",
@@ -209,6 +211,18 @@ CASES: list[tuple[str, Any, str]] = [
         "load cases that are not a mapping",
         spherical_shaft(load_cases=[1, 2]),
         r"load_cases: expected a mapping \(NAME: \[\.\.\.\], \.\.\.\), got list",
+    ),
+    (
+        "planar face both a rectangle and a disc",
+        spherical_shaft(joints=[{**FACE, "diameter": 20, "width": 3, "height": 4}]),
+        r"joints\[0\] 'f': a planar joint's face is a rectangle \('width' and 'height'\) "
+        r"or a disc \('diameter'\), not both; remove one",
+    ),
+    (
+        "point joint given a clearance",
+        spherical_shaft(joints=[{**FACE, "type": "point", "clearance": 0.1}]),
+        r"joints\[0\] 'f': clearance: a point joint has a one-sided 'gap' to its plane, "
+        r"not a 'clearance'; write gap: 0\.1",
     ),
 ]
 

@@ -45,10 +45,12 @@ from .result import (
     Certificate,
     ContactResult,
     JointResult,
-    PointResult,
     Result,
     _clean,
+    equilibrium_residual,
+    points_of,
 )
+from .solver import _csc
 
 if TYPE_CHECKING:
     from .solver import Workspace
@@ -287,8 +289,6 @@ def _step(
         P[m + np.arange(n_soft), m + np.arange(n_soft)] = 1.0 / ws.sigma[soft]
     q = np.zeros(n_var)
     q[:m] = -g / g_norm if g_norm else 0.0
-    from .solver import _csc
-
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-12
@@ -335,13 +335,10 @@ def _build(
         row += c.k
     f_start = np.concatenate([[0], np.cumsum([c.k for c in asm.balls])]).astype(int)
     joints = {}
-    # per joint: (a, b, force, moment about a's displaced joint centre, that centre), global
-    wrenches: list[tuple[str, str, FloatArray, FloatArray, FloatArray]] = []
     for jdx, joint in enumerate(model.joints):
         R_rel, phi, t_rel = relative_in_joint(asm, place, jdx)
         a_place = place.get(joint.between[0], IDENTITY)
         Rw = joint.R_world_joint
-        to_global = a_place.R @ Rw
         contacts = []
         total = np.zeros(6)
         for c in asm.contacts:
@@ -375,15 +372,6 @@ def _build(
                     past,
                 )
             )
-        wrenches.append(
-            (
-                joint.between[0],
-                joint.between[1],
-                to_global @ total[:3],
-                to_global @ total[3:],
-                a_place(joint.centre),
-            )
-        )
         joints[joint.name] = JointResult(
             joint.name,
             joint.type_name,
@@ -396,12 +384,7 @@ def _build(
             total[:3],
             total[3:],
         )
-    points = {
-        p.name: PointResult(
-            p.name, p.body, np.array(p.at), bodies[p.body].displacement_of(np.array(p.at))
-        )
-        for p in model.points
-    }
+    points = points_of(model, bodies)
     energy = 0.0
     for ld in loads:
         if ld.force is not None:
@@ -415,48 +398,7 @@ def _build(
         joints,
         points,
         Certificate(True, "exact", 0.0, 0.0, 0.0, 0.0, 0),
-        _residual(asm, place, loads, wrenches),
+        equilibrium_residual(asm, joints, loads, place),
         0.0,
         ws.free_motions,
     )
-
-
-def _residual(
-    asm: Assembly,
-    place: dict[str, Placement],
-    loads: tuple[Load, ...],
-    wrenches: list[tuple[str, str, FloatArray, FloatArray, FloatArray]],
-) -> float:
-    """Worst imbalance per moving body, in global axes at the displaced points
-    (moments about the body's displaced reference point), relative to the loads."""
-    index = asm.body_index
-    n = len(index)
-    F = np.zeros((n, 3))
-    M = np.zeros((n, 3))
-    ref = {name: place[name](asm.body_ref[i]) for name, i in index.items()}
-    scale = 0.0
-    for load in loads:
-        i = index[load.body]
-        pl = place[load.body]
-        if load.force is not None:
-            force = np.array(load.force)
-            at = np.array(load.at) if load.at is not None else asm.body_ref[i]
-            F[i] += force
-            M[i] += cross(pl(at) - ref[load.body], force)
-            scale = max(scale, float(np.linalg.norm(force)))
-        if load.torque is not None:
-            M[i] += np.array(load.torque)
-            scale = max(scale, float(np.linalg.norm(load.torque)) / asm.ell)
-    if scale == 0.0:
-        return 0.0
-    for a, b, force, moment, centre in wrenches:
-        for sign, name in ((-1.0, a), (1.0, b)):
-            if name in index:
-                i = index[name]
-                F[i] += sign * force
-                M[i] += sign * (moment + cross(centre - ref[name], force))
-    worst = max(
-        float(np.max(np.linalg.norm(F, axis=1))),
-        float(np.max(np.linalg.norm(M, axis=1))) / asm.ell,
-    )
-    return worst / scale

@@ -14,12 +14,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .finite import Linearization, linearization
+from .finite import IDENTITY, Linearization, Placement, linearization
 from .geometry import FloatArray, cross, describe_motion
 
 if TYPE_CHECKING:
     from .assembly import Assembly
-    from .model import Load
+    from .model import Load, Model
 
 #: Largest relative imbalance of loads and contact forces that ``check`` accepts.
 EQUILIBRIUM_TOLERANCE = 1e-8
@@ -303,12 +303,7 @@ def build_result(
             wrench_sum[jdx][3:],
         )
 
-    points = {
-        p.name: PointResult(
-            p.name, p.body, np.array(p.at), bodies[p.body].displacement_of(np.array(p.at))
-        )
-        for p in model.points
-    }
+    points = points_of(model, bodies)
     residual = equilibrium_residual(asm, joints, loads)
     energy = -float(g @ x)
     reach_mm = stack.r * asm.s + penetration
@@ -327,41 +322,64 @@ def build_result(
 
 
 def equilibrium_residual(
-    asm: Assembly, joints: dict[str, JointResult], loads: tuple[Load, ...]
+    asm: Assembly,
+    joints: dict[str, JointResult],
+    loads: tuple[Load, ...],
+    place: dict[str, Placement] | None = None,
 ) -> float:
     """The worst imbalance of each moving body, in global axes: the applied
     loads plus the reactions of its joints, forces relative to the largest
-    load and moments relative to it times the length scale."""
+    load and moments relative to it times the length scale.
+
+    ``place``: the bodies' exact placements (an answer with exact rotations);
+    the loads then act at their displaced points, and each joint's reaction
+    (a's joint frame, about its centre) at a's displaced joint centre.
+    Without it, everything stays where the model puts it (small displacements)."""
+    place = place or {}
     index = asm.body_index
     n = len(index)
     F = np.zeros((n, 3))
-    M = np.zeros((n, 3))  # about each body's reference point
+    M = np.zeros((n, 3))  # about each body's (displaced) reference point
+    ref = np.array([place.get(name, IDENTITY)(asm.body_ref[i]) for name, i in index.items()])
     scale = 0.0
     for load in loads:
         i = index[load.body]
         force = np.zeros(3) if load.force is None else np.array(load.force)
         moment = np.zeros(3) if load.torque is None else np.array(load.torque)
         if load.at is not None:
-            moment = moment + cross(np.array(load.at) - asm.body_ref[i], force)
+            at = place.get(load.body, IDENTITY)(np.array(load.at))
+            moment = moment + cross(at - ref[i], force)
         F[i] += force
         M[i] += moment
         scale = max(scale, float(np.linalg.norm(force)), float(np.linalg.norm(moment)) / asm.ell)
     if scale == 0.0:
         return 0.0
     for jr in joints.values():
-        R = jr.R_world_joint
+        a_place = place.get(jr.between[0], IDENTITY)
+        R = a_place.R @ jr.R_world_joint
         force = R @ jr.reaction_force
         moment_centre = R @ jr.reaction_moment
+        centre = a_place(jr.centre)
         for sign, name in ((-1.0, jr.between[0]), (1.0, jr.between[1])):
             if name in index:
                 i = index[name]
                 F[i] += sign * force
-                M[i] += sign * (moment_centre + cross(jr.centre - asm.body_ref[i], force))
+                M[i] += sign * (moment_centre + cross(centre - ref[i], force))
     worst = max(
         float(np.max(np.linalg.norm(F, axis=1))) if n else 0.0,
         float(np.max(np.linalg.norm(M, axis=1))) / asm.ell if n else 0.0,
     )
     return worst / scale
+
+
+def points_of(model: Model, bodies: dict[str, BodyResult]) -> dict[str, PointResult]:
+    """The functional points' displacements, from the bodies' results."""
+    return {
+        p.name: PointResult(
+            p.name, p.body, np.array(p.at), bodies[p.body].displacement_of(np.array(p.at))
+        )
+        for p in model.points
+    }
 
 
 def describe_free_motions(asm: Assembly, free_basis: FloatArray) -> tuple[str, ...]:

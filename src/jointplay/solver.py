@@ -188,19 +188,14 @@ class Workspace:
         moving bodies together, along a global axis; else the solver's own
         certificate of unboundedness (``fallback``)."""
         m, n = self.m, len(self.asm.body_names)
-        groups = [[i] for i in range(n)] + ([list(range(n))] if n > 1 else [])
-        candidates = []
-        for group in groups:
-            for part in (0, 3):
-                for axis in range(3):
-                    d = np.zeros(m)
-                    d[[6 * i + part + axis for i in group]] = 1.0
-                    if part == 3 and len(group) > 1:
-                        continue  # a common rotation: about which point is not obvious
-                    candidates.extend([d, -d])
+        candidates: list[FloatArray] = []
+        for i in range(n):  # each body alone: a translation, or a turn about its reference
+            candidates.extend(np.eye(m)[6 * i : 6 * i + 6])
+        if n > 1:  # all together: a translation (a common turn has no obvious centre)
+            candidates.extend(np.tile(np.eye(6)[:3], n) / np.sqrt(n))
+        candidates += [-d for d in candidates]
         best, best_work = fallback[:m], 0.0
         for d in candidates:
-            d = d / np.linalg.norm(d)
             work = float(g @ d)
             if work <= best_work:
                 continue
