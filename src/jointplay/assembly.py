@@ -1,12 +1,14 @@
 """One path from a model to a cone program, with a map back to joints and contacts.
 
 Unknowns. Each moving body b gets a 6-vector of *scaled* unknowns
-``x_b = (V_b / s, Omega_b * ell / s)``: ``V_b`` the translation of the body
+``x_b = (V_b / s, Omega_b * ell_b / s)``: ``V_b`` the translation of the body
 point at its reference point ``c_b`` (the centroid of its joint centres),
 ``Omega_b`` its rotation vector. ``s`` is a displacement scale (the largest
-play), ``ell`` a length scale of the mechanism. Working at ``c_b`` rather than
-at the global origin keeps far-away parts well conditioned; results are
-reported at the global origin.
+play), ``ell_b`` the body's own length (how far its joints are from ``c_b``).
+Working at ``c_b``, with each body's own lever, keeps far-away and small
+parts of a large mechanism well conditioned; results are reported at the
+global origin. ``ell``, a length of the whole mechanism, weighs rotations
+against translations in the least-norm metric.
 
 Everything the solver needs is linear in ``x``:
 
@@ -24,10 +26,13 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from . import linalg
 from .geometry import FloatArray, cross, skew
 from .joints import Contact, Joint
+from .linalg import Matrix
 from .model import Load, Model
 
 IntArray = NDArray[np.intp]
@@ -97,6 +102,31 @@ class ContactRows:
         return out
 
 
+def _rows_matrix(blocks: Sequence[tuple[IntArray, FloatArray]], m: int, sparse: bool) -> Matrix:
+    """Rows given as (columns, block) pairs, stacked: dense or sparse (CSR)."""
+    n_rows = sum(block.shape[0] for _, block in blocks)
+    if not sparse:
+        out = np.zeros((n_rows, m))
+        at = 0
+        for cols, block in blocks:
+            np.add.at(out[at : at + block.shape[0]].T, cols, block.T)
+            at += block.shape[0]
+        return out
+    rows, cols_all, vals = [], [], []
+    at = 0
+    for cols, block in blocks:
+        k = block.shape[0]
+        rows.append(np.repeat(np.arange(at, at + k), len(cols)))
+        cols_all.append(np.tile(cols, k))
+        vals.append(block.ravel())
+        at += k
+    if not rows:
+        return sp.csr_matrix((0, m))
+    return sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols_all))), shape=(n_rows, m)
+    )
+
+
 @dataclass(frozen=True)
 class BallStack:
     """The clearance cones ``|A_i x| + B_i x <= r_i`` stacked for vectorized work.
@@ -109,22 +139,44 @@ class BallStack:
     ``A_i^T f_i + lam_i B_i`` (see ``adjoint``).
     """
 
-    A: FloatArray  # (sum k, m)
+    A: Matrix  # (sum k, m), dense or sparse (see ``linalg``)
     start: IntArray  # (n,) first row of each cone
     k: IntArray  # (n,) rows per cone
     r: FloatArray  # (n,)
     spring: FloatArray  # (n,) contact stiffness N/mm, 0 for a hard limit
-    B: FloatArray  # (n, m)
+    B: Matrix  # (n, m)
 
     @staticmethod
-    def of(balls: Sequence[ContactRows], m: int) -> BallStack:
+    def of(balls: Sequence[ContactRows], m: int, sparse: bool = False) -> BallStack:
         k = np.array([c.k for c in balls], dtype=np.intp)
         start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
-        A = np.vstack([c.dense() for c in balls]) if balls else np.zeros((0, m))
+        A = _rows_matrix([(c.cols, c.block) for c in balls], m, sparse)
         r = np.array([c.radius for c in balls], dtype=float)
         spring = np.array([c.stiffness for c in balls], dtype=float)
-        B = np.array([c.dense_offset() for c in balls]).reshape(len(balls), m)
+        zero = np.zeros((1, 0))
+        B = _rows_matrix(
+            [
+                (c.cols, c.offset_block[None, :])
+                if c.offset_block is not None
+                else (c.cols[:0], zero)
+                for c in balls
+            ],
+            m,
+            sparse,
+        )
         return BallStack(A, start, k, r, spring, B)
+
+    @property
+    def m(self) -> int:
+        return int(self.A.shape[1])
+
+    def cone_rows(self, i: int) -> Matrix:
+        """The rows ``A_i`` of cone i."""
+        return self.A[self.start[i] : self.start[i] + self.k[i]]
+
+    def face_rows(self, i: int) -> Matrix:
+        """``(A_i; B_i)``: the rows that hold when cone i rests flat at its apex."""
+        return linalg.vstack([self.cone_rows(i), self.B[i : i + 1]], self.m)
 
     def rows_of(self, which: Sequence[int] | IntArray) -> IntArray:
         """Rows of ``A`` (and entries of ``f``) of the cones ``which``."""
@@ -147,7 +199,17 @@ class BallStack:
     @cached_property
     def has_offset(self) -> NDArray[np.bool_]:
         """(n,): the cone has a face row ``B_i`` (a one-sided limit or a tilting face)."""
-        return np.asarray(np.any(self.B != 0.0, axis=1))
+        return np.asarray(linalg.nonzero_rows(self.B), dtype=bool)
+
+    @cached_property
+    def segment_matrix(self) -> sp.csr_matrix:
+        """(sum k, n) sparse indicator of each row's cone."""
+        n_rows = int(np.sum(self.k))
+        rows = np.arange(n_rows)
+        return sp.csr_matrix(
+            (np.ones(n_rows), (rows, np.repeat(np.arange(len(self.k)), self.k))),
+            shape=(n_rows, len(self.k)),
+        )
 
     @cached_property
     def _segments(self) -> FloatArray | None:
@@ -158,6 +220,13 @@ class BallStack:
         S = np.zeros((int(np.sum(self.k)), len(self.k)))
         S[np.arange(S.shape[0]), np.repeat(np.arange(len(self.k)), self.k)] = 1.0
         return S
+
+    @cached_property
+    def cone_size(self) -> FloatArray:
+        """(n,): ``|A_i|_F + |B_i|``, which bounds the generalized force of cone
+        i per unit of its multiplier (to weigh a balance of forces)."""
+        a2 = linalg.row_norms(self.A) ** 2
+        return np.asarray(np.sqrt(self.segment_sum(a2)) + linalg.row_norms(self.B))
 
     def segment_sum(self, w: FloatArray) -> FloatArray:
         """Per cone, the sum of ``w`` over its rows (last axis)."""
@@ -170,17 +239,17 @@ class BallStack:
 
     def norms(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(A @ x, |A_i x|)`` for one x (m,) or a batch of rows (B, m)."""
-        v = x @ self.A.T
+        v = linalg.times(self.A, x)
         return v, np.sqrt(self.segment_sum(v * v))
 
     def levels(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``(A @ x, |A_i x|, |A_i x| + B_i x)``: each cone's level, to compare with r."""
         v, rho = self.norms(x)
-        return v, rho, rho + x @ self.B.T
+        return v, rho, rho + linalg.times(self.B, x)
 
     def adjoint(self, f: FloatArray, lam: FloatArray) -> FloatArray:
         """``sum_i A_i^T f_i + lam_i B_i``: the work of the contact forces (rows batched)."""
-        return f @ self.A + lam @ self.B
+        return linalg.adjoint(self.A, f) + linalg.adjoint(self.B, lam)
 
     def surface_forces(self, v: FloatArray, rho: FloatArray, lam: FloatArray) -> FloatArray:
         """``f_i = lam_i A_i x / |A_i x|`` (0 where ``A_i x = 0``): the force vectors
@@ -203,14 +272,20 @@ class Assembly:
     body_names: tuple[str, ...]  # moving bodies, in unknown-block order
     body_ref: FloatArray  # (n, 3) reference point c_b of each moving body (mm)
     s: float  # mm per unit of scaled translation
-    ell: float  # mm: rotation lever of the scaling and of the least-norm metric
+    ell: float  # mm: rotation lever of the least-norm metric (the whole mechanism)
     G: tuple[JointMap, ...]  # per joint: scaled x -> (t mm, w rad) in joint frame
     contacts: tuple[ContactRows, ...]
     g: FloatArray  # (m,) work of the loads per unit scaled x (N*mm)
+    turn: FloatArray  # (n,) rad per unit of each body's scaled rotation: s / ell_b
 
     @property
     def m(self) -> int:
         return 6 * len(self.body_names)
+
+    @property
+    def sparse(self) -> bool:
+        """Whether the matrices are sparse (a large mechanism; see ``linalg``)."""
+        return self.m > linalg.SPARSE_FROM
 
     @cached_property
     def balls(self) -> tuple[ContactRows, ...]:
@@ -235,6 +310,21 @@ class Assembly:
             M[np.ix_(G.cols, G.cols)] += wb.T @ wb
         return M
 
+    @cached_property
+    def metric_matrix(self) -> Matrix:
+        """The least-norm metric, sparse for a large mechanism (else ``metric``)."""
+        if not self.sparse:
+            return self.metric
+        w2 = self._metric_weights**2
+        parts = []
+        for G in self.G:
+            wb = w2[:, None] * G.block
+            block = G.block.T @ wb
+            rows = np.repeat(G.cols, len(G.cols))
+            parts.append((rows, np.tile(G.cols, len(G.cols)), block.ravel()))
+        rows, cols, vals = (np.concatenate(p) for p in zip(*parts, strict=True))
+        return sp.csr_matrix((vals, (rows, cols)), shape=(self.m, self.m))
+
     @property
     def _metric_weights(self) -> FloatArray:
         """Weights of (t, w) in the metric: |t/s|^2 + |w * ell / s|^2."""
@@ -257,7 +347,7 @@ class Assembly:
         for load in loads:
             if load.body not in self.body_index:
                 raise ValueError(f"load on body {load.body!r}, which is not a moving body")
-        return load_work(loads, self.body_index, self.body_ref, self.s, self.ell)
+        return load_work(loads, self.body_index, self.body_ref, self.s, self.turn)
 
     def wrench_work(self, body: str, at: Sequence[float] | None = None) -> FloatArray:
         """The (m, 6) map from a wrench ``(force N, torque N*mm)`` acting on
@@ -266,34 +356,35 @@ class Assembly:
         i = self.body_index[body]
         W = np.zeros((self.m, 6))
         W[6 * i : 6 * i + 3, :3] = self.s * np.eye(3)
-        W[6 * i + 3 : 6 * i + 6, 3:] = (self.s / self.ell) * np.eye(3)
+        W[6 * i + 3 : 6 * i + 6, 3:] = self.turn[i] * np.eye(3)
         if at is not None:
             lever = np.asarray(at, dtype=float) - self.body_ref[i]
-            W[6 * i + 3 : 6 * i + 6, :3] = (self.s / self.ell) * skew(lever)
+            W[6 * i + 3 : 6 * i + 6, :3] = self.turn[i] * skew(lever)
         return W
 
     @cached_property
     def stack(self) -> BallStack:
         """All clearance cones stacked into dense arrays (see ``BallStack``)."""
-        return BallStack.of(self.balls, self.m)
+        return BallStack.of(self.balls, self.m, self.sparse)
 
     @cached_property
-    def E(self) -> FloatArray:
-        """Equality rows (rigid joints and zero-clearance contacts), dense."""
-        if not self.fixed:
-            return np.zeros((0, self.m))
-        return np.vstack([c.dense() for c in self.fixed])
+    def E(self) -> Matrix:
+        """Equality rows (rigid joints and zero-clearance contacts)."""
+        return _rows_matrix([(c.cols, c.block) for c in self.fixed], self.m, self.sparse)
 
     def scale_matrix(self) -> FloatArray:
         """Physical (V_c mm, Omega rad) per body from scaled x: ``x_phys = D * x``."""
-        per_body = np.r_[np.full(3, self.s), np.full(3, self.s / self.ell)]
-        return np.tile(per_body, len(self.body_names))
+        n = len(self.body_names)
+        return np.column_stack([np.full((n, 3), self.s), np.repeat(self.turn[:, None], 3, 1)]).ravel()
 
     def body_motion(self, x: FloatArray, i: int) -> tuple[FloatArray, FloatArray]:
-        """(rotation rad, translation at global origin mm) of moving body ``i``."""
-        v_ref = self.s * x[6 * i : 6 * i + 3]
-        omega = (self.s / self.ell) * x[6 * i + 3 : 6 * i + 6]
-        return omega, v_ref - cross(omega, self.body_ref[i])
+        """(rotation rad, translation at global origin mm) of moving body ``i``
+        (for one x, or for each row of a batch)."""
+        v_ref = self.s * x[..., 6 * i : 6 * i + 3]
+        omega = self.turn[i] * x[..., 6 * i + 3 : 6 * i + 6]
+        if x.ndim == 1:
+            return omega, v_ref - cross(omega, self.body_ref[i])
+        return omega, v_ref - np.cross(omega, self.body_ref[i])
 
 
 def assemble(model: Model) -> Assembly:
@@ -320,11 +411,21 @@ def assemble(model: Model) -> Assembly:
     if s == 0.0:  # every joint is tight: any length of the model will do
         s = max([spread, *sizes, 1.0])
     ell = max([spread, *sizes, s])
+    # each body's own lever: its farthest joint centre, or its largest joint
+    lever = np.full(n, s)
+    has_play = {id(j) for j in with_play}
+    for joint in model.joints:
+        for name in joint.between:
+            if name in index:
+                i = index[name]
+                far = float(np.linalg.norm(joint.centre - body_ref[i]))
+                lever[i] = max(lever[i], far, joint.size if id(joint) in has_play else 0.0)
+    turn = s / lever
 
     G_list: list[JointMap] = []
     contacts: list[ContactRows] = []
     for jdx, joint in enumerate(model.joints):
-        G = _joint_map(joint, index, body_ref, s, ell, m)
+        G = _joint_map(joint, index, body_ref, s, turn, m)
         G_list.append(G)
         for cdx, contact in enumerate(joint.cones):
             block = (contact.rows / s) @ G.block
@@ -334,8 +435,10 @@ def assemble(model: Model) -> Assembly:
                 ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m, spring, offset)
             )
 
-    g = load_work(model.loads_of(None), index, body_ref, s, ell)
-    return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g)
+    g = load_work(model.loads_of(None), index, body_ref, s, turn)
+    return Assembly(
+        model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g, turn
+    )
 
 
 def load_work(
@@ -343,7 +446,7 @@ def load_work(
     index: dict[str, int],
     body_ref: FloatArray,
     s: float,
-    ell: float,
+    turn: FloatArray,
 ) -> FloatArray:
     """The loads' work per unit of scaled unknowns (N*mm): ``g`` with V = -g @ x."""
     g = np.zeros(6 * len(body_ref))
@@ -354,12 +457,12 @@ def load_work(
         if load.at is not None:
             moment += cross(np.array(load.at) - body_ref[i], force)
         g[6 * i : 6 * i + 3] += s * force
-        g[6 * i + 3 : 6 * i + 6] += (s / ell) * moment
+        g[6 * i + 3 : 6 * i + 6] += turn[i] * moment
     return g
 
 
 def _joint_map(
-    joint: Joint, index: dict[str, int], body_ref: FloatArray, s: float, ell: float, m: int
+    joint: Joint, index: dict[str, int], body_ref: FloatArray, s: float, turn: FloatArray, m: int
 ) -> JointMap:
     """The map from scaled unknowns to the relative torsor of b w.r.t. a at the joint."""
     R_joint_world = joint.R_world_joint.T
@@ -372,8 +475,8 @@ def _joint_map(
         lever = joint.centre - body_ref[i]
         block = np.zeros((6, 6))
         block[:3, :3] = s * R_joint_world
-        block[:3, 3:] = -(s / ell) * R_joint_world @ skew(lever)
-        block[3:, 3:] = (s / ell) * R_joint_world
+        block[:3, 3:] = -turn[i] * R_joint_world @ skew(lever)
+        block[3:, 3:] = turn[i] * R_joint_world
         cols.append(np.arange(6 * i, 6 * i + 6))
         blocks.append(sign * block)
     return JointMap(np.concatenate(cols), np.hstack(blocks), m)

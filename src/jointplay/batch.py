@@ -68,10 +68,9 @@ class BatchSolution:
         if name not in self.asm.body_index:
             return out  # a ground body
         i = self.asm.body_index[name]
-        s, ell = self.asm.s, self.asm.ell
-        omega = (s / ell) * self.x[:, 6 * i + 3 : 6 * i + 6]
+        omega, v_origin = self.asm.body_motion(self.x, i)
         out[:, 3:] = omega
-        out[:, :3] = s * self.x[:, 6 * i : 6 * i + 3] - np.cross(omega, self.asm.body_ref[i])
+        out[:, :3] = v_origin
         return out
 
     def gap_used(self) -> FloatArray:
@@ -319,9 +318,7 @@ def _certificates(
         residual_vec = g_hat.copy()
     if len(ws.E):
         feas = np.maximum(feas, np.max(np.abs(x @ ws.E.T), axis=1))
-    Q = ws._rigid_basis
-    if Q.shape[1]:
-        residual_vec -= (residual_vec @ Q) @ Q.T
-    residual = np.linalg.norm(residual_vec, axis=1)
+    residual_vec = ws._rigid_residual(residual_vec)
+    residual = np.linalg.norm(residual_vec, axis=1) / ws._balance_scale(lam)
     residual[~np.any(g_hat, axis=1)] = 0.0
     return feas, residual

@@ -128,7 +128,7 @@ def _x_of(asm: Assembly, result: Result) -> FloatArray:
     for i, name in enumerate(asm.body_names):
         body = result.bodies[name]
         x[6 * i : 6 * i + 3] = body.displacement_of(asm.body_ref[i]) / asm.s
-        x[6 * i + 3 : 6 * i + 6] = body.rotation * asm.ell / asm.s
+        x[6 * i + 3 : 6 * i + 6] = body.rotation / asm.turn[i]
     return x
 
 
@@ -168,7 +168,7 @@ def _virtual_work(asm: Assembly, x: FloatArray, loads: Sequence[Load]) -> FloatA
     g = np.zeros(asm.m)
     for load in loads:
         i = asm.body_index[load.body]
-        omega = (asm.s / asm.ell) * x[6 * i + 3 : 6 * i + 6]
+        omega = asm.turn[i] * x[6 * i + 3 : 6 * i + 6]
         R = rotation_matrix(omega)
         moment = np.zeros(3) if load.torque is None else np.array(load.torque, dtype=float)
         if load.force is not None:
@@ -176,7 +176,7 @@ def _virtual_work(asm: Assembly, x: FloatArray, loads: Sequence[Load]) -> FloatA
             at = np.array(load.at) if load.at is not None else asm.body_ref[i]
             g[6 * i : 6 * i + 3] += asm.s * force
             moment = moment + cross(R @ (at - asm.body_ref[i]), force)
-        g[6 * i + 3 : 6 * i + 6] += (asm.s / asm.ell) * left_jacobian(omega).T @ moment
+        g[6 * i + 3 : 6 * i + 6] += asm.turn[i] * left_jacobian(omega).T @ moment
     return g
 
 
@@ -192,8 +192,8 @@ def _twist_map(asm: Assembly, x: FloatArray, place: dict[str, Placement], jdx: i
         if name not in asm.body_index:
             continue
         i = asm.body_index[name]
-        omega = (asm.s / asm.ell) * x[6 * i + 3 : 6 * i + 6]
-        turn = (asm.s / asm.ell) * left_jacobian(omega)  # dtheta per unit scaled x
+        omega = asm.turn[i] * x[6 * i + 3 : 6 * i + 6]
+        turn = asm.turn[i] * left_jacobian(omega)  # dtheta per unit scaled x
         lever = O_a - place[name](asm.body_ref[i])
         T[:3, 6 * i : 6 * i + 3] = sign * R_ga.T * asm.s
         T[:3, 6 * i + 3 : 6 * i + 6] = sign * R_ga.T @ (-skew(lever) @ turn)

@@ -91,7 +91,7 @@ def placements(asm: Assembly, x: FloatArray) -> dict[str, Placement]:
     out = {}
     for i, name in enumerate(asm.body_names):
         v_ref = asm.s * x[6 * i : 6 * i + 3]
-        omega = (asm.s / asm.ell) * x[6 * i + 3 : 6 * i + 6]
+        omega = asm.turn[i] * x[6 * i + 3 : 6 * i + 6]
         R = rotation_matrix(omega)
         c = asm.body_ref[i]
         out[name] = Placement(R, c + v_ref - R @ c)

@@ -35,7 +35,7 @@ class Certificate:
     ``feasibility_mm``: the largest amount by which a contact goes past its
     clearance (0 when feasible). ``equilibrium_residual``: the imbalance of
     loads and contact forces in generalized coordinates, relative to the
-    loads. ``min_force``: the smallest contact multiplier (must not be
+    largest of them. ``min_force``: the smallest contact multiplier (must not be
     negative). ``method``: ``polished`` (KKT equations solved to machine
     precision), ``least-norm face`` (a tie resolved by a second program),
     ``interior-point`` (the cone solver's own answer), or ``no load``.
@@ -149,7 +149,8 @@ class Result:
     points: dict[str, PointResult]
     certificate: Certificate
     #: Worst imbalance of loads and contact forces over the moving bodies,
-    #: computed in global axes from the reported forces (relative to the loads).
+    #: computed in global axes from the reported forces (relative to the
+    #: largest force in the balance: a load, or a joint's reaction).
     equilibrium_residual: float
     solve_time: float  # s
     #: Describes the free motions that no load drives (reported as 0); called lazily.
@@ -329,7 +330,8 @@ def equilibrium_residual(
 ) -> float:
     """The worst imbalance of each moving body, in global axes: the applied
     loads plus the reactions of its joints, forces relative to the largest
-    load and moments relative to it times the length scale.
+    force in the balance (a load or a joint's reaction) and moments relative
+    to it times the length scale.
 
     ``place``: the bodies' exact placements (an answer with exact rotations);
     the loads then act at their displaced points, and each joint's reaction
@@ -358,6 +360,11 @@ def equilibrium_residual(
         a_place = place.get(jr.between[0], IDENTITY)
         R = a_place.R @ jr.R_world_joint
         force = R @ jr.reaction_force
+        scale = max(
+            scale,
+            float(np.linalg.norm(jr.reaction_force)),
+            float(np.linalg.norm(jr.reaction_moment)) / asm.ell,
+        )
         moment_centre = R @ jr.reaction_moment
         centre = a_place(jr.centre)
         for sign, name in ((-1.0, jr.between[0]), (1.0, jr.between[1])):

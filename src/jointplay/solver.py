@@ -29,9 +29,11 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
+from . import linalg
 from .assembly import Assembly, BallStack, IntArray, assemble
 from .errors import SolverError, UnboundedMechanismError
 from .geometry import FloatArray, describe_motion
+from .linalg import Matrix
 from .model import Load, Model
 from .result import Certificate, Result, build_result, describe_free_motions
 
@@ -57,7 +59,8 @@ class SolverSettings:
     #: that answer does not certify as the unique optimum.
     warm_start: bool = True
     #: Certificate thresholds: feasibility as a fraction of the largest play,
-    #: equilibrium residual as a fraction of the load.
+    #: equilibrium residual as a fraction of the largest force in the balance
+    #: (the loads, or a contact force if larger).
     feasibility_tolerance: float = 1e-9
     equilibrium_tolerance: float = 1e-8
 
@@ -94,11 +97,11 @@ class _Face:
 
     key: _FaceKey
     stack: BallStack  # the surface cones
-    L: FloatArray
+    L: Matrix
     rhs: FloatArray
     lam_rows: IntArray
     f_rows: IntArray
-    Eq: FloatArray  # the workspace's equalities, then L
+    Eq: Matrix  # the workspace's equalities, then L
     e: FloatArray
     surface_rows: IntArray  # rows of the full stack's A (and f) of the surface cones
     linear_rows: IntArray  # ... and of the linear cones
@@ -144,12 +147,13 @@ class Workspace:
         self.balls = assembly.balls
         self.stack = assembly.stack
         self.E = assembly.E
+        self.sparse = assembly.sparse
         self.N = self._free_motions()
         self.K = assembly.metric_times(self.N).T
-        self.Eq = np.vstack([self.E, self.K])
+        self.Eq = linalg.vstack([self.E, self.K], self.m)
         largest = float(np.max(self.stack.r)) if len(self.stack.r) else 0.0
         self._max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
-        self._rigid_basis = _range_basis(self.E.T)
+        self._rigid_basis = None if self.sparse else _range_basis(self.E.T)
         self._phase1_data: _ConeProgram | None = None
         self._faces: dict[_FaceKey, _Face] = {}
         self._last: _Point | None = None
@@ -165,13 +169,28 @@ class Workspace:
 
     # -- free motions -------------------------------------------------------
     def _free_motions(self) -> FloatArray:
-        C = np.vstack([self.stack.A, self.stack.B[self.stack.has_offset], self.E])
-        if C.shape[0] == 0:
-            return np.eye(self.m)
-        _, sv, Vt = np.linalg.svd(C, full_matrices=True)
-        tol = self.settings.free_motion_rcond * (sv[0] if sv.size else 0.0)
-        rank = int(np.sum(sv > tol)) if sv.size and sv[0] > 0 else 0
-        return np.ascontiguousarray(Vt[rank:].T)
+        stack = self.stack
+        C = linalg.vstack([stack.A, stack.B[np.flatnonzero(stack.has_offset)], self.E], self.m)
+        return linalg.null_space(C, self.m, self.settings.free_motion_rcond)
+
+    def _balance_scale(self, lam: FloatArray) -> FloatArray:
+        """The largest force in the balance (scaled; the unit loads count as 1),
+        per row of ``lam``: what an equilibrium residual is relative to, since
+        round-off grows with the contact forces (long levers make them large)."""
+        size = np.abs(lam) * self.stack.cone_size
+        return np.maximum(1.0, np.max(size, axis=-1, initial=0.0))
+
+    def _rigid_residual(self, rest: FloatArray) -> FloatArray:
+        """What rigid joints cannot carry of the generalized forces ``rest``
+        (one per row): the residual of their least-squares share."""
+        if not self.E.shape[0]:
+            return rest
+        if self._rigid_basis is not None:
+            Q = self._rigid_basis
+            return rest - (rest @ Q) @ Q.T
+        rows = np.atleast_2d(rest)
+        out = np.array([r - linalg.adjoint(self.E, linalg.lstsq(self.E.T, r)) for r in rows])
+        return out if rest.ndim == 2 else out[0]
 
     def _check_driven(self, g: FloatArray) -> None:
         if self.N.shape[1] == 0:
@@ -188,22 +207,34 @@ class Workspace:
         moving bodies together, along a global axis; else the solver's own
         certificate of unboundedness (``fallback``)."""
         m, n = self.m, len(self.asm.body_names)
-        candidates: list[FloatArray] = []
-        for i in range(n):  # each body alone: a translation, or a turn about its reference
-            candidates.extend(np.eye(m)[6 * i : 6 * i + 6])
-        if n > 1:  # all together: a translation (a common turn has no obvious centre)
-            candidates.extend(np.tile(np.eye(6)[:3], n) / np.sqrt(n))
-        candidates += [-d for d in candidates]
+        stack = self.stack
+        # each body alone (a translation, or a turn about its reference): unit
+        # vectors, whose levels are the columns' norms per cone plus B
+        S = stack.segment_matrix  # (rows, cones)
+        if self.sparse:
+            rho = sp.csr_matrix(S.T @ stack.A.multiply(stack.A)).sqrt()  # (cones, m)
+        else:
+            rho = np.sqrt(S.T @ stack.A**2)
+        e_cols = _column_max(abs(self.E), m)
         best, best_work = fallback[:m], 0.0
-        for d in candidates:
-            work = float(g @ d)
-            if work <= best_work:
-                continue
-            _, _, level = self.stack.levels(d)
-            held = len(level) and float(np.max(level)) > 1e-9
-            if held or (len(self.E) and float(np.max(np.abs(self.E @ d))) > 1e-9):
-                continue
-            best, best_work = d, work
+        for sign in (1.0, -1.0):
+            held = _column_max(rho + sign * stack.B, m) > 1e-9
+            work = sign * g
+            free = ~held & (e_cols <= 1e-9) & (work > best_work)
+            if np.any(free):
+                j = int(np.flatnonzero(free)[np.argmax(work[free])])
+                best, best_work = sign * np.eye(1, m, j)[0], float(work[j])
+        if n > 1:  # all together: a translation (a common turn has no obvious centre)
+            for d in [*(np.tile(np.eye(6)[a], n) / np.sqrt(n) for a in range(3))]:
+                for sd in (d, -d):
+                    work = float(g @ sd)
+                    if work <= best_work:
+                        continue
+                    _, _, level = stack.levels(sd)
+                    held = len(level) and float(np.max(level)) > 1e-9
+                    if held or (self.E.shape[0] and np.max(np.abs(self.E @ sd)) > 1e-9):
+                        continue
+                    best, best_work = sd, work
         return best
 
     def free_motions(self) -> tuple[str, ...]:
@@ -253,10 +284,10 @@ class Workspace:
 
         Statically indeterminate rigid joints share the load in the least-squares way.
         """
-        if not len(self.E):
+        if not self.E.shape[0]:
             return np.zeros(0)
         rest = g_hat - self.stack.adjoint(point.f, point.lam)
-        return np.asarray(np.linalg.lstsq(self.E.T, rest, rcond=None)[0])
+        return linalg.lstsq(self.E.T, rest)
 
     def solve_batch(self, work: FloatArray) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of
@@ -310,7 +341,7 @@ class Workspace:
             return self._phase1_compliant(g_hat)
         if self._phase1_data is None:
             self._phase1_data = self._cone_program(
-                None, self.Eq, np.zeros(len(self.Eq)), self.stack
+                None, self.Eq, np.zeros(self.Eq.shape[0]), self.stack
             )
         prog = self._phase1_data
         sol = self._clarabel(prog, -g_hat)
@@ -325,55 +356,73 @@ class Workspace:
         soft = np.flatnonzero(self.stack.spring > 0)
         m, nc = self.m, len(soft)
         if self._compliant_data is None:
-            base = self._cone_program(None, self.Eq, np.zeros(len(self.Eq)), self.stack)
-            A = np.zeros((base.A.shape[0] + nc, m + nc))
-            A[: base.A.shape[0], :m] = base.A.toarray()
-            A[base.soc_first[soft], m + np.arange(nc)] = -1.0  # cone radius r_i + p_i
-            A[base.A.shape[0] + np.arange(nc), m + np.arange(nc)] = -1.0  # p_i >= 0
+            base = self._cone_program(None, self.Eq, np.zeros(self.Eq.shape[0]), self.stack)
+            n_base = base.A.shape[0]
+            extra = sp.csr_matrix(
+                (
+                    -np.ones(2 * nc),
+                    (
+                        np.r_[base.soc_first[soft], n_base + np.arange(nc)],
+                        np.r_[np.arange(nc), np.arange(nc)],
+                    ),
+                ),
+                shape=(n_base + nc, nc),
+            )  # cone radius r_i + p_i, and p_i >= 0
+            A = sp.hstack([sp.vstack([base.A, sp.csr_matrix((nc, m))]), extra], format="csc")
             b = np.concatenate([base.b, np.zeros(nc)])
             cones = [*base.cones, clarabel.NonnegativeConeT(nc)]
             self._compliant_data = _ConeProgram(
-                base.P, _csc(A), b, cones, base.settings, base.soc_first, base.f_rows
+                base.P, A, b, cones, base.settings, base.soc_first, base.f_rows
             )
         prog = self._compliant_data
-        P = np.zeros((m + nc, m + nc))
-        P[m + np.arange(nc), m + np.arange(nc)] = 1.0 / self.sigma[soft]
-        prog = _ConeProgram(
-            _csc(P), prog.A, prog.b, prog.cones, prog.settings, prog.soc_first, prog.f_rows
+        P = sp.csc_matrix(
+            (1.0 / self.sigma[soft], (m + np.arange(nc), m + np.arange(nc))), shape=(m + nc, m + nc)
         )
+        prog = _ConeProgram(P, prog.A, prog.b, prog.cones, prog.settings, prog.soc_first, prog.f_rows)
         sol = self._clarabel(prog, np.concatenate([-g_hat, np.zeros(nc)]))
         z = np.asarray(sol.z)
         x = np.asarray(sol.x)[:m]
         return _Point(x, z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations)
 
     def _cone_program(
-        self, P: FloatArray | None, Eq: FloatArray, e: FloatArray, stack: BallStack
+        self, P: Matrix | None, Eq: Matrix, e: FloatArray, stack: BallStack
     ) -> _ConeProgram:
         """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, -A_i x)``
         per contact (a one-sided limit, with no rows, is a non-negative slack).
         Its dual is ``(lam_i, f_i)``."""
         n_eq, n_cones, n_rows = Eq.shape[0], len(stack.k), stack.A.shape[0]
-        A = np.zeros((n_eq + n_rows + n_cones, self.m))
-        b = np.zeros(A.shape[0])
-        A[:n_eq] = Eq
+        n_all = n_eq + n_rows + n_cones
+        b = np.zeros(n_all)
         b[:n_eq] = e
         soc_first = n_eq + stack.start + np.arange(n_cones)
         ball_rows = n_eq + np.arange(n_rows) + np.repeat(np.arange(1, n_cones + 1), stack.k)
-        A[ball_rows] = stack.A
-        A[soc_first] = stack.B
         b[soc_first] = stack.r
+        order = np.empty(n_all, dtype=np.intp)  # row of the program -> row of (Eq; A; B)
+        order[:n_eq] = np.arange(n_eq)
+        order[ball_rows] = n_eq + np.arange(n_rows)
+        order[soc_first] = n_eq + n_rows + np.arange(n_cones)
+        stacked = linalg.vstack([Eq, stack.A, stack.B], self.m)
+        if linalg.is_sparse(stacked):
+            A = sp.csc_matrix(sp.csr_matrix(stacked)[order])
+        else:
+            A = _csc(np.asarray(stacked)[order]) if n_all else _csc(np.zeros((0, self.m)))
         cones: list[Any] = [clarabel.ZeroConeT(n_eq)] if n_eq else []
         cones += [
             clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
             for k in stack.k
         ]
-        P_upper = _csc(np.zeros((self.m, self.m)) if P is None else np.triu(P))
+        if P is None:
+            P_upper = sp.csc_matrix((self.m, self.m))
+        elif linalg.is_sparse(P):
+            P_upper = sp.csc_matrix(sp.triu(P))
+        else:
+            P_upper = _csc(np.triu(P))
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         tol = self.settings.ipm_tolerance
         settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
         settings.max_iter = self.settings.max_iterations
-        return _ConeProgram(P_upper, _csc(A), b, cones, settings, soc_first, ball_rows)
+        return _ConeProgram(P_upper, A, b, cones, settings, soc_first, ball_rows)
 
     def _clarabel(self, prog: _ConeProgram, q: FloatArray) -> Any:
         sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
@@ -397,16 +446,20 @@ class Workspace:
             sub = stack.take(surface)
             lin = stack.take(linear)
             k = lin.k
-            L = np.zeros((int(np.sum(k)) + len(k), self.m))
-            rhs = np.zeros(L.shape[0])
+            n_l, n_f = int(np.sum(k)) + len(k), int(np.sum(k))
+            rhs = np.zeros(n_l)
             first = (lin.start + np.arange(len(k))).astype(np.intp)  # each cone's A rows, then B
             lam_rows = first + k
             f_rows = lin.rows_of(np.arange(len(k))) + np.repeat(np.arange(len(k)), k)
-            L[f_rows] = lin.A
-            L[lam_rows] = lin.B
+            order = np.empty(n_l, dtype=np.intp)  # row of L -> row of (A; B)
+            order[f_rows] = np.arange(n_f)
+            order[lam_rows] = n_f + np.arange(len(k))
+            L = linalg.vstack([lin.A, lin.B], self.m)[order]
             rhs[lam_rows] = lin.r
             tilting = bool(np.any(sub.has_offset & (sub.k > 0)))
-            determined = None if tilting else self._determined_rows(np.vstack([L, sub.A]))
+            determined = (
+                None if tilting else self._determined_rows(linalg.vstack([L, sub.A], self.m))
+            )
             face = _Face(
                 key,
                 sub,
@@ -414,8 +467,8 @@ class Workspace:
                 rhs,
                 lam_rows,
                 f_rows,
-                np.vstack([self.Eq, L]),
-                np.concatenate([np.zeros(len(self.Eq)), rhs]),
+                linalg.vstack([self.Eq, L], self.m),
+                np.concatenate([np.zeros(self.Eq.shape[0]), rhs]),
                 stack.rows_of(surface),
                 stack.rows_of(linear),
                 determined,
@@ -423,9 +476,9 @@ class Workspace:
             self._faces[key] = face
         return face
 
-    def _determined_rows(self, rows: FloatArray) -> bool:
-        all_rows = np.vstack([self.Eq, rows])
-        return bool(all_rows.shape[0]) and _rank(all_rows) == self.m
+    def _determined_rows(self, rows: Matrix) -> bool:
+        all_rows = linalg.vstack([self.Eq, rows], self.m)
+        return linalg.full_column_rank(all_rows, self.m)
 
     def _determined(self, face: _Face, x: FloatArray) -> bool:
         """Whether the optimum on ``face`` is unique. On a tilting face
@@ -438,16 +491,15 @@ class Workspace:
         v, rho = sub.norms(x)
         rows = [face.L]
         for i in range(len(sub.k)):
-            Ai = sub.A[sub.start[i] : sub.start[i] + sub.k[i]]
             if not sub.has_offset[i]:
-                rows.append(Ai)
+                rows.append(sub.cone_rows(i))
                 continue
             if rho[i] == 0.0:
                 return False
             w = np.append(v[sub.start[i] : sub.start[i] + sub.k[i]] / rho[i], -1.0) / np.sqrt(2)
-            M = np.vstack([Ai, sub.B[i]])
+            M = linalg.dense(sub.face_rows(i))
             rows.append(M - np.outer(w, w @ M))
-        return self._determined_rows(np.vstack(rows))
+        return self._determined_rows(linalg.vstack(rows, self.m))
 
     def _newton_on(
         self,
@@ -463,14 +515,48 @@ class Workspace:
         certified, unique optimum: feasible, forces balancing the loads, every
         active force strictly positive (strictly inside its cone for a face at
         its apex), on a face that pins the position down."""
+        point = self._kkt_point(g_hat, key, x0, lam0, iterations, method, max_iter)
+        if point is None or self._weak_forces(point, key).size:
+            return None
+        point.certificate = self._certify(g_hat, point)
+        return point if point.certificate.certified else None
+
+    def _weak_forces(self, point: _Point, key: _FaceKey) -> IntArray:
+        """The cones of ``key`` whose force is not strictly positive (or, at
+        the apex of a face, not strictly inside its cone)."""
+        surface, linear = key
+        both = np.array([*surface, *linear], dtype=np.intp)
+        lam_a = point.lam[both]
+        if not len(lam_a):
+            return both
+        weak = lam_a <= STRICT * float(np.max(lam_a))
+        if linear:
+            lin = self.stack.take(linear)
+            f_norm = np.sqrt(lin.segment_sum(point.f[self.stack.rows_of(linear)] ** 2))
+            at_apex = lin.k > 0
+            weak[len(surface) :] |= at_apex & (f_norm >= (1.0 - STRICT) * point.lam[list(linear)])
+        return both[weak]
+
+    def _kkt_point(
+        self,
+        g_hat: FloatArray,
+        key: _FaceKey,
+        x0: FloatArray,
+        lam0: FloatArray,
+        iterations: int,
+        method: str,
+        max_iter: int,
+    ) -> _Point | None:
+        """The solution of the KKT equations of the active set ``key``, if
+        Newton converges and the face pins the position down (forces unchecked)."""
         face = self._face(key)
         if not self._determined(face, x0):
             return None
         surface, linear = key
-        ne = len(self.Eq)
+        ne = self.Eq.shape[0]
         eq_soft = None
         if linear and np.any(self.sigma[list(linear)]):
-            eq_soft = np.zeros(len(face.Eq))
+            eq_soft = np.zeros(face.Eq.shape[0])
             eq_soft[ne + face.lam_rows] = self.sigma[list(linear)]
         out = _newton(
             None,
@@ -489,18 +575,7 @@ class Workspace:
         x, lam_s, nu, its = out
         if not self._determined(face, x):
             return None
-        point = self._assemble_point(x, face, lam_s, nu[ne:], method, iterations + its)
-        lam_a = point.lam[list(surface) + list(linear)]
-        if len(lam_a) and float(np.min(lam_a)) <= STRICT * float(np.max(lam_a)):
-            return None
-        if linear:
-            lin = self.stack.take(linear)
-            f_norm = np.sqrt(lin.segment_sum(point.f[face.linear_rows] ** 2))
-            at_apex = lin.k > 0
-            if np.any(f_norm[at_apex] >= (1.0 - STRICT) * point.lam[list(linear)][at_apex]):
-                return None
-        point.certificate = self._certify(g_hat, point)
-        return point if point.certificate.certified else None
+        return self._assemble_point(x, face, lam_s, nu[ne:], method, iterations + its)
 
     def _assemble_point(
         self,
@@ -554,12 +629,60 @@ class Workspace:
 
     def _polish(self, g_hat: FloatArray, point: _Point) -> _Point:
         key = self._active(point.x, point.lam, point.f, self.stack)
-        if self._determined(self._face(key), point.x):
+        determined = self._determined(self._face(key), point.x)
+        if determined:
             polished = self._newton_on(
                 g_hat, key, point.x, point.lam, point.iterations, "polished", 30
             )
-            return point if polished is None else polished
-        return self._phase2(g_hat, point, key)
+            if polished is not None:
+                return polished
+        refined = self._refine_active(g_hat, point, key)
+        if refined is not None:
+            return refined
+        return point if determined else self._phase2(g_hat, point, key)
+
+    def _refine_active(self, g_hat: FloatArray, point: _Point, key: _FaceKey) -> _Point | None:
+        """A few steps of an active-set method from the interior-point answer,
+        for when its forces span many decades (long chains, where a small
+        force and its small slack are both at the solver's tolerance): from
+        the active set ``key`` (or, if that does not pin the position down,
+        every cone near its limit), drop cones whose force comes out negative
+        and add cones the answer pushes past their limit."""
+        stack = self.stack
+        if not len(stack.k):
+            return None
+        _, rho, level = stack.levels(point.x)
+        r = np.where(stack.r > 0, stack.r, self._max_radius)
+        f_norm = np.sqrt(stack.segment_sum(point.f * point.f))
+        at_apex = (stack.k == 0) | ((rho <= 1e-6 * r) & (f_norm < (1.0 - 1e-6) * point.lam))
+        if self._determined(self._face(key), point.x):
+            active = {*key[0], *key[1]}
+        else:
+            active = set(np.flatnonzero((stack.r - level) / r <= NEAR_LIMIT).tolist())
+        lam_scale = float(np.max(np.abs(point.lam)))
+        x, lam = point.x, point.lam
+        seen: set[frozenset[int]] = set()
+        for _ in range(REFINE_ROUNDS):
+            seen.add(frozenset(active))
+            trial_key: _FaceKey = (
+                tuple(sorted(i for i in active if not at_apex[i])),
+                tuple(sorted(i for i in active if at_apex[i])),
+            )
+            trial = self._kkt_point(g_hat, trial_key, x, lam, point.iterations, "polished", 30)
+            if trial is None:
+                return None
+            weak = self._weak_forces(trial, trial_key)
+            _, _, level = stack.levels(trial.x)
+            past = np.flatnonzero((level - stack.r) / r > 1e-9)
+            past = past[[i not in active for i in past]]
+            if not weak.size and not past.size:
+                trial.certificate = self._certify(g_hat, trial)
+                return trial if trial.certificate.certified else None
+            active = (active - set(weak.tolist())) | set(past.tolist())
+            if frozenset(active) in seen:
+                return None
+            x, lam = trial.x, np.maximum(trial.lam, STRICT * lam_scale)
+        return None
 
     def _face_equalities(
         self, stack: BallStack, which: _FaceKey, x: FloatArray, reach: FloatArray
@@ -569,11 +692,11 @@ class Workspace:
         ``u . A_i x + B_i x = reach_i``); a linear cone ``A_i x = 0``,
         ``B_i x = reach_i``. ``reach`` is per cone of ``which`` (surface first)."""
         surface, linear = which
-        rows: list[FloatArray] = []
+        rows: list[Matrix] = []
         rhs: list[FloatArray] = []
         v, rho = stack.norms(x)
         for j, i in enumerate((*surface, *linear)):
-            Ai = stack.A[stack.start[i] : stack.start[i] + stack.k[i]]
+            Ai = stack.cone_rows(i)
             if j < len(surface) and stack.k[i]:
                 u = v[stack.start[i] : stack.start[i] + stack.k[i]] / max(rho[i], 1e-300)
                 if not stack.has_offset[i]:
@@ -581,13 +704,14 @@ class Workspace:
                     rhs.append(reach[j] * u)
                     continue
                 across = np.linalg.svd(u[None, :])[2][1:]  # directions across u
-                rows.append(np.vstack([across @ Ai, u @ Ai + stack.B[i]]))
+                M = linalg.dense(stack.face_rows(i))
+                rows.append(np.vstack([across @ M[:-1], u @ M[:-1] + M[-1]]))
             else:
-                rows.append(np.vstack([Ai, stack.B[i]]))
-            rhs.append(np.append(np.zeros(len(rows[-1]) - 1), reach[j]))
+                rows.append(stack.face_rows(i))
+            rhs.append(np.append(np.zeros(rows[-1].shape[0] - 1), reach[j]))
         if not rows:
             return np.zeros((0, self.m)), np.zeros(0)
-        return np.vstack(rows), np.concatenate(rhs)
+        return linalg.vstack(rows, self.m), np.concatenate(rhs)
 
     def _phase2(self, g_hat: FloatArray, point: _Point, key: _FaceKey) -> _Point:
         """Least-norm point of the optimal face (a tie between positions)."""
@@ -596,21 +720,22 @@ class Workspace:
         # a compliant contact keeps its penetration; the others stay on its face
         reach = self.stack.r[both] + self.sigma[both] * point.lam[both]
         L, L_rhs = self._face_equalities(self.stack, key, point.x, reach)
-        Eq = np.vstack([self.Eq, L])
-        e = np.concatenate([np.zeros(len(self.Eq)), L_rhs])
+        Eq = linalg.vstack([self.Eq, L], self.m)
+        e = np.concatenate([np.zeros(self.Eq.shape[0]), L_rhs])
         rest_index = [i for i in range(len(self.balls)) if i not in set(both)]
         rest = self.stack.take(rest_index)
-        prog = self._cone_program(self.asm.metric, Eq, e, rest)
+        metric = self.asm.metric_matrix
+        prog = self._cone_program(metric, Eq, e, rest)
         sol = self._clarabel(prog, np.zeros(self.m))
         x = np.asarray(sol.x)
         z = np.asarray(sol.z)
         lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
-        key2 = self._active(x, lam_rest, f_rest, rest, float(np.max(np.abs(self.asm.metric @ x))))
+        key2 = self._active(x, lam_rest, f_rest, rest, float(np.max(np.abs(metric @ x))))
         L2, l2 = self._face_equalities(rest, ((), key2[1]), x, rest.r[list(key2[1])])
         polished = _newton(
-            self.asm.metric,
+            metric,
             np.zeros(self.m),
-            np.vstack([Eq, L2]),
+            linalg.vstack([Eq, L2], self.m),
             np.concatenate([e, l2]),
             rest.take(key2[0]),
             x,
@@ -631,19 +756,18 @@ class Workspace:
         stack = self.stack
         v, rho = stack.norms(x)
         r = np.where(stack.r > 0, stack.r, self._max_radius)
-        cols: list[FloatArray] = []
+        cols: list[Matrix] = []
         slots: list[tuple[int, bool]] = []  # (cone, along u) per block of columns
         for i in touching:
-            Ai = stack.A[stack.start[i] : stack.start[i] + stack.k[i]]
+            M = stack.face_rows(i)  # (A_i; B_i)
             if stack.k[i] and rho[i] > 1e-9 * r[i]:
                 u = v[stack.start[i] : stack.start[i] + stack.k[i]] / rho[i]
-                cols.append((u @ Ai + stack.B[i])[:, None])
+                cols.append(linalg.adjoint(M, np.append(u, 1.0))[:, None])
                 slots.append((i, True))
             else:
-                cols.append(np.vstack([Ai, stack.B[i]]).T)
+                cols.append(M.T)
                 slots.append((i, False))
-        Amat = np.hstack([*cols, self.E.T]) if cols or len(self.E) else np.zeros((self.m, 0))
-        coef = np.linalg.lstsq(Amat, g_hat, rcond=None)[0] if Amat.shape[1] else np.zeros(0)
+        coef = linalg.lstsq(linalg.hstack([*cols, self.E.T], self.m), g_hat)
         lam = np.zeros(len(self.balls))
         f = self._no_f()
         at = 0
@@ -666,14 +790,12 @@ class Workspace:
         v, rho, level = stack.levels(x)
         reach = stack.r + self.sigma * np.maximum(lam, 0.0)  # a compliant contact may go past r
         feas = float(np.max(level - reach)) if len(level) else 0.0
-        if len(self.E):
+        if self.E.shape[0]:
             feas = max(feas, float(np.max(np.abs(self.E @ x))))
-        residual_vec = g_hat - stack.adjoint(f, lam)
-        if self._rigid_basis.shape[1]:
-            Q = self._rigid_basis
-            residual_vec -= Q @ (Q.T @ residual_vec)  # rigid joints carry any force
+        # rigid joints carry any force
+        residual_vec = self._rigid_residual(g_hat - stack.adjoint(f, lam))
         loaded = bool(np.any(g_hat))
-        residual = float(np.linalg.norm(residual_vec)) if loaded else 0.0
+        residual = float(np.linalg.norm(residual_vec)) / self._balance_scale(lam) if loaded else 0.0
         if len(lam):
             # lam_i (reach_i - B_i x) - f_i . A_i x: zero iff the force is
             # complementary to the slack and along the contact's direction
@@ -717,6 +839,10 @@ class _ConeProgram:
 
 #: An active force below this fraction of the largest is not "strictly" positive.
 STRICT = 1e-9
+#: ``_refine_active`` starts from the cones within this fraction of their play
+#: from their limit, and changes its guess at most this many times.
+NEAR_LIMIT = 1e-3
+REFINE_ROUNDS = 6
 
 
 def _csc(a: FloatArray) -> sp.csc_matrix:
@@ -737,15 +863,24 @@ def _range_basis(a: FloatArray, rcond: float = 1e-12) -> FloatArray:
     return U[:, keep]
 
 
+def _column_max(a: Matrix, m: int) -> FloatArray:
+    """Each column's largest entry (0 for no rows)."""
+    if not a.shape[0]:
+        return np.zeros(m)
+    if linalg.is_sparse(a):
+        return np.asarray(a.max(axis=0).toarray()).ravel()
+    return np.asarray(np.max(a, axis=0))
+
+
 def _rank(a: FloatArray, rcond: float = 1e-9) -> int:
     sv = np.linalg.svd(a, compute_uv=False)
     return int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
 
 
 def _newton(
-    P: FloatArray | None,
+    P: Matrix | None,
     q: FloatArray,
-    Eq: FloatArray,
+    Eq: Matrix,
     e: FloatArray,
     stack: BallStack,
     x0: FloatArray,
@@ -761,63 +896,102 @@ def _newton(
     (``soft``: compliance, default 0), equalities ``Eq x = e + eq_soft nu``.
     A singular system (statically indeterminate contact forces) takes
     least-squares steps. Returns None when it does not converge to machine
-    precision.
+    precision (relative to the size of the terms that balance).
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
+    sparse = linalg.is_sparse(A) or linalg.is_sparse(Eq)
     x, lam = x0.copy(), lam0.astype(float).copy()
     soft_na = np.zeros(na) if soft is None else soft
     soft_eq = np.zeros(ne) if eq_soft is None else eq_soft
     nu = np.zeros(ne)
     n = m + na + ne
-    K = np.zeros((n, n))
-    K[m + np.arange(na), m + np.arange(na)] = -soft_na
-    K[m + na + np.arange(ne), m + na + np.arange(ne)] = -soft_eq
-    K[:m, m + na :] = Eq.T
-    K[m + na :, :m] = Eq
-    scale = max(1.0, float(np.linalg.norm(q)))
+    if not sparse:
+        K = np.zeros((n, n))
+        K[m + np.arange(na), m + np.arange(na)] = -soft_na
+        K[m + na + np.arange(ne), m + na + np.arange(ne)] = -soft_eq
+        K[:m, m + na :] = Eq.T
+        K[m + na :, :m] = Eq
+    S = stack.segment_matrix if sparse else None
     best: tuple[float, FloatArray, FloatArray, FloatArray, int] | None = None
+    history: list[float] = []
     for it in range(max_iter + 1):
-        grad = q + Eq.T @ nu if P is None else P @ x + q + Eq.T @ nu
+        grad = q + linalg.adjoint(Eq, nu)
+        if P is not None:
+            grad = grad + P @ x
         if na:
-            v = A @ x
+            v = linalg.times(A, x)
             rho = np.sqrt(np.add.reduceat(v * v, start))
             if float(np.min(rho)) == 0.0:
                 return None
             u = v / np.repeat(rho, k)
-            J = np.add.reduceat(A * u[:, None], start, axis=0) + Bo
-            grad = grad + J.T @ lam
-            F = np.concatenate([grad, rho + Bo @ x - r - soft_na * lam, Eq @ x - e - soft_eq * nu])
+            if S is None:
+                J = np.add.reduceat(A * u[:, None], start, axis=0) + Bo
+            else:
+                J = sp.csr_matrix(S.T @ sp.diags(u) @ A + Bo)
+            grad = grad + linalg.adjoint(J, lam)
+            F = np.concatenate(
+                [grad, rho + linalg.times(Bo, x) - r - soft_na * lam, Eq @ x - e - soft_eq * nu]
+            )
         else:
             F = np.concatenate([grad, Eq @ x - e - soft_eq * nu])
         err = float(np.max(np.abs(F))) if F.size else 0.0
+        # round-off grows with the forces that balance (long chains carry large ones)
+        scale = _term_scale(q, lam, nu)
         if best is None or err < best[0]:
             best = (err, x, lam, nu, it)
-        if err <= 1e-14 * scale or it == max_iter:
+        history.append(err)
+        stalled = it >= 3 and err > 0.5 * min(history[-4:-1])
+        if err <= 1e-14 * scale or it == max_iter or (stalled and err <= 1e-11 * scale):
             break
-        H = np.zeros((m, m)) if P is None else P.copy()
         if na:
             c = lam / rho
             Ju = J - Bo
-            H += (A.T * np.repeat(c, k)) @ A - (Ju.T * c) @ Ju
-            K[:m, m : m + na] = J.T
-            K[m : m + na, :m] = J
-        K[:m, :m] = H
+        if not sparse:
+            H = np.zeros((m, m)) if P is None else np.array(P, dtype=float)
+            if na:
+                H += (A.T * np.repeat(c, k)) @ A - (Ju.T * c) @ Ju
+                K[:m, m : m + na] = J.T
+                K[m : m + na, :m] = J
+            K[:m, :m] = H
+            Kmat: Matrix = K
+        else:
+            H = sp.csr_matrix((m, m)) if P is None else sp.csr_matrix(P)
+            if na:
+                H = H + A.T @ sp.diags(np.repeat(c, k)) @ A - Ju.T @ sp.diags(c) @ Ju
+                Jm = J
+            else:
+                Jm = sp.csr_matrix((0, m))
+            Kmat = sp.bmat(
+                [
+                    [H, Jm.T, sp.csr_matrix(Eq).T],
+                    [Jm, sp.diags(-soft_na) if na else None, None],
+                    [sp.csr_matrix(Eq), None, sp.diags(-soft_eq) if ne else None],
+                ],
+                format="csc",
+            )
         try:
-            step = np.linalg.solve(K, -F)
-            miss = float(np.max(np.abs(K @ step + F)))
-            if not miss <= 1e-8 * err:  # singular: statically indeterminate forces
-                raise np.linalg.LinAlgError
-        except np.linalg.LinAlgError:
-            step = np.linalg.lstsq(K, -F, rcond=1e-13)[0]
+            step = linalg.solve_kkt(Kmat, -F, m)
+        except linalg.SingularSystem:
+            break
         x = x + step[:m]
         lam = lam + step[m : m + na]
         nu = nu + step[m + na :]
     assert best is not None
     err, x, lam, nu, its = best
-    if err > 1e-11 * scale:
+    if err > 1e-11 * _term_scale(q, lam, nu):
         return None
     return x, lam, nu, its
+
+
+def _term_scale(q: FloatArray, lam: FloatArray, nu: FloatArray) -> float:
+    """The size of the terms that balance in the KKT equations."""
+    return max(
+        1.0,
+        float(np.linalg.norm(q)),
+        float(np.max(np.abs(lam), initial=0.0)),
+        float(np.max(np.abs(nu), initial=0.0)),
+    )
 
 
 def _unbounded(

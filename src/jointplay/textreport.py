@@ -46,7 +46,7 @@ def render(
     )
     header.append(
         f"equilibrium of every body (loads + contact forces): residual "
-        f"{result.equilibrium_residual:.1e} of the load\n"
+        f"{result.equilibrium_residual:.1e} of the largest force\n"
     )
     header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm\n")
     header.append(

@@ -1,0 +1,93 @@
+"""Parametric mechanisms of any size, for scaling studies and benchmarks.
+
+``tube_string(n)`` is a string of ``n`` tube segments along X, each 100 mm
+long, each coupled to the one before (the first to the ground) by a spigot
+fit and a dowel pin, both with play:
+
+* a ``revolute`` joint at the coupling (spigot length 20 mm, radial play
+  ``clearance``, axial play ``axial_clearance``) holds everything but the
+  spin about X;
+* a ``sphere_in_cylinder`` dowel 15 mm off the axis, parallel to it, holds
+  the spin (and, redundantly, the spigot's radial play).
+
+The last segment carries a side force, a torque about X and an axial pull at
+its free end, so play adds up along the string. ``closed=True`` also rests
+every segment in a bearing of its own at its middle (a ``sphere_in_cylinder``
+in the ground, closing a loop through the ground at every segment, as in a
+line shaft) and loads every segment with a side force there.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .model import Model
+from .modelfile import model_from_dict
+
+SEGMENT_MM = 100.0
+
+
+def tube_string_dict(
+    n: int,
+    *,
+    closed: bool = False,
+    clearance: float = 0.02,
+    axial_clearance: float = 0.05,
+    dowel_clearance: float = 0.03,
+) -> dict[str, Any]:
+    """The model file's content (a plain dict) of an ``n``-segment string."""
+    if n < 1:
+        raise ValueError("a tube string needs at least one segment")
+    bodies: list[dict[str, Any]] = [{"name": "ground", "ground": True}]
+    joints: list[dict[str, Any]] = []
+    loads: list[dict[str, Any]] = []
+    for i in range(1, n + 1):
+        name, before = f"T{i}", ("ground" if i == 1 else f"T{i - 1}")
+        x0 = (i - 1) * SEGMENT_MM
+        bodies.append({"name": name})
+        joints.append(
+            {
+                "name": f"spigot{i}",
+                "type": "revolute",
+                "between": [before, name],
+                "at": [x0, 0, 0],
+                "axis": [1, 0, 0],
+                "length": 20,
+                "clearance": clearance,
+                "axial_clearance": axial_clearance,
+            }
+        )
+        joints.append(
+            {
+                "name": f"dowel{i}",
+                "type": "sphere_in_cylinder",
+                "between": [before, name],
+                "at": [x0, 15, 0],
+                "axis": [1, 0, 0],
+                "clearance": dowel_clearance,
+            }
+        )
+        if closed:
+            middle = [x0 + SEGMENT_MM / 2, 0, 0]
+            joints.append(
+                {
+                    "name": f"bearing{i}",
+                    "type": "sphere_in_cylinder",
+                    "between": ["ground", name],
+                    "at": middle,
+                    "axis": [1, 0, 0],
+                    "clearance": clearance,
+                }
+            )
+            loads.append({"body": name, "at": middle, "force": [0, -1, 0.5]})
+    last = f"T{n}"
+    loads.append({"body": last, "at": [n * SEGMENT_MM, 0, 0], "force": [5, -10, 5]})
+    loads.append({"body": last, "torque": [2000, 0, 0]})
+    return {"bodies": bodies, "joints": joints, "loads": loads}
+
+
+def tube_string(n: int, *, closed: bool = False, **clearances: float) -> Model:
+    """An ``n``-segment tube string (see the module's docstring) as a ``Model``."""
+    kind = "closed" if closed else "open"
+    data = tube_string_dict(n, closed=closed, **clearances)
+    return model_from_dict(data, source=f"<tube string, {n} segments, {kind}>")

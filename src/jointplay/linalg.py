@@ -1,0 +1,198 @@
+"""Linear algebra that works on dense arrays (small mechanisms, fastest) and on
+sparse matrices (large ones, where a dense m x m matrix would not fit).
+
+Every function takes either kind; ``Assembly.sparse`` decides which kind the
+assembly builds (see ``SPARSE_FROM``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .geometry import FloatArray
+
+#: Mechanisms with more unknowns than this (6 per moving body) are assembled
+#: into sparse matrices. Below it, dense LAPACK calls are faster.
+SPARSE_FROM = 240
+
+Matrix = Any  # a dense 2-D FloatArray or a scipy sparse matrix
+
+
+def is_sparse(a: Matrix) -> bool:
+    return bool(sp.issparse(a))
+
+
+def times(A: Matrix, x: FloatArray) -> FloatArray:
+    """``x @ A.T`` for one x (m,) or a batch of rows (B, m)."""
+    if sp.issparse(A):
+        return np.asarray((A @ x.T).T)
+    return np.asarray(x @ A.T)
+
+
+def adjoint(A: Matrix, y: FloatArray) -> FloatArray:
+    """``y @ A`` (that is ``A.T @ y``) for one y or a batch of rows."""
+    if sp.issparse(A):
+        return np.asarray((A.T @ y.T).T)
+    return np.asarray(y @ A)
+
+
+def vstack(mats: Sequence[Matrix], m: int) -> Matrix:
+    """Rows on rows; sparse if any part is sparse."""
+    parts = [a for a in mats if a.shape[0]]
+    if not parts:
+        return np.zeros((0, m))
+    if any(sp.issparse(a) for a in parts):
+        return sp.vstack([sp.csr_matrix(a) for a in parts], format="csr")
+    return np.vstack(parts)
+
+
+def hstack(mats: Sequence[Matrix], rows: int) -> Matrix:
+    parts = [a for a in mats if a.shape[1]]
+    if not parts:
+        return np.zeros((rows, 0))
+    if any(sp.issparse(a) for a in parts):
+        return sp.hstack([sp.csr_matrix(a) for a in parts], format="csr")
+    return np.hstack(parts)
+
+
+def dense(a: Matrix) -> FloatArray:
+    return np.asarray(a.toarray()) if sp.issparse(a) else np.asarray(a)
+
+
+def row_norms(A: Matrix) -> FloatArray:
+    if sp.issparse(A):
+        return np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel())
+    return np.asarray(np.linalg.norm(A, axis=1))
+
+
+def nonzero_rows(A: Matrix) -> FloatArray:
+    """(rows,) bool: the rows that have a non-zero entry."""
+    if sp.issparse(A):
+        A = sp.csr_matrix(A)
+        A.eliminate_zeros()
+        return np.diff(A.indptr) > 0
+    return np.asarray(np.any(A != 0.0, axis=1))
+
+
+def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> FloatArray:
+    """Orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``: singular
+    values below ``rcond`` times the largest count as zero.
+
+    Dense: one SVD. Sparse: inverse subspace iteration on ``C^T C + delta I``
+    (one sparse factorization), then an SVD of ``C Z`` on the subspace found,
+    which decides with the same threshold as the dense SVD. The subspace
+    grows until it holds a direction that ``C`` clearly moves, so that every
+    null (and near-null) direction is inside it.
+    """
+    if C.shape[0] == 0:
+        return np.eye(m)
+    if not sp.issparse(C):
+        _, sv, Vt = np.linalg.svd(C, full_matrices=True)
+        tol = rcond * (sv[0] if sv.size else 0.0)
+        rank = int(np.sum(sv > tol)) if sv.size and sv[0] > 0 else 0
+        return np.ascontiguousarray(Vt[rank:].T)
+    C = sp.csr_matrix(C)
+    Q = sp.csc_matrix(C.T @ C)
+    rng = np.random.default_rng(20140101)
+    s_max = _largest_singular_value(C, Q, rng)
+    if s_max == 0.0:
+        return np.eye(m)
+    delta = 1e-10 * s_max**2
+    lu = spla.splu(sp.csc_matrix(Q + delta * sp.identity(m, format="csc")))
+    p = min(8, m)
+    while True:
+        Z = rng.standard_normal((m, p))
+        for _ in range(3):
+            Z, _ = np.linalg.qr(lu.solve(Z))
+        R = np.linalg.qr(np.asarray(C @ Z), mode="r")  # same singular values, p columns
+        _, sv, Vt = np.linalg.svd(R, full_matrices=True)
+        sv = np.concatenate([sv, np.zeros(p - len(sv))])  # fewer rows than p
+        if p >= m or float(np.max(sv)) > 1e-4 * s_max:
+            break
+        p = min(2 * p, m)
+    keep = np.flatnonzero(sv <= rcond * s_max)
+    basis = Z @ Vt[keep].T
+    q, _ = np.linalg.qr(basis)
+    return np.ascontiguousarray(q)
+
+
+def _largest_singular_value(C: Any, Q: Any, rng: np.random.Generator) -> float:
+    """The largest singular value of C, by power iteration on C^T C (to a few
+    percent, which is all a relative threshold needs)."""
+    v = rng.standard_normal(Q.shape[0])
+    lam = 0.0
+    for _ in range(40):
+        w = Q @ v
+        norm = float(np.linalg.norm(w))
+        if norm == 0.0:
+            return 0.0
+        v = w / norm
+        if abs(norm - lam) <= 1e-3 * norm:
+            break
+        lam = norm
+    return float(np.linalg.norm(C @ v))
+
+
+def full_column_rank(rows: Matrix, m: int, rcond: float = 1e-9) -> bool:
+    """Whether only ``d = 0`` has ``rows @ d = 0`` (the rows pin every unknown)."""
+    if rows.shape[0] < m:
+        return False
+    if not sp.issparse(rows):
+        sv = np.linalg.svd(rows, compute_uv=False)
+        return bool(sv.size and sv[0] > 0 and np.sum(sv > rcond * sv[0]) == m)
+    return null_space(rows, m, rcond).shape[1] == 0
+
+
+class SingularSystem(Exception):
+    """A linear system had no accurate solution."""
+
+
+def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int) -> FloatArray:
+    """A solution of the square system ``K step = rhs`` (a Newton step on KKT
+    equations). A singular but consistent system (statically indeterminate
+    forces) gets a least-squares (dense) or regularized-and-refined (sparse)
+    solution; raises ``SingularSystem`` when no step solves it accurately."""
+    size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
+    if not sp.issparse(K):
+        try:
+            step = np.linalg.solve(K, rhs)
+            if float(np.max(np.abs(K @ step - rhs))) <= 1e-8 * size:
+                return np.asarray(step)
+        except np.linalg.LinAlgError:
+            pass
+        return np.asarray(np.linalg.lstsq(K, rhs, rcond=1e-13)[0])
+    K = sp.csc_matrix(K)
+    try:
+        step = spla.splu(K).solve(rhs)
+        if np.all(np.isfinite(step)) and float(np.max(np.abs(K @ step - rhs))) <= 1e-8 * size:
+            return np.asarray(step)
+    except RuntimeError:  # exactly singular
+        pass
+    # Quasi-definite regularization, then refinement against K itself: a
+    # proximal-point iteration that converges on a consistent singular system.
+    eps = 1e-9 * max(1.0, float(abs(K).max()))
+    n = K.shape[0]
+    signs = np.r_[np.ones(n_primal), -np.ones(n - n_primal)]
+    lu = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs)))
+    step = np.zeros(n)
+    for _ in range(30):
+        miss = rhs - K @ step
+        if float(np.max(np.abs(miss))) <= 1e-10 * size:
+            return step
+        step = step + lu.solve(miss)
+    raise SingularSystem
+
+
+def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
+    """Least-squares (least-norm for a dense A) solution of ``A y = b``."""
+    if A.shape[1] == 0:
+        return np.zeros(0)
+    if not sp.issparse(A):
+        return np.asarray(np.linalg.lstsq(A, b, rcond=None)[0])
+    out = spla.lsmr(A, b, atol=1e-15, btol=1e-15, maxiter=20 * max(A.shape))
+    return np.asarray(out[0])
