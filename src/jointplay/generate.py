@@ -21,6 +21,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from .model import Model
 from .modelfile import model_from_dict
 
@@ -34,10 +36,19 @@ def tube_string_dict(
     clearance: float = 0.02,
     axial_clearance: float = 0.05,
     dowel_clearance: float = 0.03,
+    seed: int = 0,
 ) -> dict[str, Any]:
-    """The model file's content (a plain dict) of an ``n``-segment string."""
+    """The model file's content (a plain dict) of an ``n``-segment string.
+    Each joint's play is the nominal value times a factor in [0.7, 1.3), drawn
+    with ``seed`` (a batch of real parts; equal plays everywhere would make
+    many contact states exact ties)."""
     if n < 1:
         raise ValueError("a tube string needs at least one segment")
+    rng = np.random.default_rng(seed)
+
+    def play(nominal: float) -> float:
+        return round(nominal * float(rng.uniform(0.7, 1.3)), 6)
+
     bodies: list[dict[str, Any]] = [{"name": "ground", "ground": True}]
     joints: list[dict[str, Any]] = []
     loads: list[dict[str, Any]] = []
@@ -53,8 +64,8 @@ def tube_string_dict(
                 "at": [x0, 0, 0],
                 "axis": [1, 0, 0],
                 "length": 20,
-                "clearance": clearance,
-                "axial_clearance": axial_clearance,
+                "clearance": play(clearance),
+                "axial_clearance": play(axial_clearance),
             }
         )
         joints.append(
@@ -64,7 +75,7 @@ def tube_string_dict(
                 "between": [before, name],
                 "at": [x0, 15, 0],
                 "axis": [1, 0, 0],
-                "clearance": dowel_clearance,
+                "clearance": play(dowel_clearance),
             }
         )
         if closed:
@@ -76,12 +87,14 @@ def tube_string_dict(
                     "between": ["ground", name],
                     "at": middle,
                     "axis": [1, 0, 0],
-                    "clearance": clearance,
+                    "clearance": play(clearance),
                 }
             )
-            loads.append({"body": name, "at": middle, "force": [0, -1, 0.5]})
+            turn = float(rng.uniform(0, 2 * np.pi))
+            side = [0.0, round(np.cos(turn), 6), round(np.sin(turn), 6)]
+            loads.append({"body": name, "at": middle, "force": side})
     last = f"T{n}"
-    loads.append({"body": last, "at": [n * SEGMENT_MM, 0, 0], "force": [5, -10, 5]})
+    loads.append({"body": last, "at": [n * SEGMENT_MM, 0, 0], "force": [50, 0, 0]})
     loads.append({"body": last, "torque": [2000, 0, 0]})
     return {"bodies": bodies, "joints": joints, "loads": loads}
 

@@ -173,14 +173,19 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int) -> FloatArray:
             return np.asarray(step)
     except RuntimeError:  # exactly singular
         pass
-    # Quasi-definite regularization, then refinement against K itself: a
-    # proximal-point iteration that converges on a consistent singular system.
-    eps = 1e-9 * max(1.0, float(abs(K).max()))
+    # Singular (statically indeterminate forces): quasi-definite regularization,
+    # then refinement against K itself, a proximal-point iteration that
+    # converges on a consistent system to the solution nearest the current
+    # multipliers, as the dense least-squares step does.
+    eps = 1e-12 * max(1.0, float(abs(K).max()))
     n = K.shape[0]
     signs = np.r_[np.ones(n_primal), -np.ones(n - n_primal)]
-    lu = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs)))
+    try:
+        lu = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs)))
+    except RuntimeError:
+        raise SingularSystem from None
     step = np.zeros(n)
-    for _ in range(30):
+    for _ in range(40):
         miss = rhs - K @ step
         if float(np.max(np.abs(miss))) <= 1e-10 * size:
             return step
