@@ -112,19 +112,21 @@ def _rows_matrix(blocks: Sequence[tuple[IntArray, FloatArray]], m: int, sparse: 
             np.add.at(out[at : at + block.shape[0]].T, cols, block.T)
             at += block.shape[0]
         return out
-    rows, cols_all, vals = [], [], []
-    at = 0
-    for cols, block in blocks:
-        k = block.shape[0]
-        rows.append(np.repeat(np.arange(at, at + k), len(cols)))
-        cols_all.append(np.tile(cols, k))
-        vals.append(block.ravel())
-        at += k
-    if not rows:
+    if not blocks:
         return sp.csr_matrix((0, m))
-    return sp.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols_all))), shape=(n_rows, m)
-    )
+    # one pass over the blocks to size the entries, then fill them in place
+    ks = np.array([block.shape[0] for _, block in blocks], dtype=np.intp)
+    cs = np.array([len(cols) for cols, _ in blocks], dtype=np.intp)
+    nnz = ks * cs
+    rows = np.repeat(np.arange(n_rows), np.repeat(cs, ks))
+    cols_all = np.empty(int(nnz.sum()), dtype=np.intp)
+    vals = np.empty(int(nnz.sum()))
+    at = 0
+    for (cols, block), size in zip(blocks, nnz, strict=True):
+        cols_all[at : at + size].reshape(block.shape)[:] = cols
+        vals[at : at + size] = block.ravel()
+        at += size
+    return sp.csr_matrix((vals, (rows, cols_all)), shape=(n_rows, m))
 
 
 @dataclass(frozen=True)
@@ -375,7 +377,9 @@ class Assembly:
     def scale_matrix(self) -> FloatArray:
         """Physical (V_c mm, Omega rad) per body from scaled x: ``x_phys = D * x``."""
         n = len(self.body_names)
-        return np.column_stack([np.full((n, 3), self.s), np.repeat(self.turn[:, None], 3, 1)]).ravel()
+        return np.column_stack(
+            [np.full((n, 3), self.s), np.repeat(self.turn[:, None], 3, 1)]
+        ).ravel()
 
     def body_motion(self, x: FloatArray, i: int) -> tuple[FloatArray, FloatArray]:
         """(rotation rad, translation at global origin mm) of moving body ``i``
@@ -436,9 +440,7 @@ def assemble(model: Model) -> Assembly:
             )
 
     g = load_work(model.loads_of(None), index, body_ref, s, turn)
-    return Assembly(
-        model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g, turn
-    )
+    return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g, turn)
 
 
 def load_work(

@@ -103,7 +103,11 @@ def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> FloatArray:
     if s_max == 0.0:
         return np.eye(m)
     delta = 1e-10 * s_max**2
-    lu = spla.splu(sp.csc_matrix(Q + delta * sp.identity(m, format="csc")))
+    lu = spla.splu(
+        sp.csc_matrix(Q + delta * sp.identity(m, format="csc")),
+        permc_spec="MMD_AT_PLUS_A",  # symmetric positive definite: keep the
+        diag_pivot_thresh=0.0,  # fill-reducing order, pivot on the diagonal
+    )
     p = min(8, m)
     while True:
         Z = rng.standard_normal((m, p))
@@ -148,7 +152,7 @@ def full_column_rank(rows: Matrix, m: int, rcond: float = 1e-9) -> bool:
     return null_space(rows, m, rcond).shape[1] == 0
 
 
-class SingularSystem(Exception):
+class SingularSystemError(Exception):
     """A linear system had no accurate solution."""
 
 
@@ -156,7 +160,7 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int) -> FloatArray:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
     equations). A singular but consistent system (statically indeterminate
     forces) gets a least-squares (dense) or regularized-and-refined (sparse)
-    solution; raises ``SingularSystem`` when no step solves it accurately."""
+    solution; raises ``SingularSystemError`` when no step solves it accurately."""
     size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
     if not sp.issparse(K):
         try:
@@ -183,14 +187,14 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int) -> FloatArray:
     try:
         lu = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs)))
     except RuntimeError:
-        raise SingularSystem from None
+        raise SingularSystemError from None
     step = np.zeros(n)
     for _ in range(40):
         miss = rhs - K @ step
         if float(np.max(np.abs(miss))) <= 1e-10 * size:
             return step
         step = step + lu.solve(miss)
-    raise SingularSystem
+    raise SingularSystemError
 
 
 def lstsq(A: Matrix, b: FloatArray) -> FloatArray:

@@ -378,7 +378,9 @@ class Workspace:
         P = sp.csc_matrix(
             (1.0 / self.sigma[soft], (m + np.arange(nc), m + np.arange(nc))), shape=(m + nc, m + nc)
         )
-        prog = _ConeProgram(P, prog.A, prog.b, prog.cones, prog.settings, prog.soc_first, prog.f_rows)
+        prog = _ConeProgram(
+            P, prog.A, prog.b, prog.cones, prog.settings, prog.soc_first, prog.f_rows
+        )
         sol = self._clarabel(prog, np.concatenate([-g_hat, np.zeros(nc)]))
         z = np.asarray(sol.z)
         x = np.asarray(sol.x)[:m]
@@ -629,25 +631,21 @@ class Workspace:
 
     def _polish(self, g_hat: FloatArray, point: _Point) -> _Point:
         key = self._active(point.x, point.lam, point.f, self.stack)
-        determined = self._determined(self._face(key), point.x)
-        if determined:
-            polished = self._newton_on(
-                g_hat, key, point.x, point.lam, point.iterations, "polished", 30
-            )
-            if polished is not None:
-                return polished
         refined = self._refine_active(g_hat, point, key)
         if refined is not None:
             return refined
-        return point if determined else self._phase2(g_hat, point, key)
+        return (
+            point if self._determined(self._face(key), point.x) else self._phase2(g_hat, point, key)
+        )
 
     def _refine_active(self, g_hat: FloatArray, point: _Point, key: _FaceKey) -> _Point | None:
-        """A few steps of an active-set method from the interior-point answer,
-        for when its forces span many decades (long chains, where a small
-        force and its small slack are both at the solver's tolerance): from
-        the active set ``key`` (or, if that does not pin the position down,
-        every cone near its limit), drop cones whose force comes out negative
-        and add cones the answer pushes past their limit."""
+        """Solve the KKT equations of the active set ``key`` read from the
+        interior-point answer (or, if that set does not pin the position down,
+        of every cone near its limit); if some force comes out negative or a
+        cone is pushed past its limit, take a few steps of an active-set
+        method: drop those cones, add these. A large mechanism needs them:
+        there an interior-point answer to 1e-10 cannot tell a slightly loaded
+        contact from a nearly touching one."""
         stack = self.stack
         if not len(stack.k):
             return None
@@ -972,7 +970,7 @@ def _newton(
             )
         try:
             step = linalg.solve_kkt(Kmat, -F, m)
-        except linalg.SingularSystem:
+        except linalg.SingularSystemError:
             break
         x = x + step[:m]
         lam = lam + step[m : m + na]

@@ -1,0 +1,179 @@
+#!/usr/bin/env python
+"""Scaling with size: chains and closed loops of 10 to 10,000 bodies.
+
+The mechanisms are ``jointplay.generate.tube_string``: segments coupled by a
+spigot (revolute) and a dowel pin, with a batch of real plays (seeded).
+``chain`` is the open string loaded at its free end (axial pull, torque);
+``loops`` also rests every segment in a bearing of its own and loads each
+one sideways, which closes a loop through the ground at every segment.
+
+Each (kind, size) runs in a fresh Python process, so that its peak memory is
+its own. In it, after the model is built (pydantic validation, not timed as
+a solve), the script times:
+
+* ``assemble``: the model turned into sparse matrices;
+* ``workspace``: free motions (the null space of the joints' rows);
+* ``solve``: Clarabel, polishing on the active set, certificate;
+* ``result``: the ``Result`` (every joint, contact and force);
+* ``total``: the four together, what ``jointplay.solve(model)`` costs;
+
+and reports the peak resident memory of the process (MB, ``ru_maxrss``) and
+what the solve added to it after the model was built. With ``--cvxpy-max N``
+(default 1000) CVXPY + Clarabel builds and solves the same cone program for
+sizes up to N, in the same process, as a reference.
+
+Target (issue 4): growth about linear in the size; 1,000 bodies under 0.5 s.
+
+Run from the repository root: ``python benchmarks/bench_scaling.py``
+(``--sizes 10 100 1000 10000``). Timing is informative: exits 0.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from typing import Any
+
+
+def measure(kind: str, n: int, cvxpy: bool) -> dict[str, Any]:
+    """One case, in this process (the child)."""
+    import numpy as np
+    import scipy.sparse as sp
+
+    import jointplay
+    from jointplay import solver as solver_module
+    from jointplay.assembly import assemble
+    from jointplay.generate import tube_string
+    from jointplay.solver import Workspace
+
+    model = tube_string(n, closed=(kind == "loops"))
+    base_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    t0 = time.perf_counter()
+    asm = assemble(model)
+    asm.stack, asm.E  # noqa: B018 - built lazily; count them in the assembly
+    t1 = time.perf_counter()
+    ws = Workspace(asm)
+    t2 = time.perf_counter()
+    built = solver_module.build_result
+    spent = [0.0]
+
+    def timed_build(*args: Any, **kwargs: Any) -> jointplay.Result:
+        start = time.perf_counter()
+        out = built(*args, **kwargs)
+        spent[0] = time.perf_counter() - start
+        return out
+
+    solver_module.build_result = timed_build
+    result = ws.solve()
+    t3 = time.perf_counter()
+    solver_module.build_result = built
+    result.check()
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    out: dict[str, Any] = {
+        "kind": kind,
+        "bodies": n,
+        "unknowns": asm.m,
+        "cones": len(asm.balls),
+        "assemble": t1 - t0,
+        "workspace": t2 - t1,
+        "solve": t3 - t2 - spent[0],
+        "result": spent[0],
+        "total": t3 - t0,
+        "peak_mb": peak_mb,
+        "solve_mb": peak_mb - base_mb,
+        "method": result.certificate.method,
+        "feasibility_mm": result.certificate.feasibility_mm,
+        "residual": result.equilibrium_residual,
+    }
+    if cvxpy:
+        try:
+            import cvxpy as cp
+        except ImportError:
+            return out
+        st = asm.stack
+        start = time.perf_counter()
+        x = cp.Variable(asm.m)
+        A = sp.csr_matrix(st.A)
+        cons = [
+            cp.SOC(st.r[i], A[st.start[i] : st.start[i] + st.k[i]] @ x) for i in range(len(st.k))
+        ]
+        if asm.E.shape[0]:
+            cons.append(asm.E @ x == 0)
+        problem = cp.Problem(cp.Minimize(-asm.g @ x), cons)
+        problem.solve(solver="CLARABEL", tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10)
+        out["cvxpy"] = time.perf_counter() - start
+        x_ours = np.zeros(asm.m)
+        for i, name in enumerate(asm.body_names):
+            body = result.bodies[name]
+            x_ours[6 * i : 6 * i + 3] = body.displacement_of(asm.body_ref[i]) / asm.s
+            x_ours[6 * i + 3 : 6 * i + 6] = body.rotation / asm.turn[i]
+        energy = -float(asm.g @ x_ours)
+        out["cvxpy_dE"] = abs(-float(asm.g @ x.value) - energy) / abs(energy)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100, 1000, 10000])
+    parser.add_argument("--kinds", nargs="+", default=["chain", "loops"])
+    parser.add_argument("--cvxpy-max", type=int, default=1000)
+    parser.add_argument("--child", nargs=3, metavar=("KIND", "N", "CVXPY"), help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child:
+        kind, n, cvx = args.child
+        print(json.dumps(measure(kind, int(n), cvx == "1")))
+        return 0
+
+    print("Scaling: time (s) per solve and memory (MB), one fresh process per row")
+    header = (
+        f"{'kind':<6}{'bodies':>7}{'unknowns':>9}{'assemble':>9}{'workspace':>10}{'solve':>8}"
+        f"{'result':>8}{'total':>8}{'x prev':>7}{'peak MB':>8}{'+MB':>7}"
+        f"{'CVXPY':>8}{'ratio':>7}  method / check"
+    )
+    print(header)
+    print("-" * len(header))
+    for kind in args.kinds:
+        previous: dict[str, Any] | None = None
+        for n in args.sizes:
+            cvx = "1" if n <= args.cvxpy_max else "0"
+            proc = subprocess.run(
+                [sys.executable, __file__, "--child", kind, str(n), cvx],
+                capture_output=True,
+                text=True,
+                check=False,
+            )
+            if proc.returncode != 0:
+                last = (proc.stderr.strip().splitlines() or ["?"])[-1]
+                print(f"{kind:<6}{n:>7}  failed: {last}")
+                continue
+            row = json.loads(proc.stdout.strip().splitlines()[-1])
+            growth = f"{row['total'] / previous['total']:.1f}" if previous else "-"
+            cv = (
+                f"{row['cvxpy']:>8.3f}{row['cvxpy'] / row['total']:>7.1f}"
+                if "cvxpy" in row
+                else (f"{'-':>8}{'-':>7}")
+            )
+            print(
+                f"{kind:<6}{n:>7}{row['unknowns']:>9}{row['assemble']:>9.3f}{row['workspace']:>10.3f}"
+                f"{row['solve']:>8.3f}{row['result']:>8.3f}{row['total']:>8.3f}{growth:>7}"
+                f"{row['peak_mb']:>8.0f}{row['solve_mb']:>7.0f}{cv}"
+                f"  {row['method']}, past {row['feasibility_mm']:.0e} mm,"
+                f" residual {row['residual']:.0e}"
+            )
+            if n == 1000:
+                verdict = "meets" if row["total"] < 0.5 else "misses"
+                print(f"{'':<13}1,000 bodies: {row['total']:.3f} s, {verdict} the 0.5 s target")
+            previous = row
+    print(
+        "x prev: total time over the previous size's (10 for linear growth per decade). "
+        "ratio: CVXPY + Clarabel (build + solve) over jointplay's total."
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
