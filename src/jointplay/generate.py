@@ -99,8 +99,8 @@ def tube_string_dict(
     return {"bodies": bodies, "joints": joints, "loads": loads}
 
 
-def tube_string(n: int, *, closed: bool = False, **clearances: float) -> Model:
+def tube_string(n: int, *, closed: bool = False, seed: int = 0) -> Model:
     """An ``n``-segment tube string (see the module's docstring) as a ``Model``."""
     kind = "closed" if closed else "open"
-    data = tube_string_dict(n, closed=closed, **clearances)
+    data = tube_string_dict(n, closed=closed, seed=seed)
     return model_from_dict(data, source=f"<tube string, {n} segments, {kind}>")

@@ -66,8 +66,8 @@ def dense(a: Matrix) -> FloatArray:
 
 def row_norms(A: Matrix) -> FloatArray:
     if sp.issparse(A):
-        return np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel())
-    return np.asarray(np.linalg.norm(A, axis=1))
+        return np.asarray(np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel()), dtype=float)
+    return np.asarray(np.linalg.norm(A, axis=1), dtype=float)
 
 
 def nonzero_rows(A: Matrix) -> FloatArray:
@@ -75,7 +75,7 @@ def nonzero_rows(A: Matrix) -> FloatArray:
     if sp.issparse(A):
         A = sp.csr_matrix(A)
         A.eliminate_zeros()
-        return np.diff(A.indptr) > 0
+        return np.asarray(np.diff(A.indptr) > 0)
     return np.asarray(np.any(A != 0.0, axis=1))
 
 
@@ -149,7 +149,7 @@ def full_column_rank(rows: Matrix, m: int, rcond: float = 1e-9) -> bool:
     if not sp.issparse(rows):
         sv = np.linalg.svd(rows, compute_uv=False)
         return bool(sv.size and sv[0] > 0 and np.sum(sv > rcond * sv[0]) == m)
-    return null_space(rows, m, rcond).shape[1] == 0
+    return bool(null_space(rows, m, rcond).shape[1] == 0)
 
 
 class SingularSystemError(Exception):
@@ -188,12 +188,12 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int) -> FloatArray:
         lu = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs)))
     except RuntimeError:
         raise SingularSystemError from None
-    step = np.zeros(n)
+    refined = np.zeros(n)
     for _ in range(40):
-        miss = rhs - K @ step
+        miss = rhs - K @ refined
         if float(np.max(np.abs(miss))) <= 1e-10 * size:
-            return step
-        step = step + lu.solve(miss)
+            return np.asarray(refined, dtype=np.float64)
+        refined = refined + np.asarray(lu.solve(miss), dtype=float)
     raise SingularSystemError
 
 

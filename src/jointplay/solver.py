@@ -178,7 +178,7 @@ class Workspace:
         per row of ``lam``: what an equilibrium residual is relative to, since
         round-off grows with the contact forces (long levers make them large)."""
         size = np.abs(lam) * self.stack.cone_size
-        return np.maximum(1.0, np.max(size, axis=-1, initial=0.0))
+        return np.asarray(np.maximum(1.0, np.max(size, axis=-1, initial=0.0)), dtype=float)
 
     def _rigid_residual(self, rest: FloatArray) -> FloatArray:
         """What rigid joints cannot carry of the generalized forces ``rest``
@@ -219,11 +219,11 @@ class Workspace:
         best, best_work = fallback[:m], 0.0
         for sign in (1.0, -1.0):
             held = _column_max(rho + sign * stack.B, m) > 1e-9
-            work = sign * g
-            free = ~held & (e_cols <= 1e-9) & (work > best_work)
+            works = sign * g
+            free = ~held & (e_cols <= 1e-9) & (works > best_work)
             if np.any(free):
-                j = int(np.flatnonzero(free)[np.argmax(work[free])])
-                best, best_work = sign * np.eye(1, m, j)[0], float(work[j])
+                j = int(np.flatnonzero(free)[np.argmax(works[free])])
+                best, best_work = sign * np.eye(1, m, j)[0], float(works[j])
         if n > 1:  # all together: a translation (a common turn has no obvious centre)
             for d in [*(np.tile(np.eye(6)[a], n) / np.sqrt(n) for a in range(3))]:
                 for sd in (d, -d):
@@ -231,8 +231,9 @@ class Workspace:
                     if work <= best_work:
                         continue
                     _, _, level = stack.levels(sd)
-                    held = len(level) and float(np.max(level)) > 1e-9
-                    if held or (self.E.shape[0] and np.max(np.abs(self.E @ sd)) > 1e-9):
+                    if len(level) and float(np.max(level)) > 1e-9:
+                        continue
+                    if self.E.shape[0] and float(np.max(np.abs(self.E @ sd))) > 1e-9:
                         continue
                     best, best_work = sd, work
         return best
@@ -793,7 +794,9 @@ class Workspace:
         # rigid joints carry any force
         residual_vec = self._rigid_residual(g_hat - stack.adjoint(f, lam))
         loaded = bool(np.any(g_hat))
-        residual = float(np.linalg.norm(residual_vec)) / self._balance_scale(lam) if loaded else 0.0
+        residual = (
+            float(np.linalg.norm(residual_vec)) / float(self._balance_scale(lam)) if loaded else 0.0
+        )
         if len(lam):
             # lam_i (reach_i - B_i x) - f_i . A_i x: zero iff the force is
             # complementary to the slack and along the contact's direction

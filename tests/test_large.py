@@ -1,0 +1,94 @@
+"""Large mechanisms: the sparse path gives the dense path's answers, and
+strings of hundreds of bodies solve with a certificate."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import jointplay
+from conftest import MM, RAD, ROOT
+from jointplay import linalg
+from jointplay.generate import tube_string, tube_string_dict
+from jointplay.modelfile import model_from_dict
+
+EXAMPLES = sorted((ROOT / "examples").rglob("*.yaml"))
+
+
+def _solve_all(model: jointplay.Model) -> dict[str, jointplay.Result]:
+    return jointplay.solve_cases(model)
+
+
+def _assert_same(a: jointplay.Result, b: jointplay.Result) -> None:
+    for name, body in a.bodies.items():
+        other = b.bodies[name]
+        assert np.allclose(body.translation, other.translation, rtol=0, atol=MM)
+        assert np.allclose(body.rotation, other.rotation, rtol=0, atol=RAD)
+    for name, joint in a.joints.items():
+        for c, d in zip(joint.contacts, b.joints[name].contacts, strict=True):
+            assert c.in_contact == d.in_contact
+            # forces: relative to the largest force of the answer
+            scale = max(1.0, max(float(np.linalg.norm(x.force)) for x in joint.contacts))
+            assert np.allclose(c.force, d.force, rtol=0, atol=1e-8 * scale)
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_sparse_path_gives_the_dense_answers(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    model = jointplay.load(path)
+    dense = _solve_all(model)
+    monkeypatch.setattr(linalg, "SPARSE_FROM", 0)
+    sparse = _solve_all(model)
+    for case, result in sparse.items():
+        result.check()
+        _assert_same(dense[case], result)
+
+
+@pytest.mark.parametrize("closed", [False, True], ids=["chain", "loops"])
+def test_string_sparse_matches_dense(closed: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    model = tube_string(30, closed=closed)  # 180 unknowns: dense
+    dense = jointplay.solve(model)
+    monkeypatch.setattr(linalg, "SPARSE_FROM", 0)
+    sparse = jointplay.solve(model)
+    sparse.check()
+    _assert_same(dense, sparse)
+
+
+@pytest.mark.parametrize("closed", [False, True], ids=["chain", "loops"])
+def test_long_string_is_certified(closed: bool) -> None:
+    model = tube_string(300, closed=closed)
+    result = jointplay.solve(model)
+    result.check()
+    assert result.certificate.method == "polished"
+    assert result.certificate.feasibility_mm <= 1e-9
+    assert result.equilibrium_residual <= 1e-8
+    # the open string's axial play adds up: every spigot pulled to its limit
+    if not closed:
+        data = tube_string_dict(300)
+        plays = [j["axial_clearance"] / 2 for j in data["joints"] if j["type"] == "revolute"]
+        tip = result.bodies["T300"].translation[0]
+        assert tip == pytest.approx(sum(plays), abs=MM)
+
+
+def test_free_spins_of_a_long_string_come_out_zero(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without dowels every segment spins freely: 60 free motions, none
+    loaded, each left at zero (the least-norm answer)."""
+    data = tube_string_dict(60)
+    data["joints"] = [j for j in data["joints"] if j["type"] != "sphere_in_cylinder"]
+    data["loads"] = [ld for ld in data["loads"] if "torque" not in ld]
+    model = model_from_dict(data)
+    result = jointplay.solve(model)
+    result.check()
+    assert len(result.free_motions) == 60
+    for body in result.bodies.values():
+        assert abs(body.rotation[0]) <= RAD
+
+
+def test_a_driven_spin_in_a_long_string_is_reported() -> None:
+    data = tube_string_dict(60)
+    data["joints"] = [j for j in data["joints"] if j["name"] != "dowel40"]
+    with pytest.raises(jointplay.UnboundedMechanismError) as err:
+        jointplay.solve(model_from_dict(data))
+    assert err.value.body in {f"T{i}" for i in range(40, 61)}
+    assert "rotation about the global X axis" in str(err.value)
