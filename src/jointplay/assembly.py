@@ -185,9 +185,9 @@ class BallStack:
         idx = np.asarray(which, dtype=np.intp)
         if not len(idx):
             return np.zeros(0, dtype=np.intp)
-        return np.concatenate(
-            [np.arange(a, a + n) for a, n in zip(self.start[idx], self.k[idx], strict=True)]
-        )
+        k = self.k[idx]
+        before = np.cumsum(k) - k  # rows of the earlier cones in ``which``
+        return np.asarray(np.repeat(self.start[idx] - before, k) + np.arange(int(k.sum())))
 
     def take(self, which: Sequence[int]) -> BallStack:
         """The sub-stack of cones ``which`` (in that order)."""

@@ -6,6 +6,8 @@ axes, so ``R_world_joint @ v_joint`` gives a joint-frame vector in global axes.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -35,12 +37,13 @@ def cross(a: FloatArray, b: FloatArray) -> FloatArray:
 
 
 def unit(v: FloatArray) -> FloatArray:
-    return np.asarray(v, dtype=float) / float(np.linalg.norm(v))
+    v = np.asarray(v, dtype=float)
+    return v / math.sqrt(float(v @ v))
 
 
 def is_parallel(a: FloatArray, b: FloatArray) -> bool:
-    a_hat, b_hat = unit(a), unit(b)
-    return float(np.linalg.norm(cross(a_hat, b_hat))) < PARALLEL_SINE
+    c = cross(unit(a), unit(b))
+    return math.sqrt(float(c @ c)) < PARALLEL_SINE
 
 
 def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:

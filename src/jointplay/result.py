@@ -356,22 +356,32 @@ def equilibrium_residual(
         scale = max(scale, float(np.linalg.norm(force)), float(np.linalg.norm(moment)) / asm.ell)
     if scale == 0.0:
         return 0.0
-    for jr in joints.values():
-        a_place = place.get(jr.between[0], IDENTITY)
-        R = a_place.R @ jr.R_world_joint
-        force = R @ jr.reaction_force
+    jrs = list(joints.values())
+    if jrs:  # every joint at once: large mechanisms have thousands
+        R_wj = np.stack([jr.R_world_joint for jr in jrs])
+        centre = np.stack([jr.centre for jr in jrs])
+        rf = np.stack([jr.reaction_force for jr in jrs])
+        rm = np.stack([jr.reaction_moment for jr in jrs])
         scale = max(
             scale,
-            float(np.linalg.norm(jr.reaction_force)),
-            float(np.linalg.norm(jr.reaction_moment)) / asm.ell,
+            float(np.max(np.linalg.norm(rf, axis=1))),
+            float(np.max(np.linalg.norm(rm, axis=1))) / asm.ell,
         )
-        moment_centre = R @ jr.reaction_moment
-        centre = a_place(jr.centre)
-        for sign, name in ((-1.0, jr.between[0]), (1.0, jr.between[1])):
-            if name in index:
-                i = index[name]
-                F[i] += sign * force
-                M[i] += sign * (moment_centre + cross(centre - ref[i], force))
+        if place:
+            a_places = [place.get(jr.between[0], IDENTITY) for jr in jrs]
+            R = np.stack([pl.R for pl in a_places]) @ R_wj
+            centre = np.stack([pl(c) for pl, c in zip(a_places, centre, strict=True)])
+        else:
+            R = R_wj
+        force = np.einsum("jab,jb->ja", R, rf)
+        moment_centre = np.einsum("jab,jb->ja", R, rm)
+        for sign, side in ((-1.0, 0), (1.0, 1)):
+            idx = np.array([index.get(jr.between[side], -1) for jr in jrs])
+            on = idx >= 0
+            i = idx[on]
+            np.add.at(F, i, sign * force[on])
+            lever_force = np.cross(centre[on] - ref[i], force[on])
+            np.add.at(M, i, sign * (moment_centre[on] + lever_force))
     worst = max(
         float(np.max(np.linalg.norm(F, axis=1))) if n else 0.0,
         float(np.max(np.linalg.norm(M, axis=1))) / asm.ell if n else 0.0,
