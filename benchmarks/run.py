@@ -1,0 +1,45 @@
+#!/usr/bin/env python
+"""Every benchmark, one command: prints all the tables.
+
+1. ``bench_paper.py``: section 6.1.6.1 in detail (the paper's own 12-variable
+   SLSQP, CVXPY + Clarabel, the raw Clarabel floor; then many loads on one
+   mechanism: batch, warm, cold);
+2. ``bench_cases.py``: every case of the paper against SLSQP and CVXPY;
+3. ``bench_scaling.py``: chains and closed loops of 10 to 10,000 bodies.
+
+Run from the repository root with jointplay installed (CVXPY from the
+``bench`` extra): ``python benchmarks/run.py`` (``--quick``: fewer repeats,
+sizes to 1,000). Timing is informative: it exits 0 whatever the numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_cases  # noqa: E402
+import bench_paper  # noqa: E402
+import bench_scaling  # noqa: E402
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats, sizes to 1,000")
+    args = parser.parse_args(argv)
+    repeat = ["--repeat", "50" if args.quick else "300"]
+    steps = ["--steps", "720", "--subset", "40"] if args.quick else []
+    print("=" * 100 + "\n1. Section 6.1.6.1 in detail\n" + "=" * 100)
+    bench_paper.main([*repeat, *steps])
+    print("\n" + "=" * 100 + "\n2. Every case of the paper\n" + "=" * 100)
+    bench_cases.main(["--repeat", "10" if args.quick else "30"])
+    print("\n" + "=" * 100 + "\n3. Scaling with size\n" + "=" * 100)
+    sizes = ["10", "100", "1000"] if args.quick else ["10", "100", "1000", "10000"]
+    bench_scaling.main(["--sizes", *sizes])
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
