@@ -86,8 +86,10 @@ def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> FloatArray:
     Dense: one SVD. Sparse: inverse subspace iteration on ``C^T C + delta I``
     (one sparse factorization), then an SVD of ``C Z`` on the subspace found,
     which decides with the same threshold as the dense SVD. The subspace
-    grows until it holds a direction that ``C`` clearly moves, so that every
-    null (and near-null) direction is inside it.
+    grows until it holds a direction that ``C`` moves by more than 1e-6 of
+    its largest: each iteration then shrinks that direction's share against
+    a null one's by ``delta / (1e-12 + delta) = 1e-2`` or better, so three
+    leave the null directions inside the subspace to 1e-6.
     """
     if C.shape[0] == 0:
         return np.eye(m)
@@ -102,7 +104,7 @@ def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> FloatArray:
     s_max = _largest_singular_value(C, Q, rng)
     if s_max == 0.0:
         return np.eye(m)
-    delta = 1e-10 * s_max**2
+    delta = 1e-14 * s_max**2
     lu = spla.splu(
         sp.csc_matrix(Q + delta * sp.identity(m, format="csc")),
         permc_spec="MMD_AT_PLUS_A",  # symmetric positive definite: keep the
@@ -116,7 +118,7 @@ def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> FloatArray:
         R = np.linalg.qr(np.asarray(C @ Z), mode="r")  # same singular values, p columns
         _, sv, Vt = np.linalg.svd(R, full_matrices=True)
         sv = np.concatenate([sv, np.zeros(p - len(sv))])  # fewer rows than p
-        if p >= m or float(np.max(sv)) > 1e-4 * s_max:
+        if p >= m or float(np.max(sv)) > 1e-6 * s_max:
             break
         p = min(2 * p, m)
     keep = np.flatnonzero(sv <= rcond * s_max)
