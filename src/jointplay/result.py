@@ -193,6 +193,20 @@ class Result:
             "equilibrium_residual": self.equilibrium_residual,
             "linearization_error": self.linearization_error,
             "warnings": list(self.warnings),
+            "accuracy": self.accuracy(),
+        }
+
+    def accuracy(self) -> dict[str, Any]:
+        """What the certificate proved, in numbers (JSON ``accuracy``): how far
+        any contact goes past its play (mm), the relative imbalance of the
+        forces, the complementarity of forces and gaps, the path taken."""
+        c = self.certificate
+        return {
+            "method": c.method,
+            "feasibility_mm": float(c.feasibility_mm),
+            "equilibrium_residual": float(c.equilibrium_residual),
+            "complementarity": float(c.complementarity),
+            "certified": bool(c.certified),
         }
 
     def check(self) -> None:
