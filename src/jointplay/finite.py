@@ -25,6 +25,10 @@ from .assembly import Assembly
 from .geometry import FloatArray, skew
 
 #: Warn when the exact contacts go past their play by more than this share of it.
+#: A body turning by more than this (rad, about 3 degrees) is warned about:
+#: the small-displacement model's points then drift by about theta^2 / 2
+#: (0.1%) of their lever.
+LARGE_TURN_RAD = 0.05
 WARN_SHARE = 0.01
 
 
@@ -159,5 +163,15 @@ def linearization(asm: Assembly, x: FloatArray, reach_mm: FloatArray) -> Lineari
                 f"joint '{joint.name}', contact '{c.contact.name}': placed with exact "
                 f"rotations it goes {past:.3g} mm past its clearance ({share}); the "
                 "small-displacement answer is not accurate here: solve with --exact"
+            )
+    for i, name in enumerate(asm.body_names):
+        turn = float(np.linalg.norm(asm.turn[i] * x[6 * i + 3 : 6 * i + 6]))
+        if turn > LARGE_TURN_RAD:
+            warnings.append(
+                f"body '{name}' turns by {turn:.3g} rad ({np.degrees(turn):.3g} deg): far "
+                "beyond small displacements, so points away from its joints move much "
+                "less than printed. Its joints hardly hold that turn (nearly coincident "
+                "joints, or a contact almost on an axis): move them apart, or solve with "
+                "--exact"
             )
     return Linearization(worst, where, tuple(warnings))

@@ -331,7 +331,8 @@ class Workspace:
                 "the solver's answer could not be certified: "
                 f"feasibility {cert.feasibility_mm:.3g} mm, equilibrium residual "
                 f"{cert.equilibrium_residual:.3g} (relative), smallest contact force "
-                f"{cert.min_force:.3g} N; please report this model"
+                f"{cert.min_force:.3g} N. " + self._weak_hint() + " If not, please report "
+                "this model."
             )
         point.certificate = cert
         return point
@@ -434,8 +435,35 @@ class Workspace:
             motion = self._driven_motion(-q[: self.m], np.asarray(sol.x))
             raise _unbounded(self.asm, motion, one_way=True)
         if not status.endswith("Solved"):
-            raise SolverError(f"the cone solver stopped with status {status}")
+            raise SolverError(
+                f"the cone solver stopped with status {status} on this model. "
+                + self._weak_hint()
+            )
         return sol
+
+    def _weak_hint(self) -> str:
+        """Words on the motion the joints hold most weakly, for a solve that
+        fails: a nearly free mechanism is the usual cause."""
+        stack = self.stack
+        C = linalg.vstack([stack.A, stack.B[np.flatnonzero(stack.has_offset)], self.E], self.m)
+        if self.sparse or not C.shape[0]:
+            return "Check for nearly coincident joints or a contact almost on an axis."
+        C = C - (C @ self.N) @ self.N.T  # leave out the free motions
+        _, sv, Vt = np.linalg.svd(C)
+        keep = sv > self.settings.free_motion_rcond * sv[0]
+        weakest = int(np.flatnonzero(keep)[-1])
+        ratio = sv[0] / sv[weakest]
+        d = Vt[weakest]
+        body = int(np.argmax([np.linalg.norm(d[6 * i : 6 * i + 6]) for i in range(self.m // 6)]))
+        omega, v_origin = self.asm.body_motion(d, body)
+        motion = describe_motion(omega, v_origin, self.asm.ell)
+        return (
+            f"The motion the joints hold most weakly is body '{self.asm.body_names[body]}': "
+            f"{motion}, held {ratio:.1e} times less firmly than the best-held one. Nearly "
+            "coincident joints or a contact almost on an axis make a mechanism nearly "
+            "free: move them apart, or make that motion free (remove the joint) and "
+            "balance the loads on it."
+        )
 
     # -- warm start, polishing and phase 2 ----------------------------------
     def _no_f(self) -> FloatArray:
