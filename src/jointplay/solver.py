@@ -436,8 +436,7 @@ class Workspace:
             raise _unbounded(self.asm, motion, one_way=True)
         if not status.endswith("Solved"):
             raise SolverError(
-                f"the cone solver stopped with status {status} on this model. "
-                + self._weak_hint()
+                f"the cone solver stopped with status {status} on this model. " + self._weak_hint()
             )
         return sol
 
@@ -663,9 +662,16 @@ class Workspace:
         refined = self._refine_active(g_hat, point, key)
         if refined is not None:
             return refined
-        return (
-            point if self._determined(self._face(key), point.x) else self._phase2(g_hat, point, key)
-        )
+        if self._determined(self._face(key), point.x):
+            return point
+        tie = self._phase2(g_hat, point, key)
+        tie.certificate = self._certify(g_hat, tie)
+        if tie.certificate.certified or not self._certify(g_hat, point).certified:
+            return tie
+        # the least-norm point of the tie did not certify (its second program
+        # is less accurate); the interior point is an optimum all the same
+        point.method = "interior-point, tie not resolved"
+        return point
 
     def _refine_active(self, g_hat: FloatArray, point: _Point, key: _FaceKey) -> _Point | None:
         """Solve the KKT equations of the active set ``key`` read from the
