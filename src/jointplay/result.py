@@ -392,10 +392,10 @@ def equilibrium_residual(
         for sign, side in ((-1.0, 0), (1.0, 1)):
             idx = np.array([index.get(jr.between[side], -1) for jr in jrs])
             on = idx >= 0
-            i = idx[on]
-            np.add.at(F, i, sign * force[on])
-            lever_force = np.cross(centre[on] - ref[i], force[on])
-            np.add.at(M, i, sign * (moment_centre[on] + lever_force))
+            rows = idx[on]
+            np.add.at(F, rows, sign * force[on])
+            lever_force = np.cross(centre[on] - ref[rows], force[on])
+            np.add.at(M, rows, sign * (moment_centre[on] + lever_force))
     worst = max(
         float(np.max(np.linalg.norm(F, axis=1))) if n else 0.0,
         float(np.max(np.linalg.norm(M, axis=1))) / asm.ell if n else 0.0,
