@@ -20,9 +20,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import bench_cases  # noqa: E402
-import bench_paper  # noqa: E402
-import bench_scaling  # noqa: E402
+import bench_cases
+import bench_paper
+import bench_scaling
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -22,6 +22,12 @@ SPARSE_FROM = 240
 
 Matrix = Any  # a dense 2-D FloatArray or a scipy sparse matrix
 
+#: The sparse null space search stops growing its subspace here (a very long
+#: chain has hundreds of weakly held motions, none free): its memory is m times
+#: this. Null directions it returns are checked; past this size a free motion
+#: could be missed, and the cone solver's own unboundedness test takes over.
+MAX_SUBSPACE = 256
+
 
 def is_sparse(a: Matrix) -> bool:
     return bool(sp.issparse(a))
@@ -118,9 +124,9 @@ def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> FloatArray:
         R = np.linalg.qr(np.asarray(C @ Z), mode="r")  # same singular values, p columns
         _, sv, Vt = np.linalg.svd(R, full_matrices=True)
         sv = np.concatenate([sv, np.zeros(p - len(sv))])  # fewer rows than p
-        if p >= m or float(np.max(sv)) > 1e-6 * s_max:
+        if p >= min(m, MAX_SUBSPACE) or float(np.max(sv)) > 1e-6 * s_max:
             break
-        p = min(2 * p, m)
+        p = min(2 * p, m, MAX_SUBSPACE)
     keep = np.flatnonzero(sv <= rcond * s_max)
     basis = Z @ Vt[keep].T
     q, _ = np.linalg.qr(basis)
