@@ -7,6 +7,7 @@ import json
 import os
 import sys
 import traceback
+import warnings
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -94,13 +95,19 @@ def solve(
 
 
 def _console() -> Console:
-    return Console(highlight=False, soft_wrap=False)
+    # names from the model are printed as they are: "[/b]" is not markup, ":x:" no emoji
+    return Console(highlight=False, soft_wrap=False, markup=False, emoji=False)
 
 
 def _guarded(run: Any, as_json: bool) -> None:
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     try:
-        run()
+        with warnings.catch_warnings():
+            # numpy's overflow and division warnings on extreme models are noise
+            # around the one message: the certificate decides what is printed
+            if not os.environ.get("JOINTPLAY_DEBUG"):
+                warnings.simplefilter("ignore", RuntimeWarning)
+            run()
     except JointplayError as exc:
         kind = (
             "invalid model"

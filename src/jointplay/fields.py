@@ -6,13 +6,12 @@ string with units, and fails with an "expected ..., got ..." message.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Annotated, Any
 
 from pydantic import AfterValidator, BeforeValidator, StringConstraints
 
-from .units import to_base
+from .units import shown, to_base
 
 Vec3 = tuple[float, float, float]
 
@@ -26,9 +25,9 @@ def _scalar(dimension: str) -> Callable[[Any], float]:
 
 def _vector(dimension: str) -> Callable[[Any], Vec3]:
     def parse(value: Any) -> Vec3:
-        if isinstance(value, str | bytes) or not hasattr(value, "__len__") or len(value) != 3:
+        if not isinstance(value, list | tuple) or len(value) != 3:
             raise ValueError(
-                f"expected a list of 3 components [x, y, z] ({dimension}), got {value!r}"
+                f"expected a list of 3 components [x, y, z] ({dimension}), got {shown(value)}"
             )
         out = []
         for i, component in enumerate(value):
@@ -53,13 +52,49 @@ def _positive(value: float) -> float:
     return value
 
 
-def _nonzero_vector(value: Vec3) -> Vec3:
-    if math.hypot(*value) == 0.0:
-        raise ValueError("expected a nonzero direction, got [0, 0, 0]")
+#: Softest contact spring (N/mm, 1 N per km): a softer one holds nothing, and
+#: the solver's scaling divides by it.
+SOFTEST_STIFFNESS = 1e-6
+
+
+def _stiff_enough(value: float) -> float:
+    if not value >= SOFTEST_STIFFNESS:
+        raise ValueError(
+            f"expected a stiffness of at least {SOFTEST_STIFFNESS:g} N/mm, got {value:g}; "
+            "give the contact's stiffness in N/mm, or remove 'stiffness' for a rigid contact"
+        )
     return value
 
 
-Name = Annotated[str, StringConstraints(strict=True, min_length=1, strip_whitespace=True)]
+#: A direction's largest component must reach this (in any unit): below it the
+#: squares of the components underflow and the direction cannot be normalized.
+_SHORTEST_DIRECTION = 1e-100
+
+
+def _nonzero_vector(value: Vec3) -> Vec3:
+    if max(abs(c) for c in value) < _SHORTEST_DIRECTION:
+        got = "[0, 0, 0]" if not any(value) else f"[{', '.join(f'{c:g}' for c in value)}]"
+        raise ValueError(
+            f"expected a nonzero direction, got {got}; write plain numbers such as [1, 0, 0]"
+        )
+    return value
+
+
+def _plain_name(value: str) -> str:
+    if not value.isprintable():
+        raise ValueError(
+            f"a name is one line of text, without tabs, line breaks or control characters; "
+            f"got {shown(value)}"
+        )
+    return value
+
+
+#: Names appear in every message and report: one printable line, at most 100 characters.
+Name = Annotated[
+    str,
+    StringConstraints(strict=True, min_length=1, max_length=100, strip_whitespace=True),
+    AfterValidator(_plain_name),
+]
 Length = Annotated[float, BeforeValidator(_scalar("length"))]
 NonNegativeLength = Annotated[
     float, BeforeValidator(_scalar("length")), AfterValidator(_non_negative)
@@ -72,5 +107,5 @@ TorqueVector = Annotated[Vec3, BeforeValidator(_vector("torque"))]
 NonNegativeMass = Annotated[float, BeforeValidator(_scalar("mass")), AfterValidator(_non_negative)]
 AccelerationVector = Annotated[Vec3, BeforeValidator(_vector("acceleration"))]
 PositiveStiffness = Annotated[
-    float, BeforeValidator(_scalar("stiffness")), AfterValidator(_positive)
+    float, BeforeValidator(_scalar("stiffness")), AfterValidator(_stiff_enough)
 ]

@@ -12,10 +12,11 @@ from collections.abc import Iterable
 from functools import cached_property
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, model_validator
 
 from .fields import AccelerationVector, ForceVector, Name, NonNegativeMass, Point, TorqueVector
 from .joints import JOINT_TYPES, Joint
+from .units import shown
 
 if TYPE_CHECKING:
     AnyJoint = Joint
@@ -39,8 +40,25 @@ class EntryError(ValueError):
 
 def suggest(word: str, candidates: Iterable[str]) -> str:
     """' Did you mean 'x'?' for a likely typo, else ''."""
+    if len(word) > 100:  # not a typo, and difflib is slow on long words
+        return ""
     close = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.5)
     return f" Did you mean '{close[0]}'?" if close else ""
+
+
+def listing(names: Iterable[str], most: int = 10) -> str:
+    """'a, b, c' for a message, cut after ``most`` names: 'a, b, ... (and 990 more)'."""
+    names = list(names)
+    text = ", ".join(names[:most])
+    return text + (f", ... (and {len(names) - most} more)" if len(names) > most else "")
+
+
+def _schema_one(value: Any) -> Any:
+    if value != 1 or not isinstance(value, int) or isinstance(value, bool):
+        raise ValueError(
+            f"this is schema version 1; got {shown(value)}. Write 'schema: 1' or leave it out"
+        )
+    return value
 
 
 class Body(BaseModel):
@@ -98,7 +116,7 @@ class Model(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid", populate_by_name=True)
 
-    schema_version: Literal[1] = Field(1, alias="schema")
+    schema_version: Annotated[Literal[1], BeforeValidator(_schema_one)] = Field(1, alias="schema")
     name: str | None = None
     description: str | None = None
     bodies: tuple[Body, ...] = Field(min_length=1)
@@ -118,7 +136,7 @@ class Model(BaseModel):
             raise EntryError(
                 "bodies",
                 "no ground body; mark the fixed body with 'ground: true' "
-                f"(bodies are: {', '.join(names)})",
+                f"(bodies are: {listing(names)})",
             )
         for i, joint in enumerate(self.joints):
             entry = f"joints[{i}] '{joint.name}'"
@@ -127,7 +145,7 @@ class Model(BaseModel):
                 if body not in names:
                     raise EntryError(
                         entry,
-                        f"between: unknown body '{body}'; bodies are: {', '.join(names)}."
+                        f"between: unknown body '{body}'; bodies are: {listing(names)}."
                         + suggest(body, names),
                     )
             if a == b:
@@ -147,7 +165,7 @@ class Model(BaseModel):
             if load.body not in names:
                 raise EntryError(
                     entry,
-                    f"body: unknown body '{load.body}'; bodies are: {', '.join(names)}."
+                    f"body: unknown body '{load.body}'; bodies are: {listing(names)}."
                     + suggest(load.body, names),
                 )
             if load.body in grounds:
@@ -165,7 +183,7 @@ class Model(BaseModel):
             if point.body not in names:
                 raise EntryError(
                     f"points[{i}] '{point.name}'",
-                    f"body: unknown body '{point.body}'; bodies are: {', '.join(names)}."
+                    f"body: unknown body '{point.body}'; bodies are: {listing(names)}."
                     + suggest(point.body, names),
                 )
         unreached = _unreached_from_ground(names, grounds, [j.between for j in self.joints])
@@ -173,7 +191,7 @@ class Model(BaseModel):
             raise EntryError(
                 "bodies",
                 "no chain of joints connects "
-                + ", ".join(f"'{n}'" for n in unreached)
+                + listing(f"'{n}'" for n in unreached)
                 + " to a ground body; add a joint, or mark the body 'ground: true'",
             )
         return self
@@ -195,8 +213,10 @@ class Model(BaseModel):
         for b in self.moving_bodies:
             if b.mass and b.center_of_mass is not None:
                 # kg * mm/s^2 = 1e-3 N
-                force = tuple(1e-3 * b.mass * g for g in self.gravity)
-                out.append(Load(body=b.name, at=b.center_of_mass, force=force))
+                gx, gy, gz = self.gravity
+                force = (1e-3 * b.mass * gx, 1e-3 * b.mass * gy, 1e-3 * b.mass * gz)
+                # built from validated values: no second validation (and its limits)
+                out.append(Load.model_construct(body=b.name, at=b.center_of_mass, force=force))
         return tuple(out)
 
     def loads_of(self, case: str | None = None) -> tuple[Load, ...]:
@@ -207,7 +227,7 @@ class Model(BaseModel):
             if case not in (self.load_cases or {}):
                 cases = self.case_names
                 raise KeyError(
-                    f"no load case '{case}'; cases are: {', '.join(cases) or '(none)'}."
+                    f"no load case {shown(case)}; cases are: {listing(cases) or '(none)'}."
                     + suggest(case, cases)
                 )
             own = (self.load_cases or {})[case]
