@@ -51,3 +51,19 @@ def spherical_shaft(**over: object) -> dict[str, object]:
 @pytest.fixture
 def shaft_dict() -> dict[str, object]:
     return spherical_shaft()
+
+
+# -- Hypothesis profiles, for tests/test_properties.py ---------------------------
+# "ci" (the default): a fixed seed and no example database, so that every run
+# checks the same examples; its budget keeps the property tests near 30 s on
+# two cores. "long": JOINTPLAY_PROFILE=long or pytest --hypothesis-profile=long,
+# fresh random examples on every run. Each property test takes a fraction of
+# max_examples (tests/test_properties.py, ``budget``).
+import os  # noqa: E402
+
+from hypothesis import HealthCheck, settings  # noqa: E402
+
+_PROFILE = {"deadline": None, "database": None, "suppress_health_check": [HealthCheck.too_slow]}
+settings.register_profile("ci", max_examples=600, derandomize=True, **_PROFILE)
+settings.register_profile("long", max_examples=8000, print_blob=True, **_PROFILE)
+settings.load_profile(os.environ.get("JOINTPLAY_PROFILE", "ci"))
