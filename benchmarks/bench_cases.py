@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -40,6 +39,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 import jointplay
+from bench_paper import per_solve_times
 from jointplay.assembly import Assembly, assemble
 from jointplay.linalg import dense
 from jointplay.solver import Workspace
@@ -54,14 +54,7 @@ PAPER = ROOT / "examples" / "paper"
 
 
 def median_ms(fn: Callable[[], object], repeat: int, warmup: int = 3) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * statistics.median(times)
+    return 1e3 * statistics.median(per_solve_times(fn, repeat, warmup))
 
 
 def cones(asm: Assembly) -> list[tuple[np.ndarray, np.ndarray, float]]:
@@ -132,16 +125,6 @@ def cvxpy_build_and_solve(asm: Assembly) -> np.ndarray:
     return np.asarray(x.value)
 
 
-def x_of(asm: Assembly, result: jointplay.Result) -> np.ndarray:
-    """jointplay's answer as the assembled unknowns x."""
-    x = np.zeros(asm.m)
-    for i, name in enumerate(asm.body_names):
-        body = result.bodies[name]
-        x[6 * i : 6 * i + 3] = body.displacement_of(asm.body_ref[i]) / asm.s
-        x[6 * i + 3 : 6 * i + 6] = body.rotation / asm.turn[i]
-    return x
-
-
 def joint_translations(asm: Assembly, x: np.ndarray) -> np.ndarray:
     return np.concatenate([G.apply(x)[:3] for G in asm.G])
 
@@ -165,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
         result.check()
         ws = Workspace(asm)
         ws.solve()
-        x_ref = x_of(asm, result)
+        x_ref = asm.unknowns_of(result.bodies)
         energy = -float(asm.g @ x_ref)
         t_ref = joint_translations(asm, x_ref)
 

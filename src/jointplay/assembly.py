@@ -21,9 +21,10 @@ Everything the solver needs is linear in ``x``:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -380,6 +381,16 @@ class Assembly:
         return np.column_stack(
             [np.full((n, 3), self.s), np.repeat(self.turn[:, None], 3, 1)]
         ).ravel()
+
+    def unknowns_of(self, bodies: Mapping[str, Any]) -> FloatArray:
+        """The scaled unknowns x of an answer's bodies (``Result.bodies``:
+        each with ``displacement_of(point)`` and ``rotation``)."""
+        x = np.zeros(self.m)
+        for i, name in enumerate(self.body_names):
+            body = bodies[name]
+            x[6 * i : 6 * i + 3] = body.displacement_of(self.body_ref[i]) / self.s
+            x[6 * i + 3 : 6 * i + 6] = body.rotation / self.turn[i]
+        return x
 
     def body_motion(self, x: FloatArray, i: int) -> tuple[FloatArray, FloatArray]:
         """(rotation rad, translation at global origin mm) of moving body ``i``

@@ -68,7 +68,7 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     asm = ws.asm
     loads = tuple(asm.model.loads_of(None) if loads is None else loads)
     linear = ws.solve(loads=loads)
-    x = _x_of(asm, linear)
+    x = asm.unknowns_of(linear.bodies)
     iterations = 0
     for iterations in range(1, MAX_ITERATIONS + 1):  # noqa: B007 - reported below
         parts = _contact_parts(asm, x)
@@ -120,16 +120,6 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     worst = max(feas_mm, 0.0)
     object.__setattr__(result, "_linearization", Linearization(worst, None, ()))
     return result
-
-
-def _x_of(asm: Assembly, result: Result) -> FloatArray:
-    """Scaled unknowns of a small-displacement result."""
-    x = np.zeros(asm.m)
-    for i, name in enumerate(asm.body_names):
-        body = result.bodies[name]
-        x[6 * i : 6 * i + 3] = body.displacement_of(asm.body_ref[i]) / asm.s
-        x[6 * i + 3 : 6 * i + 6] = body.rotation / asm.turn[i]
-    return x
 
 
 class _Parts:
