@@ -132,6 +132,17 @@ def solve_cases(
     return {case: ws.solve(loads=model.loads_of(case), exact=exact) for case in model.case_names}
 
 
+#: An active force below this fraction of the largest is not "strictly" positive.
+STRICT = 1e-9
+#: ``_refine_active`` starts from the cones within this fraction of their play
+#: from their limit, and changes its guess at most this many times.
+NEAR_LIMIT = 1e-3
+REFINE_ROUNDS = 6
+#: Contact forces (scaled: loads of unit size) at this level are the
+#: interior-point method's round-off when rigid joints carry the loads.
+NOISE_FORCE = 1e-6
+
+
 class Workspace:
     """The solver's side: assembled matrices, free motions and scratch data.
 
@@ -426,6 +437,10 @@ class Workspace:
         tol = self.settings.ipm_tolerance
         settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
         settings.max_iter = self.settings.max_iterations
+        # refine each step's linear solve further than the default: with
+        # stiff springs pressed far past their play, the default leaves some
+        # programs "AlmostSolved" at a 1e-7 gap
+        settings.iterative_refinement_reltol = settings.iterative_refinement_abstol = 1e-14
         return _ConeProgram(P_upper, A, b, cones, settings, soc_first, ball_rows)
 
     def _clarabel(self, prog: _ConeProgram, q: FloatArray) -> Any:
@@ -576,11 +591,14 @@ class Workspace:
         iterations: int,
         method: str,
         max_iter: int,
+        pinned: bool = True,
     ) -> _Point | None:
         """The solution of the KKT equations of the active set ``key``, if
-        Newton converges and the face pins the position down (forces unchecked)."""
+        Newton converges and (``pinned``) the face pins the position down
+        (forces unchecked). Unpinned, Newton's least-squares steps stop at an
+        optimum near ``x0`` on the tied face."""
         face = self._face(key)
-        if not self._determined(face, x0):
+        if pinned and not self._determined(face, x0):
             return None
         surface, linear = key
         ne = self.Eq.shape[0]
@@ -603,7 +621,7 @@ class Workspace:
         if out is None:
             return None
         x, lam_s, nu, its = out
-        if not self._determined(face, x):
+        if pinned and not self._determined(face, x):
             return None
         return self._assemble_point(x, face, lam_s, nu[ne:], method, iterations + its)
 
@@ -639,11 +657,13 @@ class Workspace:
         lam: FloatArray,
         f: FloatArray,
         stack: BallStack,
-        lam_scale: float = 0.0,
+        lam_scale: float = NOISE_FORCE,
     ) -> _FaceKey:
         """Contacts whose multiplier outweighs their slack (both relative),
         split into those on their cone's surface and those at its apex (or
-        with no rows): see ``_Face``."""
+        with no rows): see ``_Face``. Multipliers are relative to the largest,
+        or to ``lam_scale`` if that is larger (when rigid joints carry the
+        loads, the contacts' multipliers are round-off)."""
         if len(lam) == 0:
             return (), ()
         lam_max = max(float(np.max(lam)), lam_scale, 1e-300)
@@ -659,19 +679,15 @@ class Workspace:
 
     def _polish(self, g_hat: FloatArray, point: _Point) -> _Point:
         key = self._active(point.x, point.lam, point.f, self.stack)
-        refined = self._refine_active(g_hat, point, key)
-        if refined is not None:
-            return refined
-        if self._determined(self._face(key), point.x):
-            return point
-        tie = self._phase2(g_hat, point, key)
-        tie.certificate = self._certify(g_hat, tie)
-        if tie.certificate.certified or not self._certify(g_hat, point).certified:
-            return tie
-        # the least-norm point of the tie did not certify (its second program
-        # is less accurate); the interior point is an optimum all the same
-        point.method = "interior-point, tie not resolved"
-        return point
+        optimum = self._refine_active(g_hat, point, key)
+        if optimum is None:  # the interior point as it is, if it certifies
+            optimum = point
+        elif optimum.active is not None:
+            key = optimum.active
+        if self._determined(self._face(key), optimum.x):
+            return optimum
+        optimum.active = None  # the face is not a warm start: x is not unique
+        return self._phase2(g_hat, optimum, key)
 
     def _refine_active(self, g_hat: FloatArray, point: _Point, key: _FaceKey) -> _Point | None:
         """Solve the KKT equations of the active set ``key`` read from the
@@ -701,7 +717,9 @@ class Workspace:
                 tuple(sorted(i for i in active if not at_apex[i])),
                 tuple(sorted(i for i in active if at_apex[i])),
             )
-            trial = self._kkt_point(g_hat, trial_key, x, lam, point.iterations, "polished", 30)
+            trial = self._kkt_point(
+                g_hat, trial_key, x, lam, point.iterations, "polished", 30, pinned=False
+            )
             if trial is None:
                 return None
             weak = self._weak_forces(trial, trial_key)
@@ -776,9 +794,9 @@ class Workspace:
         )
         if polished is not None:
             x = polished[0]
-        touching = sorted(set(both) | {rest_index[i] for i in (*key2[0], *key2[1])})
-        lam, f = self._forces_at(g_hat, x, touching)
-        return _Point(x, lam, f, method="least-norm face", iterations=point.iterations)
+        # any optimal forces are complementary to every optimal position:
+        # those of ``point`` hold at x, which keeps its active cones as they were
+        return _Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
 
     def _forces_at(
         self, g_hat: FloatArray, x: FloatArray, touching: list[int]
@@ -870,14 +888,6 @@ class _ConeProgram:
     settings: Any
     soc_first: IntArray  # row of each cone's first entry (its multiplier lam)
     f_rows: IntArray  # rows of the cones' other entries (their force vectors f)
-
-
-#: An active force below this fraction of the largest is not "strictly" positive.
-STRICT = 1e-9
-#: ``_refine_active`` starts from the cones within this fraction of their play
-#: from their limit, and changes its guess at most this many times.
-NEAR_LIMIT = 1e-3
-REFINE_ROUNDS = 6
 
 
 def _csc(a: FloatArray) -> sp.csc_matrix:
