@@ -8,9 +8,11 @@ assembly builds (see ``SPARSE_FROM``).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -164,45 +166,59 @@ class SingularSystemError(Exception):
     """A linear system had no accurate solution."""
 
 
-def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int) -> FloatArray:
+def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> FloatArray:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
     equations). A singular but consistent system (statically indeterminate
     forces) gets a least-squares (dense) or regularized-and-refined (sparse)
-    solution; raises ``SingularSystemError`` when no step solves it accurately."""
+    solution; raises ``SingularSystemError`` when no step solves it accurately.
+
+    ``prox`` > 0: the system is expected to be singular up to round-off (a
+    tied face); the step is the regularized-and-refined one, which stays
+    nearest the current point in every unknown (a plain solve would take the
+    round-off's huge step along the singular directions)."""
     size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
-    if not sp.issparse(K):
-        try:
-            step = np.linalg.solve(K, rhs)
-            if float(np.max(np.abs(K @ step - rhs))) <= 1e-8 * size:
-                return np.asarray(step)
-        except np.linalg.LinAlgError:
-            pass
-        return np.asarray(np.linalg.lstsq(K, rhs, rcond=1e-13)[0])
-    K = sp.csc_matrix(K)
-    try:
-        step = spla.splu(K).solve(rhs)
-        if np.all(np.isfinite(step)) and float(np.max(np.abs(K @ step - rhs))) <= 1e-8 * size:
-            return np.asarray(step)
-    except RuntimeError:  # exactly singular
-        pass
-    # Singular (statically indeterminate forces): quasi-definite regularization,
-    # then refinement against K itself, a proximal-point iteration that
-    # converges on a consistent system to the solution nearest the current
-    # multipliers, as the dense least-squares step does.
-    eps = 1e-12 * max(1.0, float(abs(K).max()))
+    if not prox:
+        step = _plain_solve(K, rhs, size)
+        if step is not None:
+            return step
+    # Quasi-definite regularization, then refinement against K itself: a
+    # proximal-point iteration that converges on a consistent system to the
+    # solution nearest the current point, as a least-squares step does.
+    eps = max(prox, 1e-12 * max(1.0, float(abs(K).max())))
     n = K.shape[0]
     signs = np.r_[np.ones(n_primal), -np.ones(n - n_primal)]
     try:
-        lu = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs)))
-    except RuntimeError:
-        raise SingularSystemError from None
-    refined = np.zeros(n)
-    for _ in range(40):
-        miss = rhs - K @ refined
-        if float(np.max(np.abs(miss))) <= 1e-10 * size:
-            return np.asarray(refined, dtype=np.float64)
-        refined = refined + np.asarray(lu.solve(miss), dtype=float)
+        if sp.issparse(K):
+            solve = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs))).solve
+        else:
+            factors = sla.lu_factor(K + np.diag(eps * signs), check_finite=False)
+            solve = partial(sla.lu_solve, factors, check_finite=False)
+    except (RuntimeError, ValueError, np.linalg.LinAlgError):
+        solve = None
+    if solve is not None:
+        refined = np.zeros(n)
+        for _ in range(40):
+            miss = rhs - K @ refined
+            if float(np.max(np.abs(miss))) <= 1e-10 * size:
+                return np.asarray(refined, dtype=np.float64)
+            refined = refined + np.asarray(solve(miss), dtype=float)
+    if not sp.issparse(K):
+        return np.asarray(np.linalg.lstsq(K, rhs, rcond=1e-13)[0])
     raise SingularSystemError
+
+
+def _plain_solve(K: Matrix, rhs: FloatArray, size: float) -> FloatArray | None:
+    """``K^-1 rhs`` if K is regular enough to give it accurately, else None."""
+    try:
+        if sp.issparse(K):
+            step = spla.splu(sp.csc_matrix(K)).solve(rhs)
+        else:
+            step = np.linalg.solve(K, rhs)
+    except (RuntimeError, np.linalg.LinAlgError):  # exactly singular
+        return None
+    if np.all(np.isfinite(step)) and float(np.max(np.abs(K @ step - rhs))) <= 1e-8 * size:
+        return np.asarray(step)
+    return None
 
 
 def lstsq(A: Matrix, b: FloatArray) -> FloatArray:

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import clarabel
 import numpy as np
+from numpy.typing import NDArray
 import scipy.sparse as sp
 
 from . import linalg
@@ -133,14 +134,22 @@ def solve_cases(
 
 
 #: An active force below this fraction of the largest is not "strictly" positive.
-STRICT = 1e-9
+STRICT = 1e-8
 #: ``_refine_active`` starts from the cones within this fraction of their play
 #: from their limit, and changes its guess at most this many times.
 NEAR_LIMIT = 1e-3
+#: ... or, failing that, from the active cones without the faintly loaded ones.
+FAINT = 1e-4
 REFINE_ROUNDS = 6
 #: Contact forces (scaled: loads of unit size) at this level are the
 #: interior-point method's round-off when rigid joints carry the loads.
 NOISE_FORCE = 1e-6
+#: Proximal weight of Newton's steps on a face that may be tied (scaled
+#: unknowns, loads of unit size): the steps along the tie stay short.
+TIE_PROX = 1e-9
+#: ... taken on a large system when a plain Newton step goes this many times
+#: farther than the size of the position (or of the forces).
+FAR = 1e3
 
 
 class Workspace:
@@ -617,6 +626,7 @@ class Workspace:
             max_iter,
             self.sigma[list(surface)],
             eq_soft,
+            prox=0.0 if pinned else TIE_PROX,
         )
         if out is None:
             return None
@@ -690,13 +700,13 @@ class Workspace:
         return self._phase2(g_hat, optimum, key)
 
     def _refine_active(self, g_hat: FloatArray, point: _Point, key: _FaceKey) -> _Point | None:
-        """Solve the KKT equations of the active set ``key`` read from the
-        interior-point answer (or, if that set does not pin the position down,
-        of every cone near its limit); if some force comes out negative or a
-        cone is pushed past its limit, take a few steps of an active-set
-        method: drop those cones, add these. A large mechanism needs them:
-        there an interior-point answer to 1e-10 cannot tell a slightly loaded
-        contact from a nearly touching one."""
+        """A certified optimum, from the KKT equations of the active set
+        ``key`` read from the interior-point answer or, failing that, of every
+        cone near its limit; if some force comes out negative or a cone is
+        pushed past its limit, take a few steps of an active-set method: drop
+        those cones, add these. A large mechanism needs them: there an
+        interior-point answer to 1e-10 cannot tell a slightly loaded contact
+        from a nearly touching one. The optimum need not be unique (a tie)."""
         stack = self.stack
         if not len(stack.k):
             return None
@@ -704,14 +714,34 @@ class Workspace:
         r = np.where(stack.r > 0, stack.r, self._max_radius)
         f_norm = np.sqrt(stack.segment_sum(point.f * point.f))
         at_apex = (stack.k == 0) | ((rho <= 1e-6 * r) & (f_norm < (1.0 - 1e-6) * point.lam))
-        if self._determined(self._face(key), point.x):
-            active = {*key[0], *key[1]}
-        else:
-            active = set(np.flatnonzero((stack.r - level) / r <= NEAR_LIMIT).tolist())
+        near = set(np.flatnonzero((stack.r - level) / r <= NEAR_LIMIT).tolist())
+        # a contact the interior point loads faintly may be one that nearly
+        # touches (its equations then contradict the others')
+        both = np.array([*key[0], *key[1]], dtype=np.intp)
+        faint = set(both[point.lam[both] < FAINT * float(np.max(point.lam, initial=0.0))].tolist())
+        seen: set[frozenset[int]] = set()
+        for start in ({*key[0], *key[1]}, near, {*key[0], *key[1]} - faint):
+            found = self._active_set_steps(g_hat, point, start, at_apex, seen)
+            if found is not None:
+                return found
+        return None
+
+    def _active_set_steps(
+        self,
+        g_hat: FloatArray,
+        point: _Point,
+        active: set[int],
+        at_apex: NDArray[np.bool_],
+        seen: set[frozenset[int]],
+    ) -> _Point | None:
+        """The active-set rounds of ``_refine_active`` from ``active``."""
+        stack = self.stack
+        r = np.where(stack.r > 0, stack.r, self._max_radius)
         lam_scale = float(np.max(np.abs(point.lam)))
         x, lam = point.x, point.lam
-        seen: set[frozenset[int]] = set()
         for _ in range(REFINE_ROUNDS):
+            if frozenset(active) in seen:
+                return None
             seen.add(frozenset(active))
             trial_key: _FaceKey = (
                 tuple(sorted(i for i in active if not at_apex[i])),
@@ -726,12 +756,18 @@ class Workspace:
             _, _, level = stack.levels(trial.x)
             past = np.flatnonzero((level - stack.r) / r > 1e-9)
             past = past[[i not in active for i in past]]
-            if not weak.size and not past.size:
+            if not past.size:
                 trial.certificate = self._certify(g_hat, trial)
-                return trial if trial.certificate.certified else None
+                if trial.certificate.certified:
+                    # a cone with no force (to round-off) does not bound the tie
+                    trial.active = (
+                        tuple(i for i in trial_key[0] if i not in weak),
+                        tuple(i for i in trial_key[1] if i not in weak),
+                    )
+                    return trial
+                if not weak.size:
+                    return None
             active = (active - set(weak.tolist())) | set(past.tolist())
-            if frozenset(active) in seen:
-                return None
             x, lam = trial.x, np.maximum(trial.lam, STRICT * lam_scale)
         return None
 
@@ -771,8 +807,9 @@ class Workspace:
         # a compliant contact keeps its penetration; the others stay on its face
         reach = self.stack.r[both] + self.sigma[both] * point.lam[both]
         L, L_rhs = self._face_equalities(self.stack, key, point.x, reach)
-        Eq = linalg.vstack([self.Eq, L], self.m)
-        e = np.concatenate([np.zeros(self.Eq.shape[0]), L_rhs])
+        Eq, e = self._independent_rows(
+            linalg.vstack([self.Eq, L], self.m), np.concatenate([np.zeros(self.Eq.shape[0]), L_rhs])
+        )
         rest_index = [i for i in range(len(self.balls)) if i not in set(both)]
         rest = self.stack.take(rest_index)
         metric = self.asm.metric_matrix
@@ -781,58 +818,61 @@ class Workspace:
         x = np.asarray(sol.x)
         z = np.asarray(sol.z)
         lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
-        key2 = self._active(x, lam_rest, f_rest, rest, float(np.max(np.abs(metric @ x))))
-        L2, l2 = self._face_equalities(rest, ((), key2[1]), x, rest.r[list(key2[1])])
-        polished = _newton(
-            metric,
-            np.zeros(self.m),
-            linalg.vstack([Eq, L2], self.m),
-            np.concatenate([e, l2]),
-            rest.take(key2[0]),
-            x,
-            lam_rest[list(key2[0])],
-        )
-        if polished is not None:
-            x = polished[0]
+        x = self._phase2_polish(x, lam_rest, f_rest, rest, Eq, e)
         # any optimal forces are complementary to every optimal position:
         # those of ``point`` hold at x, which keeps its active cones as they were
         return _Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
 
-    def _forces_at(
-        self, g_hat: FloatArray, x: FloatArray, touching: list[int]
-    ) -> tuple[FloatArray, FloatArray]:
-        """Contact multipliers that best balance the loads at ``x`` (least
-        squares): a cone on its surface pushes along ``A_i x``; one at its apex
-        (or with no rows) may push with any ``f_i`` (checked by the certificate)."""
-        stack = self.stack
-        v, rho = stack.norms(x)
-        r = np.where(stack.r > 0, stack.r, self._max_radius)
-        cols: list[Matrix] = []
-        slots: list[tuple[int, bool]] = []  # (cone, along u) per block of columns
-        for i in touching:
-            M = stack.face_rows(i)  # (A_i; B_i)
-            if stack.k[i] and rho[i] > 1e-9 * r[i]:
-                u = v[stack.start[i] : stack.start[i] + stack.k[i]] / rho[i]
-                cols.append(linalg.adjoint(M, np.append(u, 1.0))[:, None])
-                slots.append((i, True))
-            else:
-                cols.append(M.T)
-                slots.append((i, False))
-        coef = linalg.lstsq(linalg.hstack([*cols, self.E.T], self.m), g_hat)
-        lam = np.zeros(len(self.balls))
-        f = self._no_f()
-        at = 0
-        for i, along in slots:
-            rows = slice(stack.start[i], stack.start[i] + stack.k[i])
-            if along:
-                lam[i] = coef[at]
-                f[rows] = lam[i] * v[rows] / rho[i]
-                at += 1
-            else:
-                f[rows] = coef[at : at + stack.k[i]]
-                lam[i] = coef[at + stack.k[i]]
-                at += stack.k[i] + 1
-        return lam, f
+    def _phase2_polish(
+        self,
+        x: FloatArray,
+        lam: FloatArray,
+        f: FloatArray,
+        rest: BallStack,
+        Eq: Matrix,
+        e: FloatArray,
+    ) -> FloatArray:
+        """Newton on the KKT equations of the least-norm program from its
+        interior point ``x``, with a few active-set rounds (cones pushed past
+        their limit join); ``x`` itself if that does not end feasible."""
+        metric = self.asm.metric_matrix
+        surface, linear = self._active(x, lam, f, rest, float(np.max(np.abs(metric @ x))))
+        active = {*surface, *linear}
+        apex = set(linear)
+        r = np.where(rest.r > 0, rest.r, self._max_radius)
+        for _ in range(REFINE_ROUNDS):
+            on_surface = sorted(i for i in active if i not in apex)
+            at_apex = sorted(i for i in active if i in apex)
+            L2, l2 = self._face_equalities(rest, ((), tuple(at_apex)), x, rest.r[at_apex])
+            polished = _newton(
+                metric,
+                np.zeros(self.m),
+                linalg.vstack([Eq, L2], self.m),
+                np.concatenate([e, l2]),
+                rest.take(on_surface),
+                x,
+                np.maximum(lam[on_surface], 0.0),
+            )
+            if polished is None:
+                return x
+            _, _, level = rest.levels(polished[0])
+            past = set(np.flatnonzero((level - rest.r) / r > 1e-9).tolist()) - active
+            if not past:
+                return polished[0]
+            active |= past
+            apex |= {i for i in past if rest.k[i] == 0}
+        return x
+
+    def _independent_rows(self, C: Matrix, c: FloatArray) -> tuple[Matrix, FloatArray]:
+        """Equalities ``C x = c`` as orthonormal, independent rows (least
+        squares): the face's rows often repeat each other (a joint's cones
+        share them), and nearly dependent rows make the solvers' multipliers
+        huge and their accuracy poor. A large (sparse) system is kept as it is."""
+        if linalg.is_sparse(C) or not C.shape[0]:
+            return C, c
+        U, sv, Vt = np.linalg.svd(np.asarray(C), full_matrices=False)
+        keep = sv > self.settings.free_motion_rcond * sv[0] if sv[0] > 0 else sv > 0
+        return Vt[keep], (U[:, keep].T @ c) / sv[keep]
 
     # -- certificate --------------------------------------------------------
     def _certify(self, g_hat: FloatArray, point: _Point) -> Certificate:
@@ -933,6 +973,7 @@ def _newton(
     max_iter: int = 30,
     soft: FloatArray | None = None,
     eq_soft: FloatArray | None = None,
+    prox: float = 0.0,
 ) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
     """Newton's method on the KKT equations of an active set.
 
@@ -940,8 +981,12 @@ def _newton(
     active contacts on their surface ``|A_i x| + B_i x = r_i + soft_i lam_i``
     (``soft``: compliance, default 0), equalities ``Eq x = e + eq_soft nu``.
     A singular system (statically indeterminate contact forces) takes
-    least-squares steps. Returns None when it does not converge to machine
-    precision (relative to the size of the terms that balance).
+    least-squares steps. ``prox`` > 0: the steps are proximal ones
+    (``linalg.solve_kkt``): on a tied face, whose directions make the system
+    singular only up to round-off, they stay short and end at the optimum
+    nearest ``x0``, with the forces nearest ``lam0``. Returns None when it does not
+    converge to machine precision (relative to the size of the terms that
+    balance).
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
@@ -980,14 +1025,22 @@ def _newton(
             )
         else:
             F = np.concatenate([grad, Eq @ x - e - soft_eq * nu])
-        err = float(np.max(np.abs(F))) if F.size else 0.0
-        # round-off grows with the forces that balance (long chains carry large ones)
-        scale = _term_scale(q, lam, nu)
+        # relative errors: stationarity to the forces that balance (round-off
+        # grows with them: long chains carry large ones), the contact and
+        # equality rows to the size of the position
+        force_scale = _term_scale(q, lam, nu)
+        if P is not None:
+            force_scale = max(force_scale, float(np.max(np.abs(P @ x), initial=0.0)))
+        length_scale = max(1.0, float(np.max(np.abs(x), initial=0.0)))
+        err = max(
+            float(np.max(np.abs(F[:m]), initial=0.0)) / force_scale,
+            float(np.max(np.abs(F[m:]), initial=0.0)) / length_scale,
+        )
         if best is None or err < best[0]:
             best = (err, x, lam, nu, it)
         history.append(err)
         stalled = it >= 3 and err > 0.5 * min(history[-4:-1])
-        if err <= 1e-14 * scale or it == max_iter or (stalled and err <= 1e-11 * scale):
+        if err <= 1e-14 or it == max_iter or (stalled and err <= 1e-11):
             break
         if na:
             c = lam / rho
@@ -1016,7 +1069,19 @@ def _newton(
                 format="csc",
             )
         try:
-            step = linalg.solve_kkt(Kmat, -F, m)
+            # proximal steps where a tie may be (dense: small systems, whose
+            # refinement is cheap); a large system's only when its plain step
+            # is absurd (they converge slowly on a long chain's weak modes)
+            step = linalg.solve_kkt(Kmat, -F, m, 0.0 if sparse else prox)
+            if (
+                prox
+                and sparse
+                and (
+                    float(np.max(np.abs(step[:m]))) > FAR * length_scale
+                    or float(np.max(np.abs(step[m:]), initial=0.0)) > FAR * force_scale
+                )
+            ):  # round-off's step along a tie or an indeterminate force
+                step = linalg.solve_kkt(Kmat, -F, m, prox)
         except linalg.SingularSystemError:
             break
         x = x + step[:m]
@@ -1024,7 +1089,7 @@ def _newton(
         nu = nu + step[m + na :]
     assert best is not None
     err, x, lam, nu, its = best
-    if err > 1e-11 * _term_scale(q, lam, nu):
+    if err > 1e-11:
         return None
     return x, lam, nu, its
 
