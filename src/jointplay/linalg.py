@@ -210,10 +210,8 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
 def _plain_solve(K: Matrix, rhs: FloatArray, size: float) -> FloatArray | None:
     """``K^-1 rhs`` if K is regular enough to give it accurately, else None."""
     try:
-        if sp.issparse(K):
-            step = spla.splu(sp.csc_matrix(K)).solve(rhs)
-        else:
-            step = np.linalg.solve(K, rhs)
+        solve = spla.splu(sp.csc_matrix(K)).solve if sp.issparse(K) else partial(np.linalg.solve, K)
+        step = solve(rhs)
     except (RuntimeError, np.linalg.LinAlgError):  # exactly singular
         return None
     if np.all(np.isfinite(step)) and float(np.max(np.abs(K @ step - rhs))) <= 1e-8 * size:

@@ -27,8 +27,8 @@ from typing import TYPE_CHECKING, Any
 
 import clarabel
 import numpy as np
-from numpy.typing import NDArray
 import scipy.sparse as sp
+from numpy.typing import NDArray
 
 from . import linalg
 from .assembly import Assembly, BallStack, IntArray, assemble
