@@ -33,7 +33,7 @@ def frame(axis: Any, up: Any = None) -> np.ndarray:
         if np.linalg.norm(np.cross(x, up)) < 1e-9:
             up = np.array([-np.sign(x[2]), 0.0, 0.0])
     up = np.asarray(up, dtype=float)
-    z = up - (up @ x) * x
+    z = np.cross(x, np.cross(up, x))  # up - (up . x) x, without cancellation
     z = z / np.linalg.norm(z)
     return np.column_stack([x, np.cross(z, x), z])
 

@@ -44,7 +44,7 @@ CASES = Path(__file__).parent / "property_cases"
 #: decline some random multi-body models (see the report of the property
 #: tests). A declined example checks nothing more. Set this to False once the
 #: solver no longer declines, to make every decline a failure.
-SOLVER_MAY_DECLINE = True
+SOLVER_MAY_DECLINE = False
 
 #: Answers that jointplay polishes to round-off (``certificate.method``). The
 #: others, the interior-point answer and the least-norm point of a tie built
@@ -59,7 +59,7 @@ SOLVER_MAY_DECLINE = True
 #: having no lower energy near or far and the same energy in a moved model
 #: (to ENERGY_INEXACT), and to boundedness; polished answers to everything.
 #: Set this to True once every answer is exact.
-CHECK_INEXACT_FULLY = False
+CHECK_INEXACT_FULLY = True
 EXACT_METHODS = ("polished", "warm-started Newton", "no load")
 
 

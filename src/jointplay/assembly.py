@@ -199,6 +199,19 @@ class BallStack:
             self.A[self.rows_of(idx)], start, k, self.r[idx], self.spring[idx], self.B[idx]
         )
 
+    def with_limits(self, rows: Matrix) -> BallStack:
+        """This stack and the one-sided limits ``rows @ x <= 0`` (one per row)."""
+        n = rows.shape[0]
+        total = np.full(n, int(np.sum(self.k)), dtype=np.intp)
+        return BallStack(
+            self.A,
+            np.concatenate([self.start, total]),
+            np.concatenate([self.k, np.zeros(n, dtype=np.intp)]),
+            np.concatenate([self.r, np.zeros(n)]),
+            np.concatenate([self.spring, np.zeros(n)]),
+            linalg.vstack([self.B, rows], self.m),
+        )
+
     @cached_property
     def has_offset(self) -> NDArray[np.bool_]:
         """(n,): the cone has a face row ``B_i`` (a one-sided limit or a tilting face)."""

@@ -61,8 +61,9 @@ def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:
         up = GLOBAL_AXES["Z"]
         if is_parallel(x, up):
             up = np.array([-np.sign(x[2]), 0.0, 0.0])
-    z = np.asarray(up, dtype=float) - float(np.dot(up, x)) * x
-    z = unit(z)
+    # z = up - (up . x) x, written as x cross (up cross x): accurate also
+    # when up is nearly along x (the subtraction would lose its digits)
+    z = unit(cross(x, cross(np.asarray(up, dtype=float), x)))
     y = cross(z, x)
     return np.column_stack([x, y, z])
 

@@ -150,6 +150,11 @@ TIE_PROX = 1e-9
 #: ... taken on a large system when a plain Newton step goes this many times
 #: farther than the size of the position (or of the forces).
 FAR = 1e3
+#: Newton's answer on a face that may be tied is kept when its equations
+#: hold to this (relative; it stops at 1e-14, or where round-off stalls it,
+#: which on a nearly degenerate mechanism may be far above): the
+#: certificate's tolerance, and the certificate has the last word.
+NEWTON_ACCEPT = 1e-8
 
 
 class Workspace:
@@ -627,6 +632,7 @@ class Workspace:
             self.sigma[list(surface)],
             eq_soft,
             prox=0.0 if pinned else TIE_PROX,
+            accept=1e-11 if pinned else NEWTON_ACCEPT,
         )
         if out is None:
             return None
@@ -767,7 +773,17 @@ class Workspace:
                     return trial
                 if not weak.size:
                     return None
-            active = (active - set(weak.tolist())) | set(past.tolist())
+            # a face at its apex whose force reaches its cone's edge tilts
+            # onto its surface; the other weak cones leave the set
+            lam_top = float(np.max(trial.lam, initial=0.0))
+            tilts = {
+                int(i)
+                for i in weak
+                if at_apex[i] and self.stack.k[i] and trial.lam[i] > STRICT * lam_top
+            }
+            at_apex = at_apex.copy()
+            at_apex[list(tilts)] = False
+            active = (active - (set(weak.tolist()) - tilts)) | set(past.tolist())
             x, lam = trial.x, np.maximum(trial.lam, STRICT * lam_scale)
         return None
 
@@ -812,6 +828,16 @@ class Workspace:
         )
         rest_index = [i for i in range(len(self.balls)) if i not in set(both)]
         rest = self.stack.take(rest_index)
+        # a tilting face stays on the side it leans to: u . A_i x >= 0
+        v, rho = self.stack.norms(point.x)
+        lean = [
+            -(v[self.stack.start[i] : self.stack.start[i] + self.stack.k[i]] / rho[i])
+            @ linalg.dense(self.stack.cone_rows(i))
+            for i in surface
+            if self.stack.k[i] and self.stack.has_offset[i] and rho[i] > 0
+        ]
+        if lean:
+            rest = rest.with_limits(np.array(lean))
         metric = self.asm.metric_matrix
         prog = self._cone_program(metric, Eq, e, rest)
         sol = self._clarabel(prog, np.zeros(self.m))
@@ -974,6 +1000,7 @@ def _newton(
     soft: FloatArray | None = None,
     eq_soft: FloatArray | None = None,
     prox: float = 0.0,
+    accept: float = 1e-11,
 ) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
     """Newton's method on the KKT equations of an active set.
 
@@ -984,9 +1011,9 @@ def _newton(
     least-squares steps. ``prox`` > 0: the steps are proximal ones
     (``linalg.solve_kkt``): on a tied face, whose directions make the system
     singular only up to round-off, they stay short and end at the optimum
-    nearest ``x0``, with the forces nearest ``lam0``. Returns None when it does not
-    converge to machine precision (relative to the size of the terms that
-    balance).
+    nearest ``x0``, with the forces nearest ``lam0``. Returns None when its
+    equations do not hold to ``accept`` (relative: stationarity to the size
+    of the forces that balance, the other rows to the size of x).
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
@@ -1040,7 +1067,7 @@ def _newton(
             best = (err, x, lam, nu, it)
         history.append(err)
         stalled = it >= 3 and err > 0.5 * min(history[-4:-1])
-        if err <= 1e-14 or it == max_iter or (stalled and err <= 1e-11):
+        if err <= 1e-14 or it == max_iter or stalled:
             break
         if na:
             c = lam / rho
@@ -1089,7 +1116,7 @@ def _newton(
         nu = nu + step[m + na :]
     assert best is not None
     err, x, lam, nu, its = best
-    if err > 1e-11:
+    if err > accept:
         return None
     return x, lam, nu, its
 
