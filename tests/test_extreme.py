@@ -90,22 +90,38 @@ def test_kilonewton_loads_on_springs_sink_by_force_over_stiffness() -> None:
     assert ball.contacts[0].penetration == pytest.approx(20000 / 5e5, abs=MM)
 
 
-def test_nearly_coincident_joints_are_flagged_not_hidden() -> None:
-    """A shaft tilting about a ball 1 um from its ring: the play allows a turn
-    of radians, far outside small displacements. The answer is the linear
-    model's, and the result says how far it is from the exact geometry."""
+def _shaft_with_ring_at(x_mm: float) -> dict[str, object]:
     data = spherical_shaft()
     data["joints"][1] = {  # type: ignore[index]
         "name": "l2",
         "type": "sphere_in_cylinder",
         "between": ["S0", "S1"],
-        "at": [0.001, 0, 0],
+        "at": [x_mm, 0, 0],
         "clearance": 0.2,
     }
-    result = jointplay.solve(model_from_dict(data))
+    return data
+
+
+def test_nearly_coincident_joints_are_flagged_not_hidden() -> None:
+    """A shaft tilting about a ball 1 um from its ring: the play allows a
+    turn of 200 rad, far beyond small displacements. The answer is the linear
+    model's, and the result says how far it is from the exact geometry."""
+    result = jointplay.solve(model_from_dict(_shaft_with_ring_at(0.001)))
     result.check()
     assert result.warnings, "a turn of radians must not pass silently"
     assert "body 'S1' turns by" in result.warnings[-1]
+
+
+def test_joints_a_nanometre_apart_hold_nothing() -> None:
+    """The same ring 1 nm from the ball: the linear answer turns the shaft by
+    2e5 rad. That is no answer: the shaft is reported as not held (exit 3),
+    with the turn and the motion named."""
+    with pytest.raises(jointplay.UnboundedMechanismError) as info:
+        jointplay.solve(model_from_dict(_shaft_with_ring_at(1e-6)))
+    message = str(info.value)
+    assert "body 'S1'" in message
+    assert "held only weakly" in message
+    assert "2e+05 rad" in message
 
 
 def test_a_nearly_free_spin_is_held_or_reported() -> None:

@@ -141,6 +141,12 @@ NEAR_LIMIT = 1e-3
 #: ... or, failing that, from the active cones without the faintly loaded ones.
 FAINT = 1e-4
 REFINE_ROUNDS = 6
+#: A body turning by more than this (rad) in the answer is reported as not
+#: held (``UnboundedMechanismError``): a linear answer means nothing there.
+#: (Turns above 0.05 rad are answered with a warning, ``finite.py``; random
+#: mechanisms held by design reach 30 rad, a mechanism whose joints are
+#: nearly coincident or whose axes lean 1e-7 rad from a free motion 1e5 rad.)
+FREE_TURN_RAD = 1e3
 #: Contact forces (scaled: loads of unit size) at this level are the
 #: interior-point method's round-off when rigid joints carry the loads.
 NOISE_FORCE = 1e-6
@@ -347,9 +353,11 @@ class Workspace:
                 point = warm
             else:
                 point = self._phase1(g_hat)
+                self._check_turns(point.x)
                 if self.settings.polish:
                     point = self._polish(g_hat, point)
             self._last = point if point.active is not None else None
+        self._check_turns(point.x)
         cert = point.certificate or self._certify(g_hat, point)
         if not cert.certified:
             raise SolverError(
@@ -361,6 +369,17 @@ class Workspace:
             )
         point.certificate = cert
         return point
+
+    def _check_turns(self, x: FloatArray) -> None:
+        """A body that the loads turn by more than ``FREE_TURN_RAD`` is not
+        held in any sense a small-displacement answer can describe."""
+        asm = self.asm
+        if not self.m:
+            return
+        turns = np.linalg.norm(x.reshape(-1, 6)[:, 3:], axis=1) * asm.turn
+        worst = int(np.argmax(turns))
+        if turns[worst] > FREE_TURN_RAD:
+            raise _unbounded(asm, x, one_way=True, turn=float(turns[worst]))
 
     # -- phase 1: the cone program -----------------------------------------
     def _phase1(self, g_hat: FloatArray) -> _Point:
@@ -1132,10 +1151,11 @@ def _term_scale(q: FloatArray, lam: FloatArray, nu: FloatArray) -> float:
 
 
 def _unbounded(
-    asm: Assembly, direction: FloatArray, one_way: bool = False
+    asm: Assembly, direction: FloatArray, one_way: bool = False, turn: float | None = None
 ) -> UnboundedMechanismError:
     """Describe a driven free motion (scaled unknowns) in words (``one_way``:
-    a motion the joints stop in one sense only, such as lifting off)."""
+    a motion the joints stop in one sense only, such as lifting off; ``turn``:
+    the motion is held, but only after this many radians)."""
     moves = []
     for i, name in enumerate(asm.body_names):
         omega, v_origin = asm.body_motion(direction, i)
@@ -1155,6 +1175,14 @@ def _unbounded(
         "There is no equilibrium: add a joint or a clearance limit that holds this motion, "
         "or balance the loads on it."
     )
+    if turn is not None:
+        message = (
+            f"body '{body}': {motion} is held only weakly{with_others}: the loads drive it "
+            f"until the body has turned by {turn:.3g} rad, far beyond the small "
+            "displacements that this model describes. Nearly coincident joints, or a "
+            "contact or an axis almost along this motion, leave it practically free: "
+            "move them apart, add a joint that holds it, or balance the loads on it."
+        )
     scale = 1.0 / max(biggest, 1e-300)
     direction_map = {
         mv[1]: (
