@@ -95,12 +95,7 @@ def _check_certified(out: str) -> None:
 
 
 def _cases() -> list[Any]:
-    out = []
-    for name, case in EXPECTED.items():
-        if "open" in case:  # a solver bug, reported on issue 4; not a loader case
-            continue
-        out.append(pytest.param(name, case, id=name))
-    return out
+    return [pytest.param(name, case, id=name) for name, case in EXPECTED.items()]
 
 
 @pytest.mark.parametrize(("name", "case"), _cases())
@@ -117,13 +112,13 @@ def test_corpus_case(name: str, case: dict[str, Any], tmp_path: Path) -> None:
             else:
                 assert "certificate: holds" in out and "FAILED" not in out
             continue
-        kind = {2: "invalid model", 3: "not held"}[code]
+        kind = {1: "error", 2: "invalid model", 3: "not held"}[code]
         message = _check_one_message(err, path, kind)
         for piece in case.get("message", []):
             assert piece in message, f"{name}: {piece!r} not in {message!r}"
         if mode:
             doc = json.loads(out)
-            assert doc["status"] == {2: "invalid", 3: "unbounded"}[code]
+            assert doc["status"] == {1: "error", 2: "invalid", 3: "unbounded"}[code]
             assert doc["message"] == message.removeprefix(f"jointplay: {kind}: ").rstrip("\n")
 
 

@@ -859,11 +859,18 @@ class Workspace:
             rest = rest.with_limits(np.array(lean))
         metric = self.asm.metric_matrix
         prog = self._cone_program(metric, Eq, e, rest)
-        sol = self._clarabel(prog, np.zeros(self.m))
-        x = np.asarray(sol.x)
-        z = np.asarray(sol.z)
-        lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
-        x = self._phase2_polish(x, lam_rest, f_rest, rest, Eq, e)
+        try:
+            sol = self._clarabel(prog, np.zeros(self.m))
+        except SolverError:
+            # badly scaled (levers of 100 m on plays of 0.1 mm): the active-set
+            # Newton alone, from the optimum, with no other contact active
+            x = self._phase2_polish(
+                point.x, np.zeros(len(rest.k)), np.zeros(rest.A.shape[0]), rest, Eq, e, strict=True
+            )
+        else:
+            z = np.asarray(sol.z)
+            lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
+            x = self._phase2_polish(np.asarray(sol.x), lam_rest, f_rest, rest, Eq, e)
         # any optimal forces are complementary to every optimal position:
         # those of ``point`` hold at x, which keeps its active cones as they were
         return _Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
@@ -876,10 +883,12 @@ class Workspace:
         rest: BallStack,
         Eq: Matrix,
         e: FloatArray,
+        strict: bool = False,
     ) -> FloatArray:
         """Newton on the KKT equations of the least-norm program from its
         interior point ``x``, with a few active-set rounds (cones pushed past
-        their limit join); ``x`` itself if that does not end feasible."""
+        their limit join); ``x`` itself if that does not end feasible (or,
+        ``strict``, SolverError)."""
         metric = self.asm.metric_matrix
         surface, linear = self._active(x, lam, f, rest, float(np.max(np.abs(metric @ x))))
         active = {*surface, *linear}
@@ -899,13 +908,18 @@ class Workspace:
                 np.maximum(lam[on_surface], 0.0),
             )
             if polished is None:
-                return x
+                break
             _, _, level = rest.levels(polished[0])
             past = set(np.flatnonzero((level - rest.r) / r > 1e-9).tolist()) - active
             if not past:
                 return polished[0]
             active |= past
             apex |= {i for i in past if rest.k[i] == 0}
+        if strict:
+            raise SolverError(
+                "the least-norm point of a tie (an optimum that is not unique) could not "
+                "be found accurately on this model. " + self._weak_hint()
+            )
         return x
 
     def _independent_rows(self, C: Matrix, c: FloatArray) -> tuple[Matrix, FloatArray]:

@@ -13,12 +13,27 @@ disc of radius J/2 across the axis. Axial slide and spin are free::
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, Self
 
 import numpy as np
+from pydantic import model_validator
 
 from ..fields import PositiveLength
 from .base import Contact, Joint, point_rows
+
+#: An engaged length below this fraction of the clearance holds no tilt: its
+#: two end discs are one circle, to round-off (and the cone program's rows
+#: nearly repeat each other, which no solver resolves to 1e-9 mm).
+SHORTEST_ENGAGEMENT = 1e-3
+
+
+def check_engagement(length: float, clearance: float) -> None:
+    if length < SHORTEST_ENGAGEMENT * clearance:
+        raise ValueError(
+            f"length: {length:.3g} mm is less than a thousandth of the clearance "
+            f"({clearance:.3g} mm), so the bore holds no tilt; model this contact as a "
+            "'sphere_in_cylinder', or give the length the bore really engages"
+        )
 
 
 def end_contacts(length: float, clearance: float) -> tuple[Contact, ...]:
@@ -33,6 +48,11 @@ def end_contacts(length: float, clearance: float) -> tuple[Contact, ...]:
 class Cylindrical(Joint):
     type: Literal["cylindrical"] = "cylindrical"
     length: PositiveLength
+
+    @model_validator(mode="after")
+    def _check_length(self) -> Self:
+        check_engagement(self.length, self.clearance)
+        return self
 
     def contacts(self) -> tuple[Contact, ...]:
         return end_contacts(self.length, self.clearance)

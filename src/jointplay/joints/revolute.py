@@ -13,19 +13,25 @@ is free::
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, Self
 
 import numpy as np
+from pydantic import model_validator
 
 from ..fields import NonNegativeLength, PositiveLength
 from .base import Contact, Joint, point_rows
-from .cylindrical import end_contacts
+from .cylindrical import check_engagement, end_contacts
 
 
 class Revolute(Joint):
     type: Literal["revolute"] = "revolute"
     length: PositiveLength
     axial_clearance: NonNegativeLength
+
+    @model_validator(mode="after")
+    def _check_length(self) -> Self:
+        check_engagement(self.length, self.clearance)
+        return self
 
     def contacts(self) -> tuple[Contact, ...]:
         centre = np.zeros(3)
