@@ -310,3 +310,16 @@ def test_models_are_immutable() -> None:
     model = jointplay.model_from_dict(spherical_shaft())
     with pytest.raises(Exception, match="frozen"):
         model.joints[0].clearance = 1.0  # type: ignore[misc]
+
+
+def test_a_generated_model_with_too_many_entries_is_refused_before_validation() -> None:
+    """A model given as a dict meets no file limit; 100,001 bodies are refused
+    by count, naming the section, before each is validated."""
+    data = {
+        "bodies": [{"name": "g", "ground": True}] + [{"name": f"b{i}"} for i in range(100_000)],
+        "joints": [],
+    }
+    with pytest.raises(ModelError) as info:
+        jointplay.model_from_dict(data)
+    message = str(info.value)
+    assert "bodies" in message and "100,001 entries" in message

@@ -56,9 +56,8 @@ def _make(name: str, case: dict[str, Any], where: Path) -> Path:
         path.write_text(("# " + "x" * 98 + "\n") * 11_000)
     elif kind == "many_values":  # under 1 MB, over the limit of values
         path.write_text("bodies: [" + "1, " * 300_000 + "1]\n")
-    elif kind == "many_entries":
-        bodies = ", ".join(f"{{name: b{i}}}" for i in range(10_001))
-        path.write_text(f"bodies: [{bodies}]\njoints: []\n")
+    elif kind == "many_entries":  # each entry is a value: the file limit holds first
+        path.write_text("bodies: [{name: a}]\nloads: [" + "{}, " * 100_000 + "{}]\n")
     else:
         assert kind == "missing", kind
     return path

@@ -36,9 +36,11 @@ MAX_NODES = 100_000
 #: entry, vector); the limit stays far below Python's recursion limit.
 MAX_DEPTH = 64
 #: Most entries in a section (bodies, joints, loads, points, load cases, the
-#: loads of one case): each is validated, and a wrong entry may repeat ten
-#: thousand times in a generated file before the first one is reported.
-MAX_ENTRIES = 10_000
+#: loads of one case), for a model given as a dict (a file meets MAX_NODES
+#: first): each is validated, and a wrong entry may repeat a hundred thousand
+#: times in a generated model before the first one is reported. A mechanism
+#: of 10,000 bodies in closed loops has 20,000 joints.
+MAX_ENTRIES = 100_000
 
 #: Accepted keys per section, for "did you mean" suggestions.
 _SECTION_KEYS = {
