@@ -214,8 +214,13 @@ def _plain_solve(K: Matrix, rhs: FloatArray, size: float) -> FloatArray | None:
         step = solve(rhs)
     except (RuntimeError, np.linalg.LinAlgError):  # exactly singular
         return None
-    if np.all(np.isfinite(step)) and float(np.max(np.abs(K @ step - rhs))) <= 1e-8 * size:
-        return np.asarray(step)
+    for _ in range(4):  # iterative refinement with the same factors (long chains need it)
+        if not np.all(np.isfinite(step)):
+            return None
+        miss = rhs - K @ step
+        if float(np.max(np.abs(miss))) <= 1e-8 * size:
+            return np.asarray(step)
+        step = step + solve(miss)
     return None
 
 
