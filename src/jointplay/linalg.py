@@ -7,6 +7,7 @@ assembly builds (see ``SPARSE_FROM``).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from functools import partial
 from typing import Any
@@ -169,8 +170,9 @@ class SingularSystemError(Exception):
 def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> FloatArray:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
     equations). A singular but consistent system (statically indeterminate
-    forces) gets a least-squares (dense) or regularized-and-refined (sparse)
-    solution; raises ``SingularSystemError`` when no step solves it accurately.
+    forces) gets a regularized-and-refined solution (dense: least squares if
+    that fails too); raises ``SingularSystemError`` when no step solves it
+    accurately.
 
     ``prox`` > 0: the system is expected to be singular up to round-off (a
     tied face); the step is the regularized-and-refined one, which stays
@@ -178,49 +180,53 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
     round-off's huge step along the singular directions)."""
     size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
     if not prox:
-        step = _plain_solve(K, rhs, size)
+        # plain factors, with a few steps of iterative refinement (long chains need them)
+        step = _refined(K, _factored(K), rhs, 1e-8 * size, 4)
         if step is not None:
             return step
     # Quasi-definite regularization, then refinement against K itself: a
     # proximal-point iteration that converges on a consistent system to the
     # solution nearest the current point, as a least-squares step does.
     eps = max(prox, 1e-12 * max(1.0, float(abs(K).max())))
-    n = K.shape[0]
-    signs = np.r_[np.ones(n_primal), -np.ones(n - n_primal)]
-    try:
-        if sp.issparse(K):
-            solve = spla.splu(sp.csc_matrix(K + sp.diags(eps * signs))).solve
-        else:
-            factors = sla.lu_factor(K + np.diag(eps * signs), check_finite=False)
-            solve = partial(sla.lu_solve, factors, check_finite=False)
-    except (RuntimeError, ValueError, np.linalg.LinAlgError):
-        solve = None
-    if solve is not None:
-        refined = np.zeros(n)
-        for _ in range(40):
-            miss = rhs - K @ refined
-            if float(np.max(np.abs(miss))) <= 1e-10 * size:
-                return np.asarray(refined, dtype=np.float64)
-            refined = refined + np.asarray(solve(miss), dtype=float)
+    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
+    regular = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
+    step = _refined(K, _factored(regular), rhs, 1e-10 * size, 40)
+    if step is not None:
+        return step
     if not sp.issparse(K):
         return np.asarray(np.linalg.lstsq(K, rhs, rcond=1e-13)[0])
     raise SingularSystemError
 
 
-def _plain_solve(K: Matrix, rhs: FloatArray, size: float) -> FloatArray | None:
-    """``K^-1 rhs`` if K is regular enough to give it accurately, else None."""
+def _factored(K: Matrix) -> Any:
+    """A solver ``b -> K^-1 b`` from one LU factorization, or None when K is
+    exactly singular."""
     try:
-        solve = spla.splu(sp.csc_matrix(K)).solve if sp.issparse(K) else partial(np.linalg.solve, K)
-        step = solve(rhs)
-    except (RuntimeError, np.linalg.LinAlgError):  # exactly singular
+        if sp.issparse(K):
+            return spla.splu(sp.csc_matrix(K)).solve
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sla.LinAlgWarning)
+            factors = sla.lu_factor(K, check_finite=False)
+    except (RuntimeError, ValueError, np.linalg.LinAlgError):
         return None
-    for _ in range(4):  # iterative refinement with the same factors (long chains need it)
+    if not np.all(np.diag(factors[0])):  # a zero pivot
+        return None
+    return partial(sla.lu_solve, factors, check_finite=False)
+
+
+def _refined(K: Matrix, solve: Any, rhs: FloatArray, tol: float, rounds: int) -> FloatArray | None:
+    """``solve(rhs)`` refined against K until ``|K step - rhs| <= tol``
+    (None if it does not get there in ``rounds`` corrections)."""
+    if solve is None:
+        return None
+    step = np.zeros(K.shape[0])
+    for _ in range(rounds + 1):
+        miss = rhs - K @ step
+        if float(np.max(np.abs(miss))) <= tol:
+            return np.asarray(step, dtype=np.float64)
+        step = step + np.asarray(solve(miss), dtype=float)
         if not np.all(np.isfinite(step)):
             return None
-        miss = rhs - K @ step
-        if float(np.max(np.abs(miss))) <= 1e-8 * size:
-            return np.asarray(step)
-        step = step + solve(miss)
     return None
 
 

@@ -349,15 +349,11 @@ class Workspace:
             )
         else:
             warm = self._warm(g_hat) if self.settings.warm_start else None
-            if warm is not None:
-                point = warm
-            else:
-                point = self._phase1(g_hat)
-                self._check_turns(point.x)
-                if self.settings.polish:
-                    point = self._polish(g_hat, point)
+            point = warm if warm is not None else self._phase1(g_hat)
+            self._check_turns(point.x)  # before polishing, which a nearly free body defeats
+            if warm is None and self.settings.polish:
+                point = self._polish(g_hat, point)
             self._last = point if point.active is not None else None
-        self._check_turns(point.x)
         cert = point.certificate or self._certify(g_hat, point)
         if not cert.certified:
             raise SolverError(
@@ -1065,7 +1061,6 @@ def _newton(
     S = stack.segment_matrix if sparse else None
     best: tuple[float, FloatArray, FloatArray, FloatArray, int] | None = None
     history: list[float] = []
-    stalled = False
     for it in range(max_iter + 1):
         grad = q + linalg.adjoint(Eq, nu)
         if P is not None:
@@ -1103,7 +1098,6 @@ def _newton(
         stalled = it >= 3 and err > 0.5 * min(history[-4:-1])
         if err <= 1e-14 or it == max_iter or stalled:
             break
-        stalled = False
         if na:
             c = lam / rho
             Ju = J - Bo
@@ -1151,9 +1145,7 @@ def _newton(
         nu = nu + step[m + na :]
     assert best is not None
     err, x, lam, nu, its = best
-    # the loose ``accept`` is for equations that round-off stalls, not for a
-    # Newton that could not take its steps
-    if err > (accept if stalled else 1e-11):
+    if err > accept:  # the certificate has the last word
         return None
     return x, lam, nu, its
 
