@@ -281,6 +281,33 @@ class BallStack:
 
 
 @dataclass(frozen=True)
+class ContactTables:
+    """Every joint and contact at once, to turn an answer into per-joint
+    results without a Python step per contact (``Assembly.contacts`` order)."""
+
+    tau_map: sp.csr_matrix  # (6 J, m): x -> each joint's torsor (t mm, w rad)
+    wrench_ball: sp.csr_matrix  # (6 nb, sum k): stacked f -> -(rows.T f) per ball
+    offset_ball: FloatArray  # (nb, 6): each ball's face row (0 for a plain ball)
+    wrench_fixed: sp.csr_matrix  # (6 nf, sum k): stacked multipliers -> -(rows.T nu)
+    is_ball: NDArray[np.bool_]  # (nc,)
+    joint_of: IntArray  # (nc,)
+    local_point: FloatArray  # (nc, 3) joint frame, mm: where each contact acts
+    leaning: IntArray  # contacts whose centre of pressure moves with the force
+    centre: FloatArray  # (J, 3) joint centres, mm
+    R_world_joint: FloatArray  # (J, 3, 3)
+
+
+def _wrench_map(contacts: Sequence[ContactRows]) -> sp.csr_matrix:
+    """Block-diagonal ``-rows.T`` of the contacts (their duals stacked)."""
+    k = np.array([c.k for c in contacts], dtype=np.intp)
+    rows = np.vstack([c.contact.rows for c in contacts]) if contacts else np.zeros((0, 6))
+    owner = np.repeat(np.arange(len(contacts)), k)
+    i = (6 * owner[:, None] + np.arange(6)).ravel()
+    j = np.repeat(np.arange(rows.shape[0]), 6)
+    return sp.csr_matrix((-rows.ravel(), (i, j)), shape=(6 * len(contacts), rows.shape[0]))
+
+
+@dataclass(frozen=True)
 class Assembly:
     """The model turned into matrices, once; the solver reads only this."""
 
@@ -379,6 +406,49 @@ class Assembly:
         return W
 
     @cached_property
+    def tables(self) -> ContactTables:
+        """Joints and contacts stacked for vectorized results (``ContactTables``)."""
+        joints = self.model.joints
+        nj = len(self.G)
+        widths = np.array([len(G.cols) for G in self.G], dtype=np.intp)
+        parts: list[tuple[IntArray, IntArray, FloatArray]] = []
+        for w in np.unique(widths):  # joints to ground (6 columns), between bodies (12)
+            which = np.flatnonzero(widths == w)
+            cols = np.array([self.G[q].cols for q in which]).reshape(-1, 1, w)
+            blocks = np.array([self.G[q].block for q in which]).reshape(-1, 6, w)
+            rows = 6 * which[:, None, None] + np.arange(6)[None, :, None]
+            shape = blocks.shape
+            parts.append(
+                (
+                    np.broadcast_to(rows, shape).ravel(),
+                    np.broadcast_to(cols, shape).ravel(),
+                    blocks.ravel(),
+                )
+            )
+        i = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, dtype=np.intp)
+        j = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, dtype=np.intp)
+        v = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0)
+        tau_map = sp.csr_matrix((v, (i, j)), shape=(6 * nj, self.m))
+        offsets = [
+            np.zeros(6) if c.contact.offset is None else c.contact.offset for c in self.balls
+        ]
+        contacts = self.contacts
+        return ContactTables(
+            tau_map,
+            _wrench_map(self.balls),
+            np.array(offsets).reshape(-1, 6),
+            _wrench_map(self.fixed),
+            np.array([not c.is_fixed for c in contacts], dtype=bool),
+            np.array([c.joint_index for c in contacts], dtype=np.intp),
+            np.array([c.contact.point for c in contacts], dtype=float).reshape(-1, 3),
+            np.array(
+                [n for n, c in enumerate(contacts) if c.contact.lever is not None], dtype=np.intp
+            ),
+            np.array([jt.centre for jt in joints], dtype=float).reshape(-1, 3),
+            np.array([jt.R_world_joint for jt in joints], dtype=float).reshape(-1, 3, 3),
+        )
+
+    @cached_property
     def stack(self) -> BallStack:
         """All clearance cones stacked into dense arrays (see ``BallStack``)."""
         return BallStack.of(self.balls, self.m, self.sparse)
@@ -420,48 +490,66 @@ def assemble(model: Model) -> Assembly:
     index = {name: i for i, name in enumerate(body_names)}
     n = len(body_names)
     m = 6 * n
+    joints = model.joints
+    # every joint at once: large mechanisms have thousands
+    centre = np.array([j.centre for j in joints], dtype=float).reshape(-1, 3)
+    side_a = np.array([index.get(j.between[0], -1) for j in joints], dtype=np.intp)
+    side_b = np.array([index.get(j.between[1], -1) for j in joints], dtype=np.intp)
 
-    centres: list[list[FloatArray]] = [[] for _ in range(n)]
-    for joint in model.joints:
-        for name in joint.between:
-            if name in index:
-                centres[index[name]].append(joint.centre)
-    body_ref = np.array([np.mean(c, axis=0) for c in centres]).reshape(n, 3)
+    count = np.zeros(n)
+    body_ref = np.zeros((n, 3))
+    for side in (side_a, side_b):
+        on = side >= 0
+        np.add.at(count, side[on], 1.0)
+        np.add.at(body_ref, side[on], centre[on])
+    body_ref /= np.maximum(count, 1.0)[:, None]
 
     # Rigid joints add nothing to the metric, so they do not set its length scale:
     # splitting a body with a weld anywhere leaves every answer unchanged.
-    with_play = [j for j in model.joints if any(c.kind == "ball" for c in j.cones)]
-    all_centres = np.array([j.centre for j in (with_play or model.joints)])
-    spread = float(np.max(np.linalg.norm(all_centres - all_centres.mean(axis=0), axis=1)))
-    radii = [c.radius for j in model.joints for c in j.cones if c.kind == "ball"]
+    has_play = np.array([any(c.kind == "ball" for c in j.cones) for j in joints], dtype=bool)
+    spread_from = centre[has_play] if np.any(has_play) else centre
+    spread = float(np.max(np.linalg.norm(spread_from - spread_from.mean(axis=0), axis=1)))
+    radii = [c.radius for j in joints for c in j.cones if c.kind == "ball"]
     s = max(radii, default=0.0)
-    sizes = [j.size for j in with_play]
+    size = np.array([j.size if play else 0.0 for j, play in zip(joints, has_play, strict=True)])
+    sizes = size[has_play].tolist()
     if s == 0.0:  # every joint is tight: any length of the model will do
         s = max([spread, *sizes, 1.0])
     ell = max([spread, *sizes, s])
     # each body's own lever: its farthest joint centre, or its largest joint
     lever = np.full(n, s)
-    has_play = {id(j) for j in with_play}
-    for joint in model.joints:
-        for name in joint.between:
-            if name in index:
-                i = index[name]
-                far = float(np.linalg.norm(joint.centre - body_ref[i]))
-                lever[i] = max(lever[i], far, joint.size if id(joint) in has_play else 0.0)
+    for side in (side_a, side_b):
+        on = side >= 0
+        far = np.linalg.norm(centre[on] - body_ref[side[on]], axis=1)
+        np.maximum.at(lever, side[on], np.maximum(far, size[on]))
     turn = s / lever
 
-    G_list: list[JointMap] = []
+    G_list = _joint_maps(joints, side_a, side_b, centre, body_ref, s, turn, m)
     contacts: list[ContactRows] = []
-    for jdx, joint in enumerate(model.joints):
-        G = _joint_map(joint, index, body_ref, s, turn, m)
-        G_list.append(G)
-        for cdx, contact in enumerate(joint.cones):
-            block = (contact.rows / s) @ G.block
-            spring = 0.0 if contact.kind == "fixed" else (joint.stiffness or 0.0)
+    for jdx, (joint, G) in enumerate(zip(joints, G_list, strict=True)):
+        cones = joint.cones
+        if not cones:
+            continue
+        blocks = (np.vstack([c.rows for c in cones]) / s) @ G.block
+        spring = joint.stiffness or 0.0
+        at = 0
+        for cdx, contact in enumerate(cones):
+            k = contact.rows.shape[0]
             offset = None if contact.offset is None else (contact.offset / s) @ G.block
             contacts.append(
-                ContactRows(jdx, cdx, contact, G.cols, block, contact.radius / s, m, spring, offset)
+                ContactRows(
+                    jdx,
+                    cdx,
+                    contact,
+                    G.cols,
+                    blocks[at : at + k],
+                    contact.radius / s,
+                    m,
+                    0.0 if contact.kind == "fixed" else spring,
+                    offset,
+                )
             )
+            at += k
 
     g = load_work(model.loads_of(None), index, body_ref, s, turn)
     return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g, turn)
@@ -487,22 +575,46 @@ def load_work(
     return g
 
 
-def _joint_map(
-    joint: Joint, index: dict[str, int], body_ref: FloatArray, s: float, turn: FloatArray, m: int
-) -> JointMap:
-    """The map from scaled unknowns to the relative torsor of b w.r.t. a at the joint."""
-    R_joint_world = joint.R_world_joint.T
-    cols: list[IntArray] = []
-    blocks: list[FloatArray] = []
-    for sign, name in ((-1.0, joint.between[0]), (1.0, joint.between[1])):
-        if name not in index:
-            continue  # ground body
-        i = index[name]
-        lever = joint.centre - body_ref[i]
-        block = np.zeros((6, 6))
-        block[:3, :3] = s * R_joint_world
-        block[:3, 3:] = -turn[i] * R_joint_world @ skew(lever)
-        block[3:, 3:] = turn[i] * R_joint_world
-        cols.append(np.arange(6 * i, 6 * i + 6))
-        blocks.append(sign * block)
-    return JointMap(np.concatenate(cols), np.hstack(blocks), m)
+def _joint_maps(
+    joints: Sequence[Joint],
+    side_a: IntArray,
+    side_b: IntArray,
+    centre: FloatArray,
+    body_ref: FloatArray,
+    s: float,
+    turn: FloatArray,
+    m: int,
+) -> list[JointMap]:
+    """Each joint's map from scaled unknowns to the relative torsor of b
+    w.r.t. a at the joint (``side_a``/``side_b``: body indices, -1 ground)."""
+    if not joints:
+        return []
+    R_joint_world = np.array([j.R_world_joint.T for j in joints])  # (J, 3, 3)
+    part: list[FloatArray] = []
+    for sign, side in ((-1.0, side_a), (1.0, side_b)):
+        on = side >= 0
+        i = np.where(on, side, 0)
+        lever = centre - body_ref[i]
+        lever_cross = np.zeros((len(joints), 3, 3))
+        lever_cross[:, 0, 1], lever_cross[:, 0, 2] = -lever[:, 2], lever[:, 1]
+        lever_cross[:, 1, 0], lever_cross[:, 1, 2] = lever[:, 2], -lever[:, 0]
+        lever_cross[:, 2, 0], lever_cross[:, 2, 1] = -lever[:, 1], lever[:, 0]
+        t = turn[i][:, None, None]
+        block = np.zeros((len(joints), 6, 6))
+        block[:, :3, :3] = s * R_joint_world
+        block[:, :3, 3:] = -t * (R_joint_world @ lever_cross)
+        block[:, 3:, 3:] = t * R_joint_world
+        part.append(sign * block)
+    both = np.concatenate(part, axis=2)  # (J, 6, 12): a's columns, then b's
+    cols_a = 6 * side_a[:, None] + np.arange(6)
+    cols_b = 6 * side_b[:, None] + np.arange(6)
+    cols = np.concatenate([cols_a, cols_b], axis=1)
+    out: list[JointMap] = []
+    for jdx in range(len(joints)):
+        if side_a[jdx] < 0:  # ground side: b's columns only
+            out.append(JointMap(cols_b[jdx], both[jdx, :, 6:], m))
+        elif side_b[jdx] < 0:
+            out.append(JointMap(cols_a[jdx], both[jdx, :, :6], m))
+        else:
+            out.append(JointMap(cols[jdx], both[jdx], m))
+    return out

@@ -56,16 +56,30 @@ def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:
     frame turned about global Y. With axis = global X and the default ``up``
     the joint frame is the global frame, as in the paper.
     """
-    x = unit(axis)
+    # plain floats: numpy's overhead on 3-vectors dominates for thousands of joints
+    ax, ay, az = (float(c) for c in axis)
+    x = _unit3((ax, ay, az))
     if up is None:
-        up = GLOBAL_AXES["Z"]
-        if is_parallel(x, up):
-            up = np.array([-np.sign(x[2]), 0.0, 0.0])
+        up3: Vec3 = (0.0, 0.0, 1.0)
+        if math.hypot(x[0], x[1]) < PARALLEL_SINE:  # along global Z
+            up3 = (-math.copysign(1.0, x[2]), 0.0, 0.0)
+    else:
+        ux, uy, uz = (float(c) for c in up)
+        up3 = (ux, uy, uz)
     # z = up - (up . x) x, written as x cross (up cross x): accurate also
     # when up is nearly along x (the subtraction would lose its digits)
-    z = unit(cross(x, cross(np.asarray(up, dtype=float), x)))
-    y = cross(z, x)
-    return np.column_stack([x, y, z])
+    z = _unit3(_cross3(x, _cross3(up3, x)))
+    y = _cross3(z, x)
+    return np.array([x, y, z]).T.copy()
+
+
+def _unit3(v: Vec3) -> Vec3:
+    n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    return (v[0] / n, v[1] / n, v[2] / n)
+
+
+def _cross3(a: Vec3, b: Vec3) -> Vec3:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 def describe_direction(direction: FloatArray, signed: bool = False) -> str:

@@ -225,6 +225,13 @@ def _clean(v: FloatArray, scale: float) -> FloatArray:
     return out
 
 
+def _clean_rows(v: FloatArray, scale: float | FloatArray) -> FloatArray:
+    """``_clean`` on each row of ``v`` (n, 3), with one scale or one per row."""
+    out = np.array(v, dtype=float)
+    out[np.abs(out) < 1e-14 * np.reshape(scale, (-1, 1))] = 0.0
+    return out
+
+
 def _list(v: FloatArray) -> list[float]:
     return [float(c) + 0.0 for c in v]  # + 0.0 turns -0.0 into 0.0
 
@@ -250,72 +257,79 @@ def build_result(
     solved for and their work.
     """
     model = asm.model
-    bodies: dict[str, BodyResult] = {}
+    n = len(asm.body_names)
+    X = x.reshape(n, 6)
+    omega = asm.turn[:, None] * X[:, 3:]
+    v_origin = asm.s * X[:, :3] - np.cross(omega, asm.body_ref)
+    omega, v_origin = _clean_rows(omega, asm.s / asm.ell), _clean_rows(v_origin, asm.s)
     index = asm.body_index
     zero = np.zeros(3)
+    bodies: dict[str, BodyResult] = {}
     for b in model.bodies:
-        if b.name in index:
-            omega, v_origin = asm.body_motion(x, index[b.name])
-            rot = _clean(omega, asm.s / asm.ell)
-            bodies[b.name] = BodyResult(b.name, _clean(v_origin, asm.s), rot)
-        else:
+        i = index.get(b.name)
+        if i is None:
             bodies[b.name] = BodyResult(b.name, zero, zero)
+        else:
+            bodies[b.name] = BodyResult(b.name, v_origin[i], omega[i])
 
+    # every contact at once (``Assembly.tables``): large mechanisms have thousands
+    T = asm.tables
     stack = asm.stack
     _, _, level = stack.levels(x)
     used = stack.gap_used(level)
     # past the clearance: only compliant contacts may be (hard ones by round-off)
     penetration = np.where(stack.spring > 0, np.maximum(level - stack.r, 0.0) * asm.s, 0.0)
-    ball_index = {id(c): i for i, c in enumerate(asm.balls)}
-    fixed_start = {}
-    row = 0
-    for c in asm.fixed:
-        fixed_start[id(c)] = row
-        row += c.k
-    taus = [asm.G[jdx] @ x for jdx in range(len(model.joints))]
+    nc = len(asm.contacts)
+    wrench = np.zeros((nc, 6))
+    wrench[T.is_ball] = (T.wrench_ball @ ball_vectors).reshape(-1, 6) - (
+        ball_forces[:, None] * T.offset_ball
+    )
+    wrench[~T.is_ball] = (T.wrench_fixed @ rigid_forces).reshape(-1, 6)
+    gap = np.ones(nc)
+    gap[T.is_ball] = used
+    past = np.zeros(nc)
+    past[T.is_ball] = penetration
+    local = T.local_point.copy()
+    ball_of = np.cumsum(T.is_ball) - 1
+    for c in T.leaning:  # the centre of pressure of a tilting face moves
+        i = int(ball_of[c])
+        f = ball_vectors[stack.start[i] : stack.start[i] + stack.k[i]]
+        local[c] = asm.contacts[c].contact.acting_point(f, float(ball_forces[i]))
+    point = T.centre[T.joint_of] + np.einsum("cab,cb->ca", T.R_world_joint[T.joint_of], local)
+    force = wrench[:, :3]
+    force = _clean_rows(force, np.maximum(1e-300, np.max(np.abs(force), axis=1, initial=0.0)))
+    wrench_sum = np.zeros((len(model.joints), 6))
+    np.add.at(wrench_sum, T.joint_of, wrench)
 
     per_joint: dict[int, list[ContactResult]] = {}
-    wrench_sum = [np.zeros(6) for _ in model.joints]
-    for c in asm.contacts:
-        joint = model.joints[c.joint_index]
-        rows = c.contact.rows
-        i = ball_index.get(id(c))
-        past = 0.0
-        local_point = c.contact.point
-        if i is None:
-            k0 = fixed_start[id(c)]
-            wrench = -rows.T @ rigid_forces[k0 : k0 + c.k]
-            gap, touching = 1.0, True
-        else:
-            lam = float(ball_forces[i])
-            f = ball_vectors[stack.start[i] : stack.start[i] + stack.k[i]]
-            wrench = -(rows.T @ f)
-            if c.contact.offset is not None:
-                wrench = wrench - lam * c.contact.offset
-            gap = float(used[i])
-            touching = gap >= TOUCHING
-            past = float(penetration[i])
-            local_point = c.contact.acting_point(f, lam)
-        wrench_sum[c.joint_index] += wrench
-        point = joint.centre + joint.R_world_joint @ local_point
-        force = _clean(wrench[:3], max(1e-300, float(np.max(np.abs(wrench[:3])))))
-        state = ContactResult(c.contact.name, gap, touching, force + 0.0, point, past)
+    touching = gap >= TOUCHING
+    gaps, pasts = gap.tolist(), past.tolist()
+    for c_index, c in enumerate(asm.contacts):
+        state = ContactResult(
+            c.contact.name,
+            gaps[c_index],
+            bool(touching[c_index]),
+            force[c_index] + 0.0,
+            point[c_index],
+            pasts[c_index],
+        )
         per_joint.setdefault(c.joint_index, []).append(state)
 
+    taus = (T.tau_map @ x).reshape(-1, 6)
+    t_rel, w_rel = _clean_rows(taus[:, :3], asm.s), _clean_rows(taus[:, 3:], asm.s / asm.ell)
     joints: dict[str, JointResult] = {}
     for jdx, joint in enumerate(model.joints):
-        tau = taus[jdx]
         joints[joint.name] = JointResult(
             joint.name,
             joint.type_name,
             joint.between,
             joint.centre,
             joint.R_world_joint,
-            _clean(tau[:3], asm.s),
-            _clean(tau[3:], asm.s / asm.ell),
+            t_rel[jdx],
+            w_rel[jdx],
             tuple(per_joint.get(jdx, [])),
-            wrench_sum[jdx][:3],
-            wrench_sum[jdx][3:],
+            wrench_sum[jdx, :3],
+            wrench_sum[jdx, 3:],
         )
 
     points = points_of(model, bodies)
@@ -356,7 +370,9 @@ def equilibrium_residual(
     n = len(index)
     F = np.zeros((n, 3))
     M = np.zeros((n, 3))  # about each body's (displaced) reference point
-    ref = np.array([place.get(name, IDENTITY)(asm.body_ref[i]) for name, i in index.items()])
+    ref = asm.body_ref
+    if place:
+        ref = np.array([place.get(name, IDENTITY)(asm.body_ref[i]) for name, i in index.items()])
     scale = 0.0
     for load in loads:
         i = index[load.body]

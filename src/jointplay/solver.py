@@ -21,8 +21,9 @@ convex, so Clarabel's interior-point answer is the global optimum. Then:
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import clarabel
@@ -108,7 +109,12 @@ class _Face:
     linear_rows: IntArray  # ... and of the linear cones
     #: Whether the active cones and equalities determine x uniquely; None when
     #: that depends on x (a tilting face: see ``Workspace._determined``).
-    determined: bool | None
+    #: Computed when first asked (a null space): most trial faces never are.
+    _determine: Callable[[], bool | None] = field(repr=False, compare=False)
+
+    @cached_property
+    def determined(self) -> bool | None:
+        return self._determine()
 
 
 def solve(
@@ -531,9 +537,12 @@ class Workspace:
             L = linalg.vstack([lin.A, lin.B], self.m)[order]
             rhs[lam_rows] = lin.r
             tilting = bool(np.any(sub.has_offset & (sub.k > 0)))
-            determined = (
-                None if tilting else self._determined_rows(linalg.vstack([L, sub.A], self.m))
-            )
+
+            def determined(L: Matrix = L, sub: BallStack = sub) -> bool | None:
+                if tilting:
+                    return None
+                return self._determined_rows(linalg.vstack([L, sub.A], self.m))
+
             face = _Face(
                 key,
                 sub,

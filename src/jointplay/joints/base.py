@@ -113,13 +113,17 @@ class Contact:
 
 def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:
     """Rows of ``delta(p) = t + w x p = [I, -[p]x] @ tau`` for the chosen joint axes."""
-    minus_p_cross = -skew(np.asarray(p, dtype=float))
-    out = np.zeros((len(directions), 6))
-    for row, axis in enumerate(directions):
-        i = "xyz".index(axis)
-        out[row, i] = 1.0
-        out[row, 3:] = minus_p_cross[i]
-    return out
+    px, py, pz = np.asarray(p, dtype=float).tolist()
+    full = np.array(
+        [
+            [1.0, 0.0, 0.0, 0.0, pz, -py],
+            [0.0, 1.0, 0.0, -pz, 0.0, px],
+            [0.0, 0.0, 1.0, py, -px, 0.0],
+        ]
+    )
+    if directions == "xyz":
+        return full
+    return full[["xyz".index(axis) for axis in directions]]
 
 
 class Joint(BaseModel):
