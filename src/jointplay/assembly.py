@@ -22,7 +22,7 @@ Everything the solver needs is linear in ``x``:
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
@@ -69,12 +69,20 @@ class ContactRows:
     m: int
     stiffness: float = 0.0  # N/mm; 0: rigid (the clearance is a hard limit)
     offset_block: FloatArray | None = None  # (len(cols),): the row B of a face, scaled
+    #: A ball with no play is fixed rows, unless its play was set by a study
+    #: (``Assembly.with_radii``): the contacts then keep the model's layout.
+    zero_play_is_fixed: bool = True
 
     @property
     def is_fixed(self) -> bool:
         if self.contact.kind == "fixed":
             return True
-        return self.radius == 0.0 and self.stiffness == 0.0 and self.offset_block is None
+        return (
+            self.zero_play_is_fixed
+            and self.radius == 0.0
+            and self.stiffness == 0.0
+            and self.offset_block is None
+        )
 
     @property
     def k(self) -> int:
@@ -380,6 +388,21 @@ class Assembly:
         for G in self.G:
             out[G.cols] += G.block.T @ (w2[:, None] * (G.block @ X[G.cols]))
         return out
+
+    def with_radii(self, radii: FloatArray) -> Assembly:
+        """This assembly with other scaled radii for its clearance cones
+        (``balls`` order); everything else, the scales included, is kept."""
+        radii = np.asarray(radii, dtype=float)
+        if radii.shape != (len(self.balls),):
+            raise ValueError(f"radii must have shape ({len(self.balls)},), not {radii.shape}")
+        new_radius = {id(c): float(r) for c, r in zip(self.balls, radii, strict=True)}
+        contacts = tuple(
+            replace(c, radius=new_radius[id(c)], zero_play_is_fixed=False)
+            if id(c) in new_radius
+            else c
+            for c in self.contacts
+        )
+        return replace(self, contacts=contacts)
 
     @cached_property
     def body_index(self) -> dict[str, int]:

@@ -79,7 +79,9 @@ class BatchSolution:
         return stack.gap_used(stack.levels(self.x)[2])
 
 
-def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
+def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None) -> BatchSolution:
+    """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
+    cone radii (``Assembly.balls`` order; default: the model's)."""
     work = np.atleast_2d(np.asarray(work, dtype=float))
     if work.ndim != 2 or work.shape[1] != ws.m:
         raise ValueError(f"work must have shape (B, {ws.m}), not {work.shape}")
@@ -90,8 +92,20 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
     _check_driven(ws, work, norms)
     g_hat = np.divide(work, norms[:, None], out=np.zeros_like(work), where=norms[:, None] > 0)
     sigma = ws.softness(norms)  # (B, n): compliance makes the answer depend on |g|
-
     n_balls = len(ws.balls)
+    if radii is None:
+        r = np.broadcast_to(ws.stack.r, (B, n_balls))
+        varied = False
+    else:
+        r = np.asarray(radii, dtype=float)
+        if r.shape != (B, n_balls):
+            raise ValueError(f"radii must have shape ({B}, {n_balls}), not {r.shape}")
+        if not np.all(np.isfinite(r)) or np.any(r < 0):
+            raise ValueError("radii must be finite and >= 0")
+        varied = True
+    # the nearest solved sample (loads, and plays when they vary) starts Newton
+    features = np.hstack([g_hat, r / max(ws._max_radius, 1e-300)]) if varied else g_hat
+
     x = np.zeros((B, ws.m))
     lam = np.zeros((B, n_balls))
     f = np.zeros((B, ws.stack.A.shape[0]))
@@ -108,9 +122,15 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
                 if not pending.size:
                     break
                 ref = np.concatenate(rows)
-                nearest = ref[cKDTree(g_hat[ref]).query(g_hat[pending])[1]]
+                nearest = ref[cKDTree(features[ref]).query(features[pending])[1]]
                 ok, xs, lams, fs = _newton_batch(
-                    ws, active, g_hat[pending], sigma[pending], x[nearest], lam[nearest]
+                    ws,
+                    active,
+                    g_hat[pending],
+                    sigma[pending],
+                    x[nearest],
+                    lam[nearest],
+                    r[pending],
                 )
                 if np.any(ok):
                     won = pending[ok]
@@ -121,14 +141,15 @@ def solve_batch(ws: Workspace, work: FloatArray) -> BatchSolution:
         if not pending.size:
             break
         first, pending = int(pending[0]), pending[1:]
-        ws._last = None
-        point = ws._optimum(g_hat[first], sigma[first])
+        solver = ws.with_radii(r[first]) if varied else ws
+        solver._last = None
+        point = solver._optimum(g_hat[first], sigma[first])
         full += 1
         x[first], lam[first], f[first] = point.x, point.lam, point.f
         if point.active is not None:
             solved_by_set.setdefault(point.active, []).append(np.array([first]))
 
-    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f)
+    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f, r)
     st = ws.settings
     if np.any(feas > st.feasibility_tolerance * ws._max_radius) or np.any(
         residual > st.equilibrium_tolerance
@@ -163,9 +184,11 @@ def _newton_batch(
     sigma: FloatArray,
     x0: FloatArray,
     lam0: FloatArray,
+    r: FloatArray,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
-    each from its own start (rows of ``x0``, ``lam0``).
+    each from its own start (rows of ``x0``, ``lam0``) and with its own
+    cone radii (rows of ``r``).
 
     Returns (accepted mask, x, full multipliers, force vectors); a row is
     accepted only if it converged and passes the certificate of a unique optimum.
@@ -183,6 +206,9 @@ def _newton_batch(
     Eq, e = face.Eq, face.e
     eq_soft = np.zeros((B, len(Eq)))
     eq_soft[:, ne0 + face.lam_rows] = sigma[:, list(linear)]
+    e_rows = np.repeat(e[None, :], B, axis=0)
+    e_rows[:, ne0 + face.lam_rows] = r[:, list(linear)]
+    r_surface = r[:, list(surface)]
     na, ne = len(surface), Eq.shape[0]
     n = m + na + ne
     lam_s = lam0[:, list(surface)].copy()
@@ -193,8 +219,9 @@ def _newton_batch(
         sl = slice(lo, min(B, lo + chunk))
         conv[sl] = _newton_rows(
             face.stack,
+            r_surface[sl],
             Eq,
-            e,
+            e_rows[sl],
             eq_soft[sl],
             -g_hat[sl],
             sigma[sl][:, list(surface)],
@@ -215,7 +242,7 @@ def _newton_batch(
         f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
         inside = (f_norm < (1.0 - 1e-9) * lam[:, list(linear)]) | (lin.k == 0)
         strict &= np.all(inside, axis=1)
-    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f)
+    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f, r)
     st = ws.settings
     ok = (
         conv
@@ -228,6 +255,7 @@ def _newton_batch(
 
 def _newton_rows(
     sub: BallStack,
+    r: FloatArray,
     Eq: FloatArray,
     e: FloatArray,
     eq_soft: FloatArray,
@@ -237,10 +265,11 @@ def _newton_rows(
     lam: FloatArray,
     nu: FloatArray,
 ) -> BoolArray:
-    """Newton on the KKT equations (see ``solver._newton``), rows in place;
+    """Newton on the KKT equations (see ``solver._newton``), rows in place,
+    each row with its own radii ``r`` (B, na) and right sides ``e`` (B, ne);
     returns the converged mask."""
     B, m = q.shape
-    A, start, k, r, Bo = sub.A, sub.start, sub.k, sub.r, sub.B
+    A, start, k, Bo = sub.A, sub.start, sub.k, sub.B
     na, ne = len(k), Eq.shape[0]
     n = m + na + ne
     K0 = np.zeros((n, n))
@@ -262,8 +291,8 @@ def _newton_rows(
         F = np.concatenate(
             [
                 grad,
-                rho + xs @ Bo.T - r - soft[todo] * ls,
-                xs @ Eq.T - e - eq_soft[todo] * nu[todo],
+                rho + xs @ Bo.T - r[todo] - soft[todo] * ls,
+                xs @ Eq.T - e[todo] - eq_soft[todo] * nu[todo],
             ],
             axis=1,
         )
@@ -305,13 +334,15 @@ def _certificates(
     x: FloatArray,
     lam: FloatArray,
     f: FloatArray,
+    r: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
-    """Per row: feasibility (scaled) and relative equilibrium residual."""
+    """Per row: feasibility (scaled, against the row's radii ``r``) and
+    relative equilibrium residual."""
     B = x.shape[0]
     stack = ws.stack
     if len(stack.k):
         _, _, level = stack.levels(x)
-        feas = np.max(level - stack.r - sigma * np.maximum(lam, 0.0), axis=1)
+        feas = np.max(level - r - sigma * np.maximum(lam, 0.0), axis=1)
         residual_vec = g_hat - stack.adjoint(f, lam)
     else:
         feas = np.zeros(B)

@@ -94,6 +94,93 @@ def solve(
     _guarded(run, as_json)
 
 
+@app.command()
+def montecarlo(
+    model_path: Annotated[
+        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
+    ],
+    samples: Annotated[
+        int,
+        typer.Option(
+            "--samples", "-n", min=1, help="Sets of parts to draw (the most, with --target)."
+        ),
+    ] = 10_000,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Random seed.")] = 0,
+    target: Annotated[
+        float | None,
+        typer.Option(
+            "--target",
+            help="Stop when every estimate's relative error is below this (0.05 = 5 %): the "
+            "fraction missing each requirement, else each point's mean displacement.",
+        ),
+    ] = None,
+    confidence: Annotated[
+        float,
+        typer.Option(
+            "--confidence",
+            help="Confidence level of --target and of the intervals.",
+        ),
+    ] = 0.95,
+    case: Annotated[
+        str | None, typer.Option("--case", metavar="NAME", help="Load case to solve.")
+    ] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option("--workers", min=1, help="Local processes (default: one per core)."),
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(
+            "--scheduler", metavar="ADDRESS", help="Solve on a Dask cluster (tcp://host:8786)."
+        ),
+    ] = None,
+    chunk: Annotated[
+        int, typer.Option("--chunk", min=1, help="Samples per chunk (fixes the random streams).")
+    ] = 10_000,
+    csv: Annotated[
+        Path | None,
+        typer.Option("--csv", metavar="FILE", help="Write every sample (plays, displacements)."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+) -> None:
+    """Monte Carlo over real parts: draw every toleranced play (limits or ISO
+    fits), solve each set of parts exactly, and summarize the functional points
+    and the requirements of MODEL."""
+    from .modelfile import load
+    from .montecarlo import MonteCarlo
+    from .textreport import render_montecarlo
+
+    def run() -> None:
+        model = load(model_path)
+        for name, value in (("--target", target), ("--confidence", confidence)):
+            if value is not None and not 0.0 < value < 1.0:
+                raise ModelError(
+                    f"{name} {value:g}: expected a fraction between 0 and 1 (0.05 is 5 %)"
+                )
+        study = MonteCarlo(samples, seed, target, confidence, chunk, case)
+        if as_json or samples <= chunk:
+            result = study.run(model, workers=workers, scheduler=scheduler)
+        else:
+            from rich.progress import Progress
+
+            with Progress(console=Console(stderr=True), transient=True) as bar:
+                task = bar.add_task("solving samples", total=samples)
+                result = study.run(
+                    model,
+                    workers=workers,
+                    scheduler=scheduler,
+                    progress=lambda done, total: bar.update(task, completed=done),
+                )
+        if csv is not None:
+            result.to_dataframe().to_csv(csv, index=False)
+        if as_json:
+            typer.echo(json.dumps(result.to_dict(), indent=2))
+        else:
+            render_montecarlo(result, str(model_path), _console())
+
+    _guarded(run, as_json)
+
+
 def _console() -> Console:
     # names from the model are printed as they are: "[/b]" is not markup, ":x:" no emoji
     return Console(highlight=False, soft_wrap=False, markup=False, emoji=False)

@@ -9,8 +9,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Annotated, Any
 
-from pydantic import AfterValidator, BeforeValidator, StringConstraints
+from pydantic import AfterValidator, BeforeValidator, PlainValidator, StringConstraints
 
+from .tolerance import parse_play
 from .units import shown, to_base
 
 Vec3 = tuple[float, float, float]
@@ -99,6 +100,9 @@ Length = Annotated[float, BeforeValidator(_scalar("length"))]
 NonNegativeLength = Annotated[
     float, BeforeValidator(_scalar("length")), AfterValidator(_non_negative)
 ]
+#: A joint's play: a length, or limits / an ISO fit (``tolerance.Toleranced``,
+#: a float equal to the mean play that also knows its spread).
+Play = Annotated[float, PlainValidator(parse_play), AfterValidator(_non_negative)]
 PositiveLength = Annotated[float, BeforeValidator(_scalar("length")), AfterValidator(_positive)]
 Point = Annotated[Vec3, BeforeValidator(_vector("length"))]
 Direction = Annotated[Vec3, BeforeValidator(_vector("length")), AfterValidator(_nonzero_vector)]

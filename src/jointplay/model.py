@@ -14,7 +14,16 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, model_validator
 
-from .fields import AccelerationVector, ForceVector, Name, NonNegativeMass, Point, TorqueVector
+from .fields import (
+    AccelerationVector,
+    Direction,
+    ForceVector,
+    Name,
+    NonNegativeMass,
+    Point,
+    PositiveLength,
+    TorqueVector,
+)
 from .joints import JOINT_TYPES, Joint
 from .units import shown
 
@@ -92,6 +101,21 @@ class FunctionalPoint(BaseModel):
     at: Point
 
 
+class Requirement(BaseModel):
+    """A functional requirement: the point's displacement stays within
+    ``max_displacement`` (its size, or its component ``along`` a direction)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    point: Name
+    max_displacement: PositiveLength
+    along: Direction | None = None
+
+    def describe(self) -> str:
+        what = "|displacement|" if self.along is None else f"displacement along {list(self.along)}"
+        return f"point '{self.point}': {what} <= {self.max_displacement:g} mm"
+
+
 class Load(BaseModel):
     """A force at a point of a body, a torque on a body, or both."""
 
@@ -125,6 +149,7 @@ class Model(BaseModel):
     load_cases: dict[Name, tuple[Load, ...]] | None = None
     gravity: AccelerationVector | None = None  # mm/s^2 as plain numbers; "9.81 m/s^2"
     points: tuple[FunctionalPoint, ...] = ()
+    requirements: tuple[Requirement, ...] = ()
 
     @model_validator(mode="after")
     def _check_topology(self) -> Model:
@@ -185,6 +210,19 @@ class Model(BaseModel):
                     f"points[{i}] '{point.name}'",
                     f"body: unknown body '{point.body}'; bodies are: {listing(names)}."
                     + suggest(point.body, names),
+                )
+        point_names = [p.name for p in self.points]
+        for i, req in enumerate(self.requirements):
+            if req.point not in point_names:
+                known = (
+                    f"points are: {listing(point_names)}"
+                    if point_names
+                    else "the model has no 'points' section; add the point there"
+                )
+                raise EntryError(
+                    f"requirements[{i}]",
+                    f"point: unknown point '{req.point}'; {known}."
+                    + suggest(req.point, point_names),
                 )
         unreached = _unreached_from_ground(names, grounds, [j.between for j in self.joints])
         if unreached:

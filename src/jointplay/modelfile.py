@@ -18,7 +18,7 @@ from pydantic import ValidationError
 
 from .errors import ModelError
 from .joints import JOINT_TYPES
-from .model import Body, EntryError, FunctionalPoint, Load, Model, suggest
+from .model import Body, EntryError, FunctionalPoint, Load, Model, Requirement, suggest
 from .units import shown
 
 #: Largest model file read, in bytes. A hand-written model of a thousand
@@ -42,12 +42,16 @@ MAX_DEPTH = 64
 #: of 10,000 bodies in closed loops has 20,000 joints.
 MAX_ENTRIES = 100_000
 
+#: The sections that are lists of entries.
+SECTIONS = ("bodies", "joints", "loads", "points", "requirements")
+
 #: Accepted keys per section, for "did you mean" suggestions.
 _SECTION_KEYS = {
     "top": set(Model.model_fields) - {"schema_version"} | {"schema"},
     "bodies": set(Body.model_fields),
     "loads": set(Load.model_fields),
     "points": set(FunctionalPoint.model_fields),
+    "requirements": set(Requirement.model_fields),
 }
 
 #: libyaml's parser when PyYAML has it (five times faster), else PyYAML's own.
@@ -433,7 +437,7 @@ def model_from_dict(data: Any, *, source: str = "<model>") -> Model:
 
 def _check_sizes(data: dict[str, Any], source: str) -> None:
     """At most MAX_ENTRIES entries per section, before validation walks them."""
-    sections = [(name, data.get(name)) for name in ("bodies", "joints", "loads", "points")]
+    sections = [(name, data.get(name)) for name in SECTIONS]
     cases = data.get("load_cases")
     if isinstance(cases, dict):
         sections.append(("load_cases", cases))
@@ -484,14 +488,13 @@ def _entry(loc: list[Any], data: dict[str, Any]) -> tuple[str, str]:
         return "load_cases", ""
     if len(loc) >= 3 and loc[0] == "load_cases" and isinstance(loc[2], int):
         return f"load_cases.{_short(loc[1])}[{loc[2]}]", _join_loc(loc[3:])
-    sections = ("bodies", "joints", "loads", "points")
-    if len(loc) >= 2 and loc[0] in sections and isinstance(loc[1], int):
+    if len(loc) >= 2 and loc[0] in SECTIONS and isinstance(loc[1], int):
         section, index = loc[0], loc[1]
         rest = loc[2:]
         if section == "joints" and rest and isinstance(rest[0], str) and rest[0] in JOINT_TYPES:
             rest = rest[1:]  # the discriminator tag pydantic inserts
         name = ""
-        items = data.get(section)
+        items = data.get(str(section))
         if isinstance(items, list) and index < len(items) and isinstance(items[index], dict):
             item_name = items[index].get("name")
             if isinstance(item_name, str) and item_name.strip():

@@ -327,12 +327,20 @@ class Workspace:
         rest = g_hat - self.stack.adjoint(point.f, point.lam)
         return linalg.lstsq(self.E.T, rest)
 
-    def solve_batch(self, work: FloatArray) -> BatchSolution:
+    def solve_batch(self, work: FloatArray, radii: FloatArray | None = None) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of
-        the loads' work per sample (build rows with ``Assembly.wrench_work``)."""
+        the loads' work per sample (build rows with ``Assembly.wrench_work``).
+        ``radii`` (B, n): each sample's own plays, as scaled cone radii in the
+        order of ``Assembly.balls`` (``variation.PlayMap.radii`` builds them)."""
         from .batch import solve_batch
 
-        return solve_batch(self, work)
+        return solve_batch(self, work, radii)
+
+    def with_radii(self, radii: FloatArray) -> Workspace:
+        """A workspace of the same mechanism with other plays: ``radii`` are
+        the scaled cone radii (``Assembly.balls`` order); scales, free motions
+        and unknowns stay those of this one, so answers compare row by row."""
+        return Workspace(self.asm.with_radii(radii), self.settings)
 
     def softness(self, g_norm: float | FloatArray) -> FloatArray:
         """Compliant contacts: the elastic energy k p^2 / 2 (p in mm) becomes

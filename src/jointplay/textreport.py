@@ -10,6 +10,7 @@ from rich.text import Text
 
 from .geometry import FloatArray, fmt_point
 from .model import Model
+from .montecarlo import MonteCarloResult
 from .result import Result
 
 
@@ -127,6 +128,77 @@ def render(
             Text(
                 "free motions that no joint holds and no load drives (reported as 0):\n"
                 + "\n".join(f"  {m}" for m in result.free_motions)
+            )
+        )
+    console.print(Group(*parts))
+
+
+def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -> None:
+    """The report of ``jointplay montecarlo``: plays, points, requirements."""
+    mc = result.settings
+    head = Text()
+    head.append(f"{result.model_name or source}: Monte Carlo\n", style="bold")
+    head.append(
+        f"{result.samples:,} sets of parts, seed {mc.seed}"
+        + (f", load case '{mc.case}'" if mc.case else "")
+        + f"; every sample certified: past clearance {result.feasibility_mm:.1e} mm, "
+        f"imbalance {result.equilibrium_residual:.1e} "
+        f"({result.batched:,} by batched Newton, {result.full_solves} full solves)\n"
+    )
+    plays = Table(title="plays drawn", title_justify="left", show_edge=False)
+    plays.add_column("play")
+    plays.add_column("limits (mm) and law")
+    for label, words in result.plays_described.items():
+        plays.add_row(label, words)
+    points = Table(
+        title="functional points: size of the displacement (mm)",
+        title_justify="left",
+        show_edge=False,
+    )
+    for name in ("point", "mean", "std", "0.135 %", "median", "99.865 %", "max"):
+        points.add_column(name, justify="left" if name == "point" else "right")
+    for name, ps in result.points.items():
+        pct = ps.size_percentiles
+        points.add_row(
+            name,
+            *(
+                f"{v:.6g}"
+                for v in (
+                    ps.size_mean,
+                    ps.size_std,
+                    pct[0.135],
+                    pct[50.0],
+                    pct[99.865],
+                    ps.size_max,
+                )
+            ),
+        )
+    parts: list[Table | Text] = [head, plays, points]
+    if result.requirements:
+        reqs = Table(
+            title=f"requirements: parts outside ({mc.confidence:.0%} interval)",
+            title_justify="left",
+            show_edge=False,
+        )
+        for name in ("requirement", "outside", "fraction", "ppm", "interval"):
+            reqs.add_column(name, justify="left" if name == "requirement" else "right")
+        for rs in result.requirements:
+            lo, hi = rs.interval
+            reqs.add_row(
+                rs.requirement.describe(),
+                f"{rs.outside:,}",
+                f"{rs.fraction:.4%}",
+                f"{rs.fraction * 1e6:.0f}",
+                f"{lo:.3%} to {hi:.3%}",
+            )
+        parts.append(reqs)
+    if mc.target_rel_error is not None:
+        worst = float(np.max(result.relative_error, initial=0.0))
+        met = "reached" if worst <= mc.target_rel_error else "NOT reached (raise --samples)"
+        parts.append(
+            Text(
+                f"target relative error {mc.target_rel_error:g} at {mc.confidence:.0%}: {met}; "
+                f"worst estimate's relative error {worst:.3g}"
             )
         )
     console.print(Group(*parts))

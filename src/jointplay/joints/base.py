@@ -23,7 +23,7 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, model_validator
 
-from ..fields import Direction, Name, NonNegativeLength, Point, PositiveStiffness
+from ..fields import Direction, Name, Play, Point, PositiveStiffness
 from ..geometry import FloatArray, is_parallel, joint_frame, skew
 
 ContactKind = Literal["ball", "fixed"]
@@ -138,7 +138,7 @@ class Joint(BaseModel):
     at: Point
     axis: Direction = (1.0, 0.0, 0.0)
     up: Direction | None = None
-    clearance: NonNegativeLength
+    clearance: Play
     #: Contact stiffness (N/mm), per contact point: a contact may go past its
     #: clearance by p at the cost of an elastic energy k p^2 / 2. None: rigid.
     stiffness: PositiveStiffness | None = None

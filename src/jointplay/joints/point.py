@@ -22,14 +22,14 @@ from typing import Literal
 import numpy as np
 from pydantic import field_validator
 
-from ..fields import NonNegativeLength
+from ..fields import Play
 from .base import Contact, Joint
 
 
 class PointOnPlane(Joint):
     type: Literal["point"] = "point"
-    gap: NonNegativeLength = 0.0
-    clearance: NonNegativeLength = 0.0
+    gap: Play = 0.0
+    clearance: Play = 0.0
 
     @field_validator("clearance")
     @classmethod

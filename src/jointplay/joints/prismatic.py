@@ -28,7 +28,7 @@ from typing import Literal
 import numpy as np
 from pydantic import model_validator
 
-from ..fields import NonNegativeLength, PositiveLength
+from ..fields import Play, PositiveLength
 from .base import Contact, Joint, point_rows
 
 
@@ -42,9 +42,9 @@ class Prismatic(Joint):
     width: PositiveLength
     height: PositiveLength
     #: Play across y and across z; ``clearance`` alone sets both.
-    clearance: NonNegativeLength | None = None  # type: ignore[assignment]
-    clearance_y: NonNegativeLength | None = None
-    clearance_z: NonNegativeLength | None = None
+    clearance: Play | None = None  # type: ignore[assignment]
+    clearance_y: Play | None = None
+    clearance_z: Play | None = None
 
     @model_validator(mode="after")
     def _check_play(self) -> Prismatic:

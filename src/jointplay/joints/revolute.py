@@ -18,7 +18,7 @@ from typing import Literal, Self
 import numpy as np
 from pydantic import model_validator
 
-from ..fields import NonNegativeLength, PositiveLength
+from ..fields import Play, PositiveLength
 from .base import Contact, Joint, point_rows
 from .cylindrical import check_engagement, end_contacts
 
@@ -26,7 +26,7 @@ from .cylindrical import check_engagement, end_contacts
 class Revolute(Joint):
     type: Literal["revolute"] = "revolute"
     length: PositiveLength
-    axial_clearance: NonNegativeLength
+    axial_clearance: Play
 
     @model_validator(mode="after")
     def _check_length(self) -> Self:
