@@ -181,6 +181,53 @@ def montecarlo(
     _guarded(run, as_json)
 
 
+@app.command()
+def envelope(
+    model_path: Annotated[
+        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
+    ],
+    point: Annotated[
+        str, typer.Option("--point", metavar="NAME", help="The functional point to bound.")
+    ],
+    directions: Annotated[
+        int, typer.Option("--directions", min=6, help="Directions over the sphere.")
+    ] = 200,
+    plays: Annotated[
+        str,
+        typer.Option(
+            "--plays",
+            metavar="max|mean",
+            help="Toleranced plays at their upper limits (every part inside) or means.",
+        ),
+    ] = "max",
+    csv: Annotated[
+        Path | None,
+        typer.Option("--csv", metavar="FILE", help="Write each direction's support point."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the envelope as JSON.")] = False,
+) -> None:
+    """Worst-case envelope of a functional point: every displacement the
+    plays allow under any load (its largest size and direction, its extent
+    along each axis, and the hull's points)."""
+    from .envelope import Envelope
+    from .modelfile import load
+    from .textreport import render_envelope
+
+    def run() -> None:
+        if plays not in ("max", "mean"):
+            raise ModelError(f"--plays {plays!r}: expected 'max' or 'mean'")
+        model = load(model_path)
+        result = Envelope(point, directions, "max" if plays == "max" else "mean").run(model)
+        if csv is not None:
+            result.to_dataframe().to_csv(csv, index=False)
+        if as_json:
+            typer.echo(json.dumps(result.to_dict(), indent=2))
+        else:
+            render_envelope(result, str(model_path), model.name, _console())
+
+    _guarded(run, as_json)
+
+
 def _console() -> Console:
     # names from the model are printed as they are: "[/b]" is not markup, ":x:" no emoji
     return Console(highlight=False, soft_wrap=False, markup=False, emoji=False)

@@ -8,6 +8,7 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
+from .envelope import EnvelopeResult
 from .geometry import FloatArray, fmt_point
 from .model import Model
 from .montecarlo import MonteCarloResult
@@ -202,3 +203,27 @@ def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -
             )
         )
     console.print(Group(*parts))
+
+
+def render_envelope(
+    result: EnvelopeResult, source: str, title: str | None, console: Console
+) -> None:
+    """The report of ``jointplay envelope``."""
+    st = result.settings
+    head = Text()
+    head.append(f"{title or source}: worst-case envelope of point '{st.point}'\n", style="bold")
+    head.append(
+        f"every displacement the plays allow under any load ({len(result.h)} directions, "
+        f"plays at their {'upper limits' if st.plays == 'max' else 'means'}, stiffness "
+        "left out)\n"
+    )
+    size = result.largest
+    direction = result.largest_vector / size if size > 0 else np.zeros(3)
+    head.append(f"largest displacement: {size:.6g} mm along {_vec(direction)}\n")
+    table = Table(title="extent along each axis (mm)", title_justify="left", show_edge=False)
+    for name in ("axis", "least", "greatest"):
+        table.add_column(name, justify="left" if name == "axis" else "right")
+    for i, axis in enumerate("XYZ"):
+        lo, hi = result.extent[i]
+        table.add_row(axis, f"{lo + 0.0:.6g}", f"{hi + 0.0:.6g}")
+    console.print(Group(head, table))

@@ -193,7 +193,7 @@ def _distribution(value: Mapping[str, Any]) -> Distribution:
 
 
 def _from_fit(value: Mapping[str, Any]) -> Toleranced:
-    from . import fits
+    from .fits import fit as iso_fit
 
     spec = value["fit"]
     if not isinstance(spec, str):
@@ -201,7 +201,7 @@ def _from_fit(value: Mapping[str, Any]) -> Toleranced:
     if "diameter" not in value:
         raise ValueError(f"fit {spec!r} needs its nominal 'diameter' (mm), e.g. diameter: 20")
     diameter = to_base(value["diameter"], "length")
-    found = fits.fit(spec, diameter)  # ValueError with its own words
+    found = iso_fit(spec, diameter)  # ValueError with its own words
     low, high = found.min_clearance, found.max_clearance
     if low < 0:
         kind = "an interference" if high <= 0 else "a transition"

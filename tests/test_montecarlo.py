@@ -1,0 +1,233 @@
+"""Monte Carlo over real parts: each sample exact, the study reproducible."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import jointplay
+from jointplay.cli import app
+from jointplay.montecarlo import MonteCarlo
+
+SHAFT: dict[str, Any] = {
+    "name": "shaft, plays by limits",
+    "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
+    "joints": [
+        {
+            "name": "l1",
+            "type": "spherical",
+            "between": ["S0", "S1"],
+            "at": [0, 0, 0],
+            "clearance": {"min": 0.1, "max": 0.3},
+        },
+        {
+            "name": "l2",
+            "type": "cylindrical",
+            "between": ["S0", "S1"],
+            "at": [200, 0, 0],
+            "length": 40,
+            "clearance": {"min": "100 um", "max": "0.3 mm", "distribution": "normal"},
+        },
+    ],
+    "loads": [{"body": "S1", "at": [300, 0, 0], "force": [1, 1, 1]}],
+    "points": [
+        {"name": "B", "body": "S1", "at": [300, 0, 0]},
+        {"name": "O", "body": "S1", "at": [0, 0, 0]},
+    ],
+    "requirements": [{"point": "B", "max_displacement": 0.2}],
+}
+
+
+def with_plays(data: dict[str, Any], plays: dict[str, float]) -> jointplay.Model:
+    """The model with each play fixed (joint name -> clearance, mm)."""
+    out = json.loads(json.dumps(data))
+    for joint in out["joints"]:
+        if joint["name"] in plays:
+            joint["clearance"] = plays[joint["name"]]
+    return jointplay.model_from_dict(out)
+
+
+def test_every_sample_is_the_equilibrium_of_its_own_parts() -> None:
+    model = jointplay.model_from_dict(SHAFT)
+    result = MonteCarlo(samples=300, seed=3, chunk=100).run(model)
+    assert result.samples == 300
+    assert result.play_labels == ("l1.clearance", "l2.clearance")
+    for i in range(0, 300, 23):  # an independent full solve of those parts
+        j1, j2 = result.plays[i]
+        solved = jointplay.solve(with_plays(SHAFT, {"l1": j1, "l2": j2}))
+        solved.check()
+        for p, name in enumerate(result.point_names):
+            expected = solved.points[name].displacement
+            assert np.max(np.abs(result.displacement[i, p] - expected)) < 1e-9
+    assert result.feasibility_mm < 1e-9
+    assert result.equilibrium_residual < 1e-8
+
+
+def test_ball_joint_closed_form_and_miss_fraction() -> None:
+    # one ball joint: the centre goes J/2 along the force, so a requirement
+    # of 0.125 mm is missed exactly by the parts whose play exceeds 0.25 mm
+    data = {
+        "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
+        "joints": [
+            {
+                "name": "ball",
+                "type": "spherical",
+                "between": ["g", "b"],
+                "at": [0, 0, 0],
+                "clearance": {"min": 0.1, "max": 0.3},
+            },
+        ],
+        "loads": [{"body": "b", "at": [0, 0, 0], "force": [3, -4, 0]}],
+        "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
+        "requirements": [{"point": "c", "max_displacement": 0.125}],
+    }
+    model = jointplay.model_from_dict(data)
+    result = MonteCarlo(samples=2000, seed=11, chunk=500).run(model)
+    play = result.plays[:, 0]
+    assert np.all((play >= 0.1) & (play <= 0.3))
+    expected = (play / 2)[:, None] * np.array([0.6, -0.8, 0.0])
+    assert np.max(np.abs(result.displacement[:, 0] - expected)) < 1e-9
+    [req] = result.requirements
+    assert req.outside == int(np.sum(play / 2 > 0.125))
+    lo, hi = req.interval
+    assert lo <= req.fraction <= hi
+    assert lo < 0.25 < hi  # the exact fraction of a uniform play above 0.25 mm
+
+
+def test_same_seed_same_numbers_whatever_the_workers() -> None:
+    model = jointplay.model_from_dict(SHAFT)
+    study = MonteCarlo(samples=900, seed=5, chunk=300)
+    one = study.run(model, workers=1)
+    two = study.run(model, workers=2)
+    assert np.array_equal(one.plays, two.plays)
+    assert np.array_equal(one.displacement, two.displacement)
+    other = MonteCarlo(samples=900, seed=6, chunk=300).run(model)
+    assert not np.array_equal(one.plays, other.plays)
+
+
+def test_dask_cluster_gives_the_local_numbers() -> None:
+    distributed = pytest.importorskip("distributed")
+    model = jointplay.model_from_dict(SHAFT)
+    study = MonteCarlo(samples=600, seed=9, chunk=200)
+    local = study.run(model, workers=1)
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        remote = study.run(model, scheduler=cluster.scheduler_address)
+    assert np.array_equal(local.plays, remote.plays)
+    assert np.array_equal(local.displacement, remote.displacement)
+
+
+def test_normal_plays_stay_in_their_limits_with_the_stated_spread() -> None:
+    model = jointplay.model_from_dict(SHAFT)
+    result = MonteCarlo(samples=20000, seed=1).run(model)
+    normal = result.plays[:, 1]
+    assert normal.min() >= 0.1 and normal.max() <= 0.3
+    # +-3 sigma at the limits: sigma = 0.2 / 6, a little less once truncated
+    assert abs(normal.mean() - 0.2) < 0.002
+    assert 0.030 < normal.std() < 0.2 / 6
+
+
+def test_convergence_mode_stops_when_the_error_is_small() -> None:
+    model = jointplay.model_from_dict({**SHAFT, "requirements": []})
+    study = MonteCarlo(samples=200_000, seed=2, chunk=1000, target_rel_error=0.01)
+    result = study.run(model, workers=1)
+    assert result.samples < 200_000
+    assert np.all(result.relative_error <= 0.01)
+
+
+def test_fit_plays_are_hole_minus_shaft() -> None:
+    model = jointplay.load(Path("examples/studies/shaft_fits.yaml"))
+    ball = model.joints[0].clearance
+    assert ball.fit == "H8/f7" and ball.diameter == 20  # type: ignore[attr-defined]
+    # ISO 286-2 at 20 mm: H8 = +0.033/0, f7 = -0.020/-0.041
+    assert ball.low == pytest.approx(0.020, abs=1e-12)  # type: ignore[attr-defined]
+    assert ball.high == pytest.approx(0.074, abs=1e-12)  # type: ignore[attr-defined]
+    assert float(ball) == pytest.approx(0.047, abs=1e-12)
+    result = MonteCarlo(samples=5000, seed=4).run(model)
+    assert np.all((result.plays[:, 0] >= 0.020 - 1e-12) & (result.plays[:, 0] <= 0.074 + 1e-12))
+
+
+def run_cli(*args: str) -> Any:
+    return CliRunner().invoke(app, list(args))
+
+
+def test_cli_montecarlo_json(tmp_path: Path) -> None:
+    out = run_cli(
+        "montecarlo",
+        "examples/studies/shaft_fits.yaml",
+        "-n",
+        "3000",
+        "--seed",
+        "7",
+        "--workers",
+        "1",
+        "--json",
+        "--csv",
+        str(tmp_path / "s.csv"),
+    )
+    assert out.exit_code == 0, out.output
+    doc = json.loads(out.output)
+    assert doc["samples"] == 3000 and doc["seed"] == 7
+    assert set(doc["points"]) == {"B"}
+    assert doc["certificate"]["feasibility_mm"] < 1e-9
+    lines = (tmp_path / "s.csv").read_text().splitlines()
+    assert lines[0].split(",") == ["l1.clearance", "l2.clearance", "B.dx", "B.dy", "B.dz", "B.size"]
+    assert len(lines) == 3001
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({"clearance": {"min": 0.2}}, "'max' is missing"),
+        ({"clearance": {"min": 0.3, "max": 0.1}}, "below min"),
+        ({"clearance": {"min": -0.1, "max": 0.1}}, "play >= 0"),
+        ({"clearance": {"min": 0.1, "max": 0.2, "distribution": "gauss"}}, "'uniform' or 'normal'"),
+        ({"clearance": {"min": 0.1, "max": 0.2, "law": "normal"}}, "unknown key 'law'"),
+        ({"clearance": {"fit": "H7/k6", "diameter": 20}}, "transition fit"),
+        ({"clearance": {"fit": "H7/s6", "diameter": 20}}, "interference fit"),
+        ({"clearance": {"fit": "H7/g6"}}, "needs its nominal 'diameter'"),
+        ({"clearance": {"fit": "H7g6", "diameter": 20}}, "H7g6"),
+        ({"clearance": {"fit": "H7/g6", "diameter": "20 kg"}}, "length"),
+        ({"clearance": {"size": 3}}, "expected a length, {min, max} or {fit, diameter}"),
+    ],
+)
+def test_bad_plays_exit_2(tmp_path: Path, change: dict[str, Any], words: str) -> None:
+    data = json.loads(json.dumps(SHAFT))
+    data["joints"][0].update(change)
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(data))
+    out = run_cli("solve", str(path))
+    assert out.exit_code == 2, out.output
+    assert "joints[0] 'l1': clearance" in out.output and words in out.output
+
+
+def test_a_study_needs_plays_and_points(tmp_path: Path) -> None:
+    fixed = json.loads(json.dumps(SHAFT))
+    for joint in fixed["joints"]:
+        joint["clearance"] = 0.2
+    path = tmp_path / "fixed.json"
+    path.write_text(json.dumps(fixed))
+    out = run_cli("montecarlo", str(path))
+    assert out.exit_code == 2 and "no play varies" in out.output
+    no_points = {**SHAFT, "points": [], "requirements": []}
+    path.write_text(json.dumps(no_points))
+    out = run_cli("montecarlo", str(path))
+    assert out.exit_code == 2 and "has none" in out.output
+    out = run_cli("montecarlo", "examples/studies/shaft_fits.yaml", "--target", "2")
+    assert out.exit_code == 2 and "between 0 and 1" in out.output
+
+
+def test_requirement_must_name_a_point(tmp_path: Path) -> None:
+    data = {**SHAFT, "requirements": [{"point": "Bee", "max_displacement": 0.1}]}
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(data))
+    out = run_cli("solve", str(path))
+    assert out.exit_code == 2
+    assert "requirements[0]: point: unknown point 'Bee'" in out.output
+    assert "Did you mean 'B'?" in out.output
