@@ -5,7 +5,8 @@
    SLSQP, CVXPY + Clarabel, the raw Clarabel floor; then many loads on one
    mechanism: batch, warm, cold);
 2. ``bench_cases.py``: every case of the paper against SLSQP and CVXPY;
-3. ``bench_scaling.py``: chains and closed loops of 10 to 10,000 bodies.
+3. ``bench_scaling.py``: chains and closed loops of 10 to 10,000 bodies;
+4. ``bench_montecarlo.py``: Monte Carlo samples per second against SLSQP.
 
 Run from the repository root with jointplay installed (CVXPY from the
 ``bench`` extra): ``python benchmarks/run.py`` (``--quick``: fewer repeats,
@@ -21,6 +22,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_cases
+import bench_montecarlo
 import bench_paper
 import bench_scaling
 
@@ -38,6 +40,8 @@ def main(argv: list[str] | None = None) -> int:
     print("\n" + "=" * 100 + "\n3. Scaling with size\n" + "=" * 100)
     sizes = ["10", "100", "1000"] if args.quick else ["10", "100", "1000", "10000"]
     bench_scaling.main(["--sizes", *sizes])
+    print("\n" + "=" * 100 + "\n4. Monte Carlo over real parts\n" + "=" * 100)
+    bench_montecarlo.main(["--samples", "200000" if args.quick else "1000000"])
     return 0
 
 
