@@ -11,36 +11,28 @@ import pytest
 from typer.testing import CliRunner
 
 import jointplay
+from conftest import spherical_shaft
 from jointplay.cli import app
 from jointplay.montecarlo import MonteCarlo
 
-SHAFT: dict[str, Any] = {
-    "name": "shaft, plays by limits",
-    "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
-    "joints": [
-        {
-            "name": "l1",
-            "type": "spherical",
-            "between": ["S0", "S1"],
-            "at": [0, 0, 0],
-            "clearance": {"min": 0.1, "max": 0.3},
-        },
-        {
-            "name": "l2",
-            "type": "cylindrical",
-            "between": ["S0", "S1"],
-            "at": [200, 0, 0],
-            "length": 40,
-            "clearance": {"min": "100 um", "max": "0.3 mm", "distribution": "normal"},
-        },
-    ],
-    "loads": [{"body": "S1", "at": [300, 0, 0], "force": [1, 1, 1]}],
-    "points": [
-        {"name": "B", "body": "S1", "at": [300, 0, 0]},
-        {"name": "O", "body": "S1", "at": [0, 0, 0]},
-    ],
-    "requirements": [{"point": "B", "max_displacement": 0.2}],
-}
+
+def _shaft() -> dict[str, Any]:
+    """The paper's shaft (``conftest.spherical_shaft``) with toleranced plays,
+    two functional points and a requirement."""
+    data: dict[str, Any] = spherical_shaft(
+        name="shaft, plays by limits",
+        points=[
+            {"name": "B", "body": "S1", "at": [300, 0, 0]},
+            {"name": "O", "body": "S1", "at": [0, 0, 0]},
+        ],
+        requirements=[{"point": "B", "max_displacement": 0.2}],
+    )
+    data["joints"][0]["clearance"] = {"min": 0.1, "max": 0.3}
+    data["joints"][1]["clearance"] = {"min": "100 um", "max": "0.3 mm", "distribution": "normal"}
+    return data
+
+
+SHAFT = _shaft()
 
 
 def with_plays(data: dict[str, Any], plays: dict[str, float]) -> jointplay.Model:
@@ -111,7 +103,8 @@ def test_same_seed_same_numbers_whatever_the_workers() -> None:
 
 
 def test_dask_cluster_gives_the_local_numbers() -> None:
-    distributed = pytest.importorskip("distributed")
+    import distributed  # the test extra installs it
+
     model = jointplay.model_from_dict(SHAFT)
     study = MonteCarlo(samples=600, seed=9, chunk=200)
     local = study.run(model, workers=1)
