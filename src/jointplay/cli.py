@@ -155,11 +155,12 @@ def montecarlo(
         for name, value in (("--target", target), ("--confidence", confidence)):
             if value is not None and not 0.0 < value < 1.0:
                 raise ModelError(
-                    f"{name} {value:g}: expected a fraction between 0 and 1 (0.05 is 5 %)"
+                    f"{name} {value:g}: expected a fraction between 0 and 1 (0.05 is 5 %)",
+                    source=str(model_path),
                 )
         study = MonteCarlo(samples, seed, target, confidence, chunk, case)
         if as_json or samples <= chunk:
-            result = study.run(model, workers=workers, scheduler=scheduler)
+            result = study.run(model, workers=workers, scheduler=scheduler, source=str(model_path))
         else:
             from rich.progress import Progress
 
@@ -170,6 +171,7 @@ def montecarlo(
                     workers=workers,
                     scheduler=scheduler,
                     progress=lambda done, total: bar.update(task, completed=done),
+                    source=str(model_path),
                 )
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
@@ -217,7 +219,8 @@ def envelope(
         if plays not in ("max", "mean"):
             raise ModelError(f"--plays {plays!r}: expected 'max' or 'mean'")
         model = load(model_path)
-        result = Envelope(point, directions, "max" if plays == "max" else "mean").run(model)
+        settings = Envelope(point, directions, "max" if plays == "max" else "mean")
+        result = settings.run(model, source=str(model_path))
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
         if as_json:

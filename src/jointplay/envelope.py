@@ -60,12 +60,15 @@ class Envelope:
         if self.directions < 6:
             raise ValueError("directions: at least 6")
 
-    def run(self, model: Model) -> EnvelopeResult:
-        source = model.name or "<model>"
+    def run(self, model: Model, *, source: str | None = None) -> EnvelopeResult:
+        """``source``: the model file's name, for messages."""
+        source = source or model.name or "<model>"
         names = [p.name for p in model.points]
         if self.point not in names:
             known = ", ".join(names) if names else "none; add a 'points' section"
-            raise ModelError(f"--point: unknown point '{self.point}'; the points are: {known}")
+            raise ModelError(
+                f"--point: unknown point '{self.point}'; the points are: {known}", source=source
+            )
         point = model.points[names.index(self.point)]
         rigid = model.model_copy(
             update={"joints": tuple(j.model_copy(update={"stiffness": None}) for j in model.joints)}

@@ -77,12 +77,14 @@ class MonteCarlo:
         workers: int | None = 1,
         scheduler: str | None = None,
         progress: Callable[[int, int], None] | None = None,
+        source: str | None = None,
     ) -> MonteCarloResult:
         """Draw and solve the samples. ``workers``: local processes (None: one
         per core; 1: this process). ``scheduler``: a Dask scheduler address
         (``tcp://host:8786``) to solve the chunks on a cluster instead.
-        ``progress(done, total)`` is called after each chunk."""
-        source = model.name or "<model>"
+        ``progress(done, total)`` is called after each chunk. ``source``: the
+        model file's name, for messages."""
+        source = source or model.name or "<model>"
         _study_inputs(model, self.case, source)
         sizes = _chunk_sizes(self.samples, self.chunk)
         parts: list[_Chunk] = []
