@@ -231,6 +231,112 @@ def envelope(
     _guarded(run, as_json)
 
 
+@app.command()
+def sweep(
+    model_path: Annotated[
+        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
+    ],
+    vary: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--vary",
+            metavar="PATH=START:STOP:COUNT",
+            help="Vary an entry of the model, named by its path in the file: "
+            "'loads[0].force[1]=0:10:11', 'joints[l2].clearance=0.1:0.3:5' (a bracket may "
+            "hold a name), values with units ('0:10 N:11') or a list 'PATH=1,2,5'. "
+            "Repeat for a grid.",
+        ),
+    ] = None,
+    rotate_load: Annotated[
+        int | None,
+        typer.Option(
+            "--rotate-load",
+            metavar="N",
+            min=0,
+            help="Turn load N (counted from 0 in 'loads') about --about: its force and torque "
+            "turn, its point stays.",
+        ),
+    ] = None,
+    about: Annotated[
+        str, typer.Option("--about", metavar="AXIS", help="x, y, z, or 'ax,ay,az'.")
+    ] = "z",
+    steps: Annotated[
+        int, typer.Option("--steps", min=1, help="Steps of the turn (a full turn by default).")
+    ] = 72,
+    start_deg: Annotated[
+        float, typer.Option("--from", metavar="DEG", help="First angle of the turn.")
+    ] = 0.0,
+    stop_deg: Annotated[
+        float | None,
+        typer.Option("--to", metavar="DEG", help="Last angle (taken); default: a full turn."),
+    ] = None,
+    case: Annotated[
+        str | None, typer.Option("--case", metavar="NAME", help="Load case to solve.")
+    ] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(
+            "--workers", min=1, help="Local processes (default: one per core above 1000 steps)."
+        ),
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(
+            "--scheduler", metavar="ADDRESS", help="Solve on a Dask cluster (tcp://host:8786)."
+        ),
+    ] = None,
+    chunk: Annotated[int, typer.Option("--chunk", min=1, help="Steps per task.")] = 64,
+    csv: Annotated[
+        Path | None,
+        typer.Option("--csv", metavar="FILE", help="Write the table (one row per step) as CSV."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print every step as JSON.")] = False,
+) -> None:
+    """Sweep MODEL: solve it as entries vary over a range or a load turns, and
+    tabulate per step the points' displacements, the joints' torsors and the
+    contacts (state and force)."""
+    from .modelfile import load
+    from .sweep import RotateLoad, Sweep, Vary
+    from .textreport import render_sweep
+
+    def run() -> None:
+        source = str(model_path)
+        try:
+            varies = tuple(Vary.parse(v) for v in vary or ())
+            turn = (
+                None
+                if rotate_load is None
+                else RotateLoad(rotate_load, RotateLoad.axis(about), steps, start_deg, stop_deg)
+            )
+            settings = Sweep(varies, turn, case, chunk)
+        except ValueError as exc:
+            raise ModelError(str(exc), source=source) from None
+        model = load(model_path)
+        n_workers = workers if workers is not None else (None if settings.steps >= 1000 else 1)
+        if as_json or settings.steps < 200:
+            result = settings.run(model, workers=n_workers, scheduler=scheduler, source=source)
+        else:
+            from rich.progress import Progress
+
+            with Progress(console=Console(stderr=True), transient=True) as bar:
+                task = bar.add_task("solving steps", total=settings.steps)
+                result = settings.run(
+                    model,
+                    workers=n_workers,
+                    scheduler=scheduler,
+                    progress=lambda done, total: bar.update(task, completed=done),
+                    source=source,
+                )
+        if csv is not None:
+            result.to_dataframe().to_csv(csv, index=False)
+        if as_json:
+            typer.echo(json.dumps(result.to_dict(), indent=2))
+        else:
+            render_sweep(result, source, _console(), csv)
+
+    _guarded(run, as_json)
+
+
 def _console() -> Console:
     # names from the model are printed as they are: "[/b]" is not markup, ":x:" no emoji
     return Console(highlight=False, soft_wrap=False, markup=False, emoji=False)

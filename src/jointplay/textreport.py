@@ -3,6 +3,8 @@ vectorial sets per joint, and which contacts touch."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from rich.console import Console, Group
 from rich.table import Table
@@ -13,6 +15,7 @@ from .geometry import FloatArray, fmt_point
 from .model import Model
 from .montecarlo import MonteCarloResult
 from .result import Result
+from .sweep import SweepResult
 
 
 def _num(v: float, digits: int = 8) -> str:
@@ -227,3 +230,59 @@ def render_envelope(
         lo, hi = result.extent[i]
         table.add_row(axis, f"{lo + 0.0:.6g}", f"{hi + 0.0:.6g}")
     console.print(Group(head, table))
+
+
+#: Rows of a sweep printed to the terminal; the rest go to --csv.
+SWEEP_ROWS = 40
+
+
+def render_sweep(
+    result: SweepResult, source: str, console: Console, csv: Path | None = None
+) -> None:
+    """The report of ``jointplay sweep``: a row per step, then each point's worst step."""
+    head = Text()
+    head.append(f"{result.model_name or source}: sweep of {result.steps} steps\n", style="bold")
+    head.append("parameters: " + ", ".join(result.labels) + "\n")
+    head.append(
+        f"every step certified: past clearance at most {result.feasibility_mm:.1e} mm, "
+        f"imbalance at most {result.equilibrium_residual:.1e}"
+    )
+    table = Table(show_edge=False)
+    table.add_column("step", justify="right")
+    for label in result.labels:
+        table.add_column(label, justify="right")
+    for name in result.point_names:
+        table.add_column(f"|d {name}| (mm)", justify="right")
+    table.add_column("touching")
+    sizes = np.linalg.norm(result.points, axis=2)  # (S, P)
+    shown_rows = range(result.steps)
+    if result.steps > SWEEP_ROWS:
+        shown_rows = range(0, result.steps, -(-result.steps // SWEEP_ROWS))
+    for s in shown_rows:
+        touching = [
+            f"{j}.{c}" for k, (j, c) in enumerate(result.contact_names) if result.in_contact[s, k]
+        ]
+        table.add_row(
+            str(s),
+            *(f"{v:.6g}" for v in result.values[s]),
+            *(f"{d:.6g}" for d in sizes[s]),
+            ", ".join(touching) or "-",
+        )
+    parts: list[Table | Text] = [head, table]
+    tail = Text()
+    if len(shown_rows) < result.steps:
+        where = f"written to {csv}" if csv else "--csv FILE writes them"
+        tail.append(f"(every {shown_rows.step}th of {result.steps} steps shown; all {where})\n")
+    for p, name in enumerate(result.point_names):
+        top = float(np.max(sizes[:, p]))
+        s = int(np.flatnonzero(sizes[:, p] >= top * (1 - 1e-12))[0])  # ties: the first
+        at = ", ".join(
+            f"{label} = {v:.6g}" for label, v in zip(result.labels, result.values[s], strict=True)
+        )
+        tail.append(
+            f"point {name}: largest displacement {sizes[s, p]:.6g} mm at step {s} ({at}), "
+            f"along {_vec(result.points[s, p] / max(sizes[s, p], 1e-300))}\n"
+        )
+    if tail:
+        parts.append(tail)
+    console.print(Group(*parts))

@@ -149,6 +149,8 @@ def _draw(
 
 def parse_play(value: Any) -> float:
     """A play field's value: a length (float) or a ``Toleranced`` from a mapping."""
+    if isinstance(value, Toleranced):
+        return value  # a validated model's own value, dumped and read again
     if not isinstance(value, Mapping):
         return to_base(value, "length")
     keys = set(value)
