@@ -337,6 +337,48 @@ def sweep(
     _guarded(run, as_json)
 
 
+@app.command()
+def contributions(
+    model_path: Annotated[
+        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
+    ],
+    case: Annotated[
+        str | None, typer.Option("--case", metavar="NAME", help="Load case to solve.")
+    ] = None,
+    step: Annotated[
+        float,
+        typer.Option("--step", help="Difference step, as a fraction of each play's tolerance."),
+    ] = 1e-3,
+    csv: Annotated[
+        Path | None,
+        typer.Option("--csv", metavar="FILE", help="Write the table (measure x play) as CSV."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the study as JSON.")] = False,
+) -> None:
+    """Which toleranced play drives each functional point: sensitivities at the
+    nominal plays and percent contributions, worst case and statistical (RSS)."""
+    from .contributions import Contributions
+    from .modelfile import load
+    from .textreport import render_contributions
+
+    def run() -> None:
+        source = str(model_path)
+        try:
+            settings = Contributions(step, case)
+        except ValueError as exc:
+            raise ModelError(f"--{exc}", source=source) from None
+        model = load(model_path)
+        result = settings.run(model, source=source)
+        if csv is not None:
+            result.to_dataframe().to_csv(csv, index=False)
+        if as_json:
+            typer.echo(json.dumps(result.to_dict(), indent=2))
+        else:
+            render_contributions(result, source, _console())
+
+    _guarded(run, as_json)
+
+
 def _console() -> Console:
     # names from the model are printed as they are: "[/b]" is not markup, ":x:" no emoji
     return Console(highlight=False, soft_wrap=False, markup=False, emoji=False)

@@ -10,6 +10,7 @@ from rich.console import Console, Group
 from rich.table import Table
 from rich.text import Text
 
+from .contributions import ContributionsResult
 from .envelope import EnvelopeResult
 from .geometry import FloatArray, fmt_point
 from .model import Model
@@ -285,4 +286,55 @@ def render_sweep(
         )
     if tail:
         parts.append(tail)
+    console.print(Group(*parts))
+
+
+def _bar(percent: float, width: int = 10) -> str:
+    full = round(width * percent / 100.0)
+    return "#" * full + "." * (width - full)
+
+
+def render_contributions(result: ContributionsResult, source: str, console: Console) -> None:
+    """The report of ``jointplay contributions``: per measure, a row per play."""
+    head = Text()
+    head.append(f"{result.model_name or source}: contributions of the plays\n", style="bold")
+    for play, words in result.plays_described.items():
+        head.append(f"  {play}: {words}\n")
+    head.append(
+        "sensitivity: mm of the measure per mm of play, at the nominal (mean) plays; "
+        "worst case: |s| T of the stack sum |s| T; RSS: (s sigma)^2 of sum (s sigma)^2"
+    )
+    parts: list[Table | Text] = [head]
+    wc, rss = result.worst_case, result.rss
+    for k, measure in enumerate(result.measures):
+        table = Table(
+            title=(
+                f"{measure}: {result.nominal[k]:.6g} mm at the nominal; worst-case spread "
+                f"{result.worst_case_range[k]:.6g} mm, RSS sigma {result.rss_sigma[k]:.6g} mm"
+            ),
+            title_justify="left",
+            show_edge=False,
+        )
+        for name in ("play", "tolerance (mm)", "sensitivity", "worst case", "RSS", ""):
+            table.add_column(name, justify="left" if name in ("play", "") else "right")
+        order = np.argsort(-rss[k], kind="stable")
+        notes = Text()
+        for i in order:
+            table.add_row(
+                result.plays[i],
+                f"{result.width[i]:.6g}",
+                f"{result.sensitivity[k, i]:.6g}",
+                f"{wc[k, i]:5.1f} %",
+                f"{rss[k, i]:5.1f} %",
+                _bar(rss[k, i]),
+            )
+            if result.kink[k, i]:
+                notes.append(
+                    f"  {result.plays[i]}: the contacts change at the nominal play; the slope is "
+                    f"{result.slope_down[k, i]:.6g} below it and {result.slope_up[k, i]:.6g} "
+                    "above (the mean of the two is used)\n"
+                )
+        parts.append(table)
+        if notes:
+            parts.append(notes)
     console.print(Group(*parts))

@@ -1,0 +1,135 @@
+"""Contributions of the plays: closed-form slopes, kinks where the contacts
+change, independent differences of full solves, the CLI."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import jointplay
+from conftest import ROOT, spherical_shaft
+from jointplay.cli import app
+from jointplay.contributions import Contributions
+
+FITS = ROOT / "examples" / "studies" / "shaft_fits.yaml"
+
+
+def shaft(j1: Any, j2: Any, at: float, force: list[float], **over: Any) -> dict[str, Any]:
+    data = spherical_shaft(
+        loads=[{"body": "S1", "at": [at, 0, 0], "force": force}],
+        points=[{"name": "B", "body": "S1", "at": [at, 0, 0]}],
+        **over,
+    )
+    joints: Any = data["joints"]
+    joints[0]["clearance"], joints[1]["clearance"] = j1, j2
+    return data
+
+
+def test_radial_load_beyond_the_bore_has_the_lever_slopes() -> None:
+    # |d_B| = -J1/2 + (J1 + J2)/2 * 300/220: the ball goes against the load
+    j1 = {"min": 0.1, "max": 0.3}
+    j2 = {"min": 0.15, "max": 0.25, "distribution": "normal"}
+    model = jointplay.model_from_dict(shaft(j1, j2, 300, [0, 0, 3]))
+    result = Contributions().run(model)
+    s = np.array([-0.5 + 150 / 220, 150 / 220])
+    assert result.measures == ("|d B|",)
+    assert result.plays == ("l1.clearance", "l2.clearance")
+    assert np.max(np.abs(result.sensitivity[0] - s)) < 1e-9
+    assert not result.kink.any()
+    assert result.nominal[0] == pytest.approx(-0.1 + 0.2 * 300 / 220, abs=1e-9)
+    width = np.array([0.2, 0.1])
+    sigma = np.array([0.2 / np.sqrt(12), 0.1 / 6])
+    assert np.allclose(result.width, width) and np.allclose(result.sigma, sigma)
+    wc = np.abs(s) * width / np.sum(np.abs(s) * width) * 100
+    rss = (s * sigma) ** 2 / np.sum((s * sigma) ** 2) * 100
+    assert np.max(np.abs(result.worst_case[0] - wc)) < 1e-6
+    assert np.max(np.abs(result.rss[0] - rss)) < 1e-6
+    assert result.worst_case_range[0] == pytest.approx(np.sum(np.abs(s) * width), abs=1e-9)
+    assert result.rss_sigma[0] == pytest.approx(np.sqrt(np.sum((s * sigma) ** 2)), abs=1e-9)
+
+
+def test_a_load_between_the_joints_at_equal_plays_sits_on_a_kink() -> None:
+    # the paper's 6.1.6.2 at J1 = J2: the ball and both bore ends touch; a
+    # larger J1 leaves the end at 180 mm touching, a smaller one the end at 220
+    band = {"min": 0.15, "max": 0.25}
+    model = jointplay.model_from_dict(shaft(band, band, 100, [0, 1, 1]))
+    result = Contributions().run(model)
+    assert result.kink.all()
+    assert result.slope_up[0] == pytest.approx([0.5 * 80 / 180, 0.5 * 100 / 220], abs=1e-9)
+    assert result.slope_down[0] == pytest.approx([0.5 * 120 / 220, 0.5 * 100 / 180], abs=1e-9)
+    mean = (result.slope_up[0] + result.slope_down[0]) / 2
+    assert np.max(np.abs(result.sensitivity[0] - mean)) < 1e-9
+
+
+def test_smooth_slopes_match_differences_of_independent_full_solves() -> None:
+    # a load with an axial part: the contact directions turn with the plays
+    model = jointplay.load(FITS)
+    result = Contributions().run(model)
+    data = json.loads(json.dumps(model.model_dump(by_alias=True, exclude_none=True)))
+    delta = 1e-5
+    for i, joint in enumerate(("l1", "l2")):
+        sizes = []
+        for sign in (1, -1):
+            changed = json.loads(json.dumps(data))
+            entry = changed["joints"][i]
+            entry["clearance"] = float(model.joint(joint).clearance) + sign * delta
+            alone = jointplay.solve(jointplay.model_from_dict(changed))
+            alone.check()
+            sizes.append(float(np.linalg.norm(alone.points["B"].displacement)))
+        slope = (sizes[0] - sizes[1]) / (2 * delta)
+        # full solves agree to ~1e-12 mm: over 2e-5 mm, slopes to ~1e-7
+        assert result.sensitivity[0, i] == pytest.approx(slope, abs=1e-6)
+    assert not result.kink.any()
+    assert result.worst_case.sum() == pytest.approx(100.0)
+    assert result.rss.sum() == pytest.approx(100.0)
+
+
+def test_requirements_along_a_direction_are_measured_too() -> None:
+    band = {"min": 0.1, "max": 0.3}
+    data = shaft(band, band, 300, [0, 0, 3])
+    data["requirements"] = [{"point": "B", "max_displacement": 0.2, "along": [0, 0, -2]}]
+    result = Contributions().run(jointplay.model_from_dict(data))
+    assert result.measures == ("|d B|", "d B along [0, 0, -1]")
+    assert np.allclose(result.sensitivity[1], -result.sensitivity[0], atol=1e-9)
+
+
+def test_cli_prints_json_csv_and_the_table(tmp_path: Path) -> None:
+    csv = tmp_path / "c.csv"
+    out = CliRunner().invoke(app, ["contributions", str(FITS), "--csv", str(csv)])
+    assert out.exit_code == 0, out.output
+    assert "l1.clearance" in out.output and "RSS" in out.output
+    import pandas as pd
+
+    table = pd.read_csv(csv)
+    assert list(table["play"]) == ["l1.clearance", "l2.clearance"]
+    assert table["rss_pct"].sum() == pytest.approx(100.0)
+    out = CliRunner().invoke(app, ["contributions", str(FITS), "--json"])
+    doc = json.loads(out.output)
+    assert doc["study"] == "contributions"
+    plays = doc["measures"]["|d B|"]["plays"]
+    assert set(plays) == {"l1.clearance", "l2.clearance"}
+    assert plays["l1.clearance"]["tolerance"] == pytest.approx(0.054)
+
+
+def test_without_toleranced_plays_or_points_the_message_says_what_to_add(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "fixed.json"
+    path.write_text(json.dumps(shaft(0.2, 0.2, 300, [0, 0, 1])))
+    out = CliRunner().invoke(app, ["contributions", str(path)])
+    assert out.exit_code == 2
+    assert "no play varies" in out.output and "fixed.json" in out.output
+    data = shaft({"min": 0.1, "max": 0.2}, 0.2, 300, [0, 0, 1])
+    del data["points"]
+    path.write_text(json.dumps(data))
+    out = CliRunner().invoke(app, ["contributions", str(path)])
+    assert out.exit_code == 2
+    assert "add 'points:" in out.output
+    out = CliRunner().invoke(app, ["contributions", str(FITS), "--step", "2"])
+    assert out.exit_code == 2
+    assert "step" in out.output
