@@ -1,5 +1,8 @@
 """Which play drives the functional deviation: sensitivities and contributions.
 
+(Load components that vary, ``force: [{min: 8, max: 12}, 0, 0]``, take part
+like plays.)
+
 For each functional measure y (a point's displacement size |d|, or its
 component along a requirement's ``along``) and each toleranced play p_i,
 the sensitivity ``s_i = dy/dp_i`` at the nominal plays (their means) comes
@@ -33,7 +36,7 @@ from .errors import ModelError
 from .geometry import FloatArray
 from .model import Model
 from .solver import Workspace
-from .variation import play_map
+from .variation import LoadVariable, PlayVariable, load_map, play_map
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -82,36 +85,39 @@ class Contributions:
         source = source or model.name or "<model>"
         asm = assemble(model)
         pmap = play_map(asm, source)
-        if not pmap.variables:
-            raise ModelError(
-                "no play varies from part to part, so none contributes; give a joint's "
-                "clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
-                "{fit: 'H7/g6', diameter: 20}",
-                source=source,
-                entry="joints",
-            )
-        measures = _measures(model, source)
         if self.case is not None:
             try:
                 model.loads_of(self.case)
             except KeyError as exc:
                 raise ModelError(f"--case: {exc.args[0]}", source=source) from None
-        loads = model.loads_of(self.case)
-        nv = len(pmap.variables)
-        width = np.array([v.value.high - v.value.low for v in pmap.variables])
-        sigma = np.array([v.value.sigma for v in pmap.variables])
+        lmap = load_map(asm, self.case)
+        variables: list[PlayVariable | LoadVariable] = [*pmap.variables, *lmap.variables]
+        if not variables:
+            raise ModelError(
+                "no play varies from part to part, so none contributes; give a joint's "
+                "clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
+                "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12})",
+                source=source,
+                entry="joints",
+            )
+        measures = _measures(model, source)
+        nv = len(variables)
+        width = np.array([v.value.high - v.value.low for v in variables])
+        sigma = np.array([v.value.sigma for v in variables])
         h = self.step * width
-        # rows: the nominal, then each play up and down by h, then by h / 2
+        # rows: the nominal, then each variable up and down by h, then by h / 2
+        nominal = np.concatenate([pmap.nominal, lmap.nominal])
         eye = np.eye(nv)
-        plays = np.vstack(
-            [pmap.nominal[None, :]]
-            + [pmap.nominal + sign * frac * eye * h for frac in (1.0, 0.5) for sign in (1, -1)]
+        values = np.vstack(
+            [nominal[None, :]]
+            + [nominal + sign * frac * eye * h for frac in (1.0, 0.5) for sign in (1, -1)]
         )
-        g = asm.work_of(loads)
+        n_plays = len(pmap.variables)
+        work = lmap.work(values[:, n_plays:])
         ws = Workspace(asm)
-        batch = ws.solve_batch(np.tile(g, (len(plays), 1)), pmap.radii(plays))
+        batch = ws.solve_batch(work, pmap.radii(values[:, :n_plays]))
         names = [p.name for p in model.points]
-        y = np.zeros((len(measures), len(plays)))
+        y = np.zeros((len(measures), len(values)))
         for k, m in enumerate(measures):
             point = model.points[names.index(m.point)]
             motion = batch.body_displacement(point.body)
@@ -136,8 +142,8 @@ class Contributions:
             self,
             model.name,
             tuple(m.label for m in measures),
-            pmap.labels,
-            {v.label: v.value.describe() for v in pmap.variables},
+            tuple(v.label for v in variables),
+            {v.label: v.value.describe() for v in variables},
             y[:, 0],
             np.where(kink, central_half, slope),
             up,
@@ -172,7 +178,9 @@ def _measures(model: Model, source: str) -> list[Measure]:
 @dataclass(frozen=True)
 class ContributionsResult:
     """Per measure and play: the sensitivity (mm of the measure per mm of
-    play) and the worst-case and statistical (RSS) contributions in %."""
+    play, or per N or N*mm of a load's varying component) and the worst-case
+    and statistical (RSS) contributions in %. ``plays`` lists the plays, then
+    the load components."""
 
     settings: Contributions
     model_name: str | None
@@ -184,8 +192,8 @@ class ContributionsResult:
     slope_up: FloatArray  # (M, nv): one-sided slopes (step h / 2)
     slope_down: FloatArray
     kink: np.ndarray[Any, np.dtype[np.bool_]]  # (M, nv): the contacts change at the nominal
-    width: FloatArray  # (nv,) mm: tolerance widths (max - min)
-    sigma: FloatArray  # (nv,) mm: standard deviations
+    width: FloatArray  # (nv,) tolerance widths (max - min): mm, N or N*mm
+    sigma: FloatArray  # (nv,) standard deviations
     feasibility_mm: float
     equilibrium_residual: float
 

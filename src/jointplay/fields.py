@@ -11,7 +11,7 @@ from typing import Annotated, Any
 
 from pydantic import AfterValidator, BeforeValidator, PlainValidator, StringConstraints
 
-from .tolerance import parse_play
+from .tolerance import parse_play, parse_scattered
 from .units import shown, to_base
 
 Vec3 = tuple[float, float, float]
@@ -24,7 +24,13 @@ def _scalar(dimension: str) -> Callable[[Any], float]:
     return parse
 
 
-def _vector(dimension: str) -> Callable[[Any], Vec3]:
+def _vector(dimension: str, scatter: bool = False) -> Callable[[Any], Vec3]:
+    """``scatter``: a component may be ``{min, max, distribution}`` (a load
+    that varies in a Monte Carlo study; see ``tolerance.parse_scattered``)."""
+
+    def read(component: Any) -> float:
+        return parse_scattered(component, dimension) if scatter else to_base(component, dimension)
+
     def parse(value: Any) -> Vec3:
         if not isinstance(value, list | tuple) or len(value) != 3:
             raise ValueError(
@@ -33,7 +39,7 @@ def _vector(dimension: str) -> Callable[[Any], Vec3]:
         out = []
         for i, component in enumerate(value):
             try:
-                out.append(to_base(component, dimension))
+                out.append(read(component))
             except ValueError as exc:
                 raise ValueError(f"component {'xyz'[i]}: {exc}") from exc
         return (out[0], out[1], out[2])
@@ -106,8 +112,11 @@ Play = Annotated[float, PlainValidator(parse_play), AfterValidator(_non_negative
 PositiveLength = Annotated[float, BeforeValidator(_scalar("length")), AfterValidator(_positive)]
 Point = Annotated[Vec3, BeforeValidator(_vector("length"))]
 Direction = Annotated[Vec3, BeforeValidator(_vector("length")), AfterValidator(_nonzero_vector)]
-ForceVector = Annotated[Vec3, BeforeValidator(_vector("force"))]
-TorqueVector = Annotated[Vec3, BeforeValidator(_vector("torque"))]
+#: A load's vectors: a component may vary in Monte Carlo studies (kept as a
+#: ``Toleranced``, hence a plain validator: a before-validator's float
+#: subclass would be turned into a float).
+ForceVector = Annotated[Vec3, PlainValidator(_vector("force", scatter=True))]
+TorqueVector = Annotated[Vec3, PlainValidator(_vector("torque", scatter=True))]
 NonNegativeMass = Annotated[float, BeforeValidator(_scalar("mass")), AfterValidator(_non_negative)]
 AccelerationVector = Annotated[Vec3, BeforeValidator(_vector("acceleration"))]
 PositiveStiffness = Annotated[

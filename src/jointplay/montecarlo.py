@@ -32,7 +32,7 @@ from .errors import ModelError
 from .geometry import FloatArray
 from .model import Model, Requirement
 from .solver import Workspace
-from .variation import play_map
+from .variation import load_map, play_map
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -104,6 +104,7 @@ class MonteCarlo:
 class _Chunk:
     index: int
     plays: FloatArray  # (n, nv) mm
+    loads: FloatArray  # (n, nl) N or N*mm: the load components that vary
     displacement: FloatArray  # (n, points, 3) mm
     batched: int
     full_solves: int
@@ -133,11 +134,17 @@ def _waves(
 
 
 def _study_inputs(model: Model, case: str | None, source: str) -> None:
-    if not play_map(assemble(model), source).variables:
+    if case is not None:
+        try:
+            model.loads_of(case)
+        except KeyError as exc:
+            raise ModelError(f"--case: {exc.args[0]}", source=source) from None
+    asm = assemble(model)
+    if not play_map(asm, source).variables and not load_map(asm, case).variables:
         raise ModelError(
             "no play varies from part to part, so every sample would be the same; give a "
             "joint's clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
-            "{fit: 'H7/g6', diameter: 20}",
+            "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12})",
             source=source,
             entry="joints",
         )
@@ -148,23 +155,19 @@ def _study_inputs(model: Model, case: str | None, source: str) -> None:
             source=source,
             entry="points",
         )
-    if case is not None:
-        try:
-            model.loads_of(case)
-        except KeyError as exc:
-            raise ModelError(f"--case: {exc.args[0]}", source=source) from None
 
 
 def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
     """Chunk ``index`` of the study: its ``size`` samples, drawn and solved."""
     asm = assemble(model)
     pmap = play_map(asm, model.name or "<model>")
+    lmap = load_map(asm, mc.case)
     rng = np.random.default_rng([mc.seed, index])
     plays = pmap.sample(rng, size)
-    loads = None if mc.case is None else model.loads_of(mc.case)
-    g = asm.g if loads is None else asm.work_of(loads)
+    loads = lmap.sample(rng, size)  # after the plays: draws nothing when no load varies
+    work = lmap.work(loads) if lmap.variables else np.tile(lmap.g0, (size, 1))
     ws = Workspace(asm)
-    batch = ws.solve_batch(np.broadcast_to(g, (size, asm.m)).copy(), pmap.radii(plays))
+    batch = ws.solve_batch(work, pmap.radii(plays))
     displacement = np.zeros((size, len(model.points), 3))
     for p, point in enumerate(model.points):
         motion = batch.body_displacement(point.body)
@@ -173,6 +176,7 @@ def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
     return _Chunk(
         index,
         plays,
+        loads,
         displacement,
         int(np.sum(batch.batched)),
         batch.full_solves,
@@ -311,6 +315,9 @@ class MonteCarloResult:
     feasibility_mm: float  # worst over the samples
     equilibrium_residual: float  # worst over the samples
     plays_described: dict[str, str] = field(default_factory=dict)
+    load_labels: tuple[str, ...] = ()
+    loads: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))  # (N, nl)
+    loads_described: dict[str, str] = field(default_factory=dict)
 
     @property
     def samples(self) -> int:
@@ -325,6 +332,7 @@ class MonteCarloResult:
             "chunk": self.settings.chunk,
             "case": self.settings.case,
             "plays": self.plays_described,
+            "loads": self.loads_described,
             "points": {n: p.to_dict() for n, p in self.points.items()},
             "requirements": [r.to_dict() for r in self.requirements],
             "confidence": self.settings.confidence,
@@ -338,12 +346,15 @@ class MonteCarloResult:
         }
 
     def to_dataframe(self) -> pd.DataFrame:
-        """One row per sample: the plays (mm) and each point's displacement (mm)."""
+        """One row per sample: the plays (mm), the varying load components (N,
+        N*mm) and each point's displacement (mm)."""
         import pandas as pd
 
         columns: dict[str, FloatArray] = {}
         for j, label in enumerate(self.play_labels):
             columns[label] = self.plays[:, j]
+        for j, label in enumerate(self.load_labels):
+            columns[label] = self.loads[:, j]
         for p, name in enumerate(self.point_names):
             for c, axis in enumerate("xyz"):
                 columns[f"{name}.d{axis}"] = self.displacement[:, p, c]
@@ -367,6 +378,7 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
     parts = sorted(parts, key=lambda c: c.index)
     asm = assemble(model)
     pmap = play_map(asm, model.name or "<model>")
+    lmap = load_map(asm, mc.case)
     plays = np.concatenate([c.plays for c in parts])
     d = np.concatenate([c.displacement for c in parts])
     points = {}
@@ -405,6 +417,9 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
         max(c.feasibility_mm for c in parts),
         max(c.equilibrium_residual for c in parts),
         {v.label: v.value.describe() for v in pmap.variables},
+        lmap.labels,
+        np.concatenate([c.loads for c in parts]),
+        {v.label: v.value.describe() for v in lmap.variables},
     )
 
 

@@ -150,10 +150,10 @@ def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -
         f"imbalance {result.equilibrium_residual:.1e} "
         f"({result.batched:,} by batched Newton, {result.full_solves} full solves)\n"
     )
-    plays = Table(title="plays drawn", title_justify="left", show_edge=False)
-    plays.add_column("play")
-    plays.add_column("limits (mm) and law")
-    for label, words in result.plays_described.items():
+    plays = Table(title="plays and loads drawn", title_justify="left", show_edge=False)
+    plays.add_column("variable")
+    plays.add_column("limits and law")
+    for label, words in (result.plays_described | result.loads_described).items():
         plays.add_row(label, words)
     points = Table(
         title="functional points: size of the displacement (mm)",
@@ -297,12 +297,13 @@ def _bar(percent: float, width: int = 10) -> str:
 def render_contributions(result: ContributionsResult, source: str, console: Console) -> None:
     """The report of ``jointplay contributions``: per measure, a row per play."""
     head = Text()
-    head.append(f"{result.model_name or source}: contributions of the plays\n", style="bold")
+    head.append(f"{result.model_name or source}: contributions\n", style="bold")
     for play, words in result.plays_described.items():
         head.append(f"  {play}: {words}\n")
     head.append(
-        "sensitivity: mm of the measure per mm of play, at the nominal (mean) plays; "
-        "worst case: |s| T of the stack sum |s| T; RSS: (s sigma)^2 of sum (s sigma)^2"
+        "sensitivity s: mm of the measure per mm of play (per N or N*mm of a load), at "
+        "the nominal (mean) values; worst case: |s| T of the stack sum |s| T, T the "
+        "tolerance; RSS: (s sigma)^2 of sum (s sigma)^2"
     )
     parts: list[Table | Text] = [head]
     wc, rss = result.worst_case, result.rss
@@ -315,8 +316,8 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
             title_justify="left",
             show_edge=False,
         )
-        for name in ("play", "tolerance (mm)", "sensitivity", "worst case", "RSS", ""):
-            table.add_column(name, justify="left" if name in ("play", "") else "right")
+        for name in ("variable", "tolerance T", "sensitivity s", "worst case", "RSS", ""):
+            table.add_column(name, justify="left" if name in ("variable", "") else "right")
         order = np.argsort(-rss[k], kind="stable")
         notes = Text()
         for i in order:

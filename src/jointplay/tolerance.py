@@ -56,6 +56,7 @@ class Toleranced(float):
     diameter: float | None
     hole: tuple[float, float] | None
     shaft: tuple[float, float] | None
+    unit: str  # "mm" for a play; "N" or "N*mm" for a load's component
 
     def __new__(
         cls,
@@ -66,6 +67,7 @@ class Toleranced(float):
         diameter: float | None = None,
         hole: tuple[float, float] | None = None,
         shaft: tuple[float, float] | None = None,
+        unit: str = "mm",
     ) -> Toleranced:
         self = super().__new__(cls, (low + high) / 2.0)
         for name, value in (
@@ -76,6 +78,7 @@ class Toleranced(float):
             ("diameter", diameter),
             ("hole", hole),
             ("shaft", shaft),
+            ("unit", unit),
         ):
             object.__setattr__(self, name, value)
         return self
@@ -91,6 +94,7 @@ class Toleranced(float):
                 self.diameter,
                 self.hole,
                 self.shaft,
+                self.unit,
             ),
         )
 
@@ -100,18 +104,18 @@ class Toleranced(float):
     def __repr__(self) -> str:
         source = f"fit {self.fit} at {self.diameter:g} mm, " if self.fit else ""
         return (
-            f"Toleranced({source}{self.low:g} to {self.high:g} mm, {self.distribution}, "
+            f"Toleranced({source}{self.low:g} to {self.high:g} {self.unit}, {self.distribution}, "
             f"mean {float(self):g})"
         )
 
     def describe(self) -> str:
         """'H7/g6 at 20 mm: 0.007 to 0.041 mm (uniform)' style words."""
         source = f"{self.fit} at {self.diameter:g} mm: " if self.fit else ""
-        return f"{source}{self.low:.6g} to {self.high:.6g} mm ({self.distribution})"
+        return f"{source}{self.low:.6g} to {self.high:.6g} {self.unit} ({self.distribution})"
 
     @property
     def sigma(self) -> float:
-        """The play's standard deviation (mm), before truncation for ``normal``."""
+        """The standard deviation (in ``unit``), before truncation for ``normal``."""
         if self.fit is None:
             width = self.high - self.low
             return width / 6.0 if self.distribution == "normal" else width / np.sqrt(12.0)
@@ -163,27 +167,47 @@ def parse_play(value: Any) -> float:
             )
         return _from_fit(value)
     if keys & {"min", "max"}:
-        unknown = keys - _RANGE_KEYS
-        if unknown:
-            raise ValueError(
-                f"unknown key {shown(sorted(map(str, unknown))[0])} in a play's limits; write "
-                "{min: 0.02, max: 0.06} (and optionally distribution: uniform|normal)"
-            )
-        missing = {"min", "max"} - keys
-        if missing:
-            raise ValueError(
-                f"a play's limits need both 'min' and 'max'; '{sorted(missing)[0]}' is missing"
-            )
-        low, high = to_base(value["min"], "length"), to_base(value["max"], "length")
-        if low < 0:
-            raise ValueError(f"min: expected a play >= 0 mm, got {low:g} mm")
-        if high < low:
-            raise ValueError(f"max ({high:g} mm) is below min ({low:g} mm); swap them")
-        return Toleranced(low, high, _distribution(value))
+        return _from_limits(value, "length", "a play")
     raise ValueError(
         f"expected a length, {{min, max}} or {{fit, diameter}}, got {shown(dict(value))}; "
         "write e.g. 0.2, '20 um', {min: 0.02, max: 0.06} or {fit: 'H7/g6', diameter: 20}"
     )
+
+
+def parse_scattered(value: Any, dimension: str) -> float:
+    """A load's component: a number (``to_base``), or ``{min, max,
+    distribution}`` for one that varies from sample to sample in a Monte
+    Carlo study (a ``Toleranced`` whose float value, the mean, a single
+    solve uses)."""
+    if isinstance(value, Toleranced):
+        return value
+    if isinstance(value, Mapping) and set(value) & {"min", "max"}:
+        return _from_limits(value, dimension, f"a {dimension}")
+    return to_base(value, dimension)
+
+
+def _from_limits(value: Mapping[str, Any], dimension: str, what: str) -> Toleranced:
+    from .units import BASE_UNITS
+
+    unit = BASE_UNITS[dimension]
+    example = "{min: 0.02, max: 0.06}" if dimension == "length" else "{min: 8, max: 12}"
+    unknown = set(value) - _RANGE_KEYS
+    if unknown:
+        raise ValueError(
+            f"unknown key {shown(sorted(map(str, unknown))[0])} in {what}'s limits; write "
+            f"{example} (and optionally distribution: uniform|normal)"
+        )
+    missing = {"min", "max"} - set(value)
+    if missing:
+        raise ValueError(
+            f"{what}'s limits need both 'min' and 'max'; '{sorted(missing)[0]}' is missing"
+        )
+    low, high = to_base(value["min"], dimension), to_base(value["max"], dimension)
+    if dimension == "length" and low < 0:
+        raise ValueError(f"min: expected a play >= 0 mm, got {low:g} mm")
+    if high < low:
+        raise ValueError(f"max ({high:g} {unit}) is below min ({low:g} {unit}); swap them")
+    return Toleranced(low, high, _distribution(value), unit=unit)
 
 
 def _distribution(value: Mapping[str, Any]) -> Distribution:

@@ -21,6 +21,7 @@ from .assembly import Assembly
 from .errors import ModelError
 from .geometry import FloatArray
 from .joints import Joint
+from .model import Load, Model
 from .tolerance import PLAY_FIELDS, Toleranced
 
 
@@ -62,6 +63,74 @@ class PlayMap:
         for j, var in enumerate(self.variables):
             out[:, j] = var.value.sample(rng, n)
         return out
+
+
+@dataclass(frozen=True)
+class LoadVariable:
+    """One load component that varies: ``loads[0].force[1]`` (N or N*mm)."""
+
+    entry: str
+    value: Toleranced
+
+    @property
+    def label(self) -> str:
+        return self.entry
+
+
+@dataclass(frozen=True)
+class LoadMap:
+    """The loads' work as an affine function of their varying components:
+    ``work = g0 + (values - nominal) @ W`` (the work is linear in each force
+    and torque component)."""
+
+    variables: tuple[LoadVariable, ...]
+    nominal: FloatArray  # (nl,) the means, which the model holds
+    g0: FloatArray  # (m,) the work of the loads at their means
+    W: FloatArray  # (nl, m) work per unit of each component
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return tuple(v.label for v in self.variables)
+
+    def work(self, values: FloatArray) -> FloatArray:
+        """(B, m) work rows for (B, nl) component values."""
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        return np.asarray(self.g0 + (values - self.nominal) @ self.W)
+
+    def sample(self, rng: np.random.Generator, n: int) -> FloatArray:
+        """(n, nl) component values of ``n`` samples."""
+        out = np.empty((n, len(self.variables)))
+        for j, var in enumerate(self.variables):
+            out[:, j] = var.value.sample(rng, n)
+        return out
+
+
+def load_map(asm: Assembly, case: str | None = None) -> LoadMap:
+    """The ``LoadMap`` of the loads acting in ``case`` (``Model.loads_of``)."""
+    model: Model = asm.model
+    entries = [(f"loads[{i}]", load) for i, load in enumerate(model.loads)]
+    if case is not None:
+        own = (model.load_cases or {})[case]
+        entries += [(f"load_cases.{case}[{i}]", load) for i, load in enumerate(own)]
+    variables, rows = [], []
+    for entry, load in entries:
+        for key in ("force", "torque"):
+            vector = getattr(load, key)
+            for c, component in enumerate(vector or ()):
+                if isinstance(component, Toleranced):
+                    e = np.zeros(3)
+                    e[c] = 1.0
+                    unit = (float(e[0]), float(e[1]), float(e[2]))
+                    one = (
+                        Load.model_construct(body=load.body, at=load.at, force=unit)
+                        if key == "force"
+                        else Load.model_construct(body=load.body, torque=unit)
+                    )
+                    variables.append(LoadVariable(f"{entry}.{key}[{c}]", component))
+                    rows.append(asm.work_of([one]))
+    W = np.array(rows) if rows else np.zeros((0, asm.m))
+    nominal = np.array([float(v.value) for v in variables])
+    return LoadMap(tuple(variables), nominal, asm.work_of(model.loads_of(case)), W)
 
 
 def toleranced_plays(asm: Assembly) -> tuple[PlayVariable, ...]:
