@@ -8,8 +8,9 @@ import os
 import sys
 import traceback
 import warnings
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 import typer
 from rich.console import Console
@@ -23,6 +24,22 @@ app = typer.Typer(
     help="Where the parts of a mechanism really sit when its joints have clearance.",
     pretty_exceptions_enable=False,
 )
+
+
+R = TypeVar("R")
+
+ModelPath = Annotated[
+    Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
+]
+CaseOption = Annotated[
+    str | None, typer.Option("--case", metavar="NAME", help="Load case to solve.")
+]
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option(
+        "--scheduler", metavar="ADDRESS", help="Solve on a Dask cluster (tcp://host:8786)."
+    ),
+]
 
 
 def _version(value: bool) -> None:
@@ -42,9 +59,7 @@ def _main(
 
 @app.command()
 def solve(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
-    ],
+    model_path: ModelPath,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
     case: Annotated[
         str | None,
@@ -68,12 +83,10 @@ def solve(
     from .textreport import render
 
     def run() -> None:
+        from .model import check_case
+
         model = load(model_path)
-        if case is not None:
-            try:
-                model.loads_of(case)
-            except KeyError as exc:
-                raise ModelError(f"--case: {exc.args[0]}", source=str(model_path)) from None
+        check_case(model, case, str(model_path))
         ws = Workspace.of(model)
         if not model.case_names:
             result = ws.solve(exact=exact)
@@ -96,9 +109,7 @@ def solve(
 
 @app.command()
 def montecarlo(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
-    ],
+    model_path: ModelPath,
     samples: Annotated[
         int,
         typer.Option(
@@ -121,19 +132,12 @@ def montecarlo(
             help="Confidence level of --target and of the intervals.",
         ),
     ] = 0.95,
-    case: Annotated[
-        str | None, typer.Option("--case", metavar="NAME", help="Load case to solve.")
-    ] = None,
+    case: CaseOption = None,
     workers: Annotated[
         int | None,
         typer.Option("--workers", min=1, help="Local processes (default: one per core)."),
     ] = None,
-    scheduler: Annotated[
-        str | None,
-        typer.Option(
-            "--scheduler", metavar="ADDRESS", help="Solve on a Dask cluster (tcp://host:8786)."
-        ),
-    ] = None,
+    scheduler: SchedulerOption = None,
     chunk: Annotated[
         int, typer.Option("--chunk", min=1, help="Samples per chunk (fixes the random streams).")
     ] = 10_000,
@@ -159,20 +163,18 @@ def montecarlo(
                     source=str(model_path),
                 )
         study = MonteCarlo(samples, seed, target, confidence, chunk, case)
-        if as_json or samples <= chunk:
-            result = study.run(model, workers=workers, scheduler=scheduler, source=str(model_path))
-        else:
-            from rich.progress import Progress
-
-            with Progress(console=Console(stderr=True), transient=True) as bar:
-                task = bar.add_task("solving samples", total=samples)
-                result = study.run(
-                    model,
-                    workers=workers,
-                    scheduler=scheduler,
-                    progress=lambda done, total: bar.update(task, completed=done),
-                    source=str(model_path),
-                )
+        result = _with_progress(
+            "solving samples",
+            samples,
+            not as_json and samples > chunk,
+            lambda progress: study.run(
+                model,
+                workers=workers,
+                scheduler=scheduler,
+                progress=progress,
+                source=str(model_path),
+            ),
+        )
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
         if as_json:
@@ -185,9 +187,7 @@ def montecarlo(
 
 @app.command()
 def envelope(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
-    ],
+    model_path: ModelPath,
     point: Annotated[
         str, typer.Option("--point", metavar="NAME", help="The functional point to bound.")
     ],
@@ -233,9 +233,7 @@ def envelope(
 
 @app.command()
 def sweep(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
-    ],
+    model_path: ModelPath,
     vary: Annotated[
         list[str] | None,
         typer.Option(
@@ -270,21 +268,14 @@ def sweep(
         float | None,
         typer.Option("--to", metavar="DEG", help="Last angle (taken); default: a full turn."),
     ] = None,
-    case: Annotated[
-        str | None, typer.Option("--case", metavar="NAME", help="Load case to solve.")
-    ] = None,
+    case: CaseOption = None,
     workers: Annotated[
         int | None,
         typer.Option(
             "--workers", min=1, help="Local processes (default: one per core above 1000 steps)."
         ),
     ] = None,
-    scheduler: Annotated[
-        str | None,
-        typer.Option(
-            "--scheduler", metavar="ADDRESS", help="Solve on a Dask cluster (tcp://host:8786)."
-        ),
-    ] = None,
+    scheduler: SchedulerOption = None,
     chunk: Annotated[int, typer.Option("--chunk", min=1, help="Steps per task.")] = 64,
     csv: Annotated[
         Path | None,
@@ -313,20 +304,14 @@ def sweep(
             raise ModelError(str(exc), source=source) from None
         model = load(model_path)
         n_workers = workers if workers is not None else (None if settings.steps >= 1000 else 1)
-        if as_json or settings.steps < 200:
-            result = settings.run(model, workers=n_workers, scheduler=scheduler, source=source)
-        else:
-            from rich.progress import Progress
-
-            with Progress(console=Console(stderr=True), transient=True) as bar:
-                task = bar.add_task("solving steps", total=settings.steps)
-                result = settings.run(
-                    model,
-                    workers=n_workers,
-                    scheduler=scheduler,
-                    progress=lambda done, total: bar.update(task, completed=done),
-                    source=source,
-                )
+        result = _with_progress(
+            "solving steps",
+            settings.steps,
+            not as_json and settings.steps >= 200,
+            lambda progress: settings.run(
+                model, workers=n_workers, scheduler=scheduler, progress=progress, source=source
+            ),
+        )
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
         if as_json:
@@ -339,12 +324,8 @@ def sweep(
 
 @app.command()
 def contributions(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="Model file (.yaml, .json, .toml).")
-    ],
-    case: Annotated[
-        str | None, typer.Option("--case", metavar="NAME", help="Load case to solve.")
-    ] = None,
+    model_path: ModelPath,
+    case: CaseOption = None,
     step: Annotated[
         float,
         typer.Option("--step", help="Difference step, as a fraction of each play's tolerance."),
@@ -377,6 +358,17 @@ def contributions(
             render_contributions(result, source, _console())
 
     _guarded(run, as_json)
+
+
+def _with_progress(label: str, total: int, shown: bool, run: Callable[[Any], R]) -> R:
+    """``run(progress)``, with a progress bar on stderr when ``shown``."""
+    if not shown:
+        return run(None)
+    from rich.progress import Progress
+
+    with Progress(console=Console(stderr=True), transient=True) as bar:
+        task = bar.add_task(label, total=total)
+        return run(lambda done, _total: bar.update(task, completed=done))
 
 
 def _console() -> Console:

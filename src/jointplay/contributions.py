@@ -34,7 +34,7 @@ import numpy as np
 from .assembly import assemble
 from .errors import ModelError
 from .geometry import FloatArray
-from .model import Model
+from .model import Model, check_case
 from .solver import Workspace
 from .variation import LoadVariable, PlayVariable, load_map, play_map
 
@@ -85,11 +85,7 @@ class Contributions:
         source = source or model.name or "<model>"
         asm = assemble(model)
         pmap = play_map(asm, source)
-        if self.case is not None:
-            try:
-                model.loads_of(self.case)
-            except KeyError as exc:
-                raise ModelError(f"--case: {exc.args[0]}", source=source) from None
+        check_case(model, self.case, source)
         lmap = load_map(asm, self.case)
         variables: list[PlayVariable | LoadVariable] = [*pmap.variables, *lmap.variables]
         if not variables:

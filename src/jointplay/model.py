@@ -290,6 +290,18 @@ class Model(BaseModel):
         return Model.model_validate(data)
 
 
+def check_case(model: Model, case: str | None, source: str) -> None:
+    """A ``ModelError`` naming the cases unless ``case`` is None or one of them."""
+    if case is None:
+        return
+    try:
+        model.loads_of(case)
+    except KeyError as exc:
+        from .errors import ModelError
+
+        raise ModelError(f"--case: {exc.args[0]}", source=source) from None
+
+
 def _check_unique(names: list[str], section: str, what: str) -> None:
     seen: dict[str, int] = {}
     for i, n in enumerate(names):

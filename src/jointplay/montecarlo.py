@@ -30,7 +30,7 @@ from scipy import stats
 from .assembly import assemble
 from .errors import ModelError
 from .geometry import FloatArray
-from .model import Model, Requirement
+from .model import Model, Requirement, check_case
 from .solver import Workspace
 from .variation import load_map, play_map
 
@@ -134,11 +134,7 @@ def _waves(
 
 
 def _study_inputs(model: Model, case: str | None, source: str) -> None:
-    if case is not None:
-        try:
-            model.loads_of(case)
-        except KeyError as exc:
-            raise ModelError(f"--case: {exc.args[0]}", source=source) from None
+    check_case(model, case, source)
     asm = assemble(model)
     if not play_map(asm, source).variables and not load_map(asm, case).variables:
         raise ModelError(

@@ -31,7 +31,7 @@ import numpy as np
 
 from .errors import JointplayError, ModelError, UnboundedMechanismError
 from .geometry import FloatArray
-from .model import Model
+from .model import Model, check_case
 from .modelfile import model_from_dict
 from .solver import Workspace
 
@@ -234,11 +234,7 @@ class Sweep:
                 + (f"; give 0 to {n - 1}" if n > 1 else "; give 0" if n else "; add one to turn"),
                 source=source,
             )
-        if self.case is not None:
-            try:
-                model.loads_of(self.case)
-            except KeyError as exc:
-                raise ModelError(f"--case: {exc.args[0]}", source=source) from None
+        check_case(model, self.case, source)
 
 
 def parse_path(path: str) -> list[str | int]:
