@@ -20,7 +20,6 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -31,6 +30,7 @@ from .assembly import assemble
 from .errors import ModelError
 from .geometry import FloatArray
 from .model import Model, Requirement, check_case
+from .parallel import run_chunks
 from .solver import Workspace
 from .variation import load_map, play_map
 
@@ -188,20 +188,7 @@ def _solve_chunks(
     workers: int | None,
     scheduler: str | None,
 ) -> list[_Chunk]:
-    if scheduler is not None:
-        from dask.distributed import Client
-
-        with Client(scheduler) as client:  # type: ignore[no-untyped-call]
-            [remote] = client.scatter([model], broadcast=True)
-            futures = [client.submit(solve_chunk, remote, mc, i, n, pure=False) for i, n in chunks]
-            out: list[_Chunk] = client.gather(futures)
-        return out
-    n_workers = workers or (os.cpu_count() or 1)
-    if n_workers <= 1 or len(chunks) <= 1:
-        return [solve_chunk(model, mc, i, n) for i, n in chunks]
-    with ProcessPoolExecutor(min(n_workers, len(chunks))) as pool:
-        futures = [pool.submit(solve_chunk, model, mc, i, n) for i, n in chunks]
-        return [f.result() for f in futures]
+    return run_chunks(solve_chunk, model, [(mc, i, n) for i, n in chunks], workers, scheduler)
 
 
 def _z(confidence: float) -> float:

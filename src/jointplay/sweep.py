@@ -20,10 +20,8 @@ from __future__ import annotations
 
 import itertools
 import math
-import os
 import re
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -33,6 +31,7 @@ from .errors import JointplayError, ModelError, UnboundedMechanismError
 from .geometry import FloatArray
 from .model import Model, check_case
 from .modelfile import model_from_dict
+from .parallel import run_chunks
 from .solver import Workspace
 
 if TYPE_CHECKING:
@@ -480,40 +479,15 @@ def _solve_chunks(
     progress: Callable[[int, int], None] | None,
 ) -> list[_Chunk]:
     total = sum(len(s) for _, s in chunks)
-    if scheduler is not None:
-        from dask.distributed import Client, as_completed
+    done = [0]
 
-        with Client(scheduler) as client:  # type: ignore[no-untyped-call]
-            [remote] = client.scatter([base], broadcast=True)
-            futures = [
-                client.submit(solve_steps, remote, sweep, lo, s, source, pure=False)
-                for lo, s in chunks
-            ]
-            out, done = [], 0
-            for future in as_completed(futures):  # type: ignore[no-untyped-call]
-                part: _Chunk = future.result()
-                out.append(part)
-                done += len(part.energy)
-                if progress is not None:
-                    progress(done, total)
-            return out
-    n_workers = workers or (os.cpu_count() or 1)
-    if n_workers <= 1 or len(chunks) <= 1:
-        out = []
-        for lo, s in chunks:
-            out.append(solve_steps(base, sweep, lo, s, source))
-            if progress is not None:
-                progress(lo + len(s), total)
-        return out
-    with ProcessPoolExecutor(min(n_workers, len(chunks))) as pool:
-        futures = [pool.submit(solve_steps, base, sweep, lo, s, source) for lo, s in chunks]
-        out, done = [], 0
-        for f in futures:
-            out.append(f.result())
-            done += len(out[-1].energy)
-            if progress is not None:
-                progress(done, total)
-        return out
+    def advance(part: _Chunk) -> None:
+        done[0] += len(part.energy)
+        if progress is not None:
+            progress(done[0], total)
+
+    tasks = [(sweep, lo, s, source) for lo, s in chunks]
+    return run_chunks(solve_steps, base, tasks, workers, scheduler, advance)
 
 
 # -- the answer -------------------------------------------------------------
