@@ -42,6 +42,12 @@ SchedulerOption = Annotated[
 ]
 
 
+PlotOption = Annotated[
+    Path | None,
+    typer.Option("--plot", metavar="FILE", help="Draw the study's figure (.png, .svg or .pdf)."),
+]
+
+
 def _version(value: bool) -> None:
     if value:
         typer.echo(f"jointplay {__version__}")
@@ -146,6 +152,7 @@ def montecarlo(
         typer.Option("--csv", metavar="FILE", help="Write every sample (plays, displacements)."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    plot: PlotOption = None,
 ) -> None:
     """Monte Carlo over real parts: draw every toleranced play (limits or ISO
     fits), solve each set of parts exactly, and summarize the functional points
@@ -162,6 +169,7 @@ def montecarlo(
                     f"{name} {value:g}: expected a fraction between 0 and 1 (0.05 is 5 %)",
                     source=str(model_path),
                 )
+        _check_plot(plot)
         study = MonteCarlo(samples, seed, target, confidence, chunk, case)
         result = _with_progress(
             "solving samples",
@@ -177,6 +185,10 @@ def montecarlo(
         )
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
+        if plot is not None:
+            from .plot import montecarlo_figure
+
+            _save_plot(montecarlo_figure(result), plot)
         if as_json:
             typer.echo(json.dumps(result.to_dict(), indent=2))
         else:
@@ -207,6 +219,7 @@ def envelope(
         typer.Option("--csv", metavar="FILE", help="Write each direction's support point."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the envelope as JSON.")] = False,
+    plot: PlotOption = None,
 ) -> None:
     """Worst-case envelope of a functional point: every displacement the
     plays allow under any load (its largest size and direction, its extent
@@ -218,11 +231,16 @@ def envelope(
     def run() -> None:
         if plays not in ("max", "mean"):
             raise ModelError(f"--plays {plays!r}: expected 'max' or 'mean'")
+        _check_plot(plot)
         model = load(model_path)
         settings = Envelope(point, directions, "max" if plays == "max" else "mean")
         result = settings.run(model, source=str(model_path))
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
+        if plot is not None:
+            from .plot import envelope_figure
+
+            _save_plot(envelope_figure(result), plot)
         if as_json:
             typer.echo(json.dumps(result.to_dict(), indent=2))
         else:
@@ -282,6 +300,15 @@ def sweep(
         typer.Option("--csv", metavar="FILE", help="Write the table (one row per step) as CSV."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print every step as JSON.")] = False,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot",
+            metavar="FILE",
+            help="Draw each point's trajectory inside its worst-case envelope, and the "
+            "contact forces along the sweep (.png, .svg or .pdf).",
+        ),
+    ] = None,
 ) -> None:
     """Sweep MODEL: solve it as entries vary over a range or a load turns, and
     tabulate per step the points' displacements, the joints' torsors and the
@@ -302,6 +329,7 @@ def sweep(
             settings = Sweep(varies, turn, case, chunk)
         except ValueError as exc:
             raise ModelError(str(exc), source=source) from None
+        _check_plot(plot)
         model = load(model_path)
         n_workers = workers if workers is not None else (None if settings.steps >= 1000 else 1)
         result = _with_progress(
@@ -314,6 +342,10 @@ def sweep(
         )
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
+        if plot is not None:
+            from .plot import sweep_figure
+
+            _save_plot(sweep_figure(result, sweep_envelopes(model, source)), plot)
         if as_json:
             typer.echo(json.dumps(result.to_dict(), indent=2))
         else:
@@ -335,6 +367,7 @@ def contributions(
         typer.Option("--csv", metavar="FILE", help="Write the table (measure x play) as CSV."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the study as JSON.")] = False,
+    plot: PlotOption = None,
 ) -> None:
     """Which toleranced play drives each functional point: sensitivities at the
     nominal plays and percent contributions, worst case and statistical (RSS)."""
@@ -348,16 +381,134 @@ def contributions(
             settings = Contributions(step, case)
         except ValueError as exc:
             raise ModelError(f"--{exc}", source=source) from None
+        _check_plot(plot)
         model = load(model_path)
         result = settings.run(model, source=source)
         if csv is not None:
             result.to_dataframe().to_csv(csv, index=False)
+        if plot is not None:
+            from .plot import contributions_figure
+
+            _save_plot(contributions_figure(result), plot)
         if as_json:
             typer.echo(json.dumps(result.to_dict(), indent=2))
         else:
             render_contributions(result, source, _console())
 
     _guarded(run, as_json)
+
+
+@app.command()
+def plot(
+    model_path: ModelPath,
+    output: Annotated[
+        Path,
+        typer.Option("--output", "-o", metavar="FILE", help="Figure file: .png, .svg or .pdf."),
+    ],
+    case: CaseOption = None,
+    magnify: Annotated[
+        float | None,
+        typer.Option(
+            "--magnify",
+            metavar="FACTOR",
+            help="Multiply displacements and plays by this (default: a round factor that "
+            "shows them as about 8 % of the mechanism).",
+        ),
+    ] = None,
+    kind: Annotated[
+        str,
+        typer.Option(
+            "--kind",
+            metavar="mechanism|joints",
+            help="'mechanism': 3D, the three views and every joint; 'joints': each joint "
+            "at true size only.",
+        ),
+    ] = "mechanism",
+    exact: Annotated[
+        bool, typer.Option("--exact", help="Solve with exact rotations first.")
+    ] = False,
+) -> None:
+    """Draw the solved MODEL in the paper's manner: the bodies as lines between
+    their joints, initial and displaced (magnified), each joint's clearance
+    domain, the contacts (red: touching), the contact forces and the loads, in
+    3D and in the three views; and each joint seen along its axis."""
+    from .modelfile import load
+    from .solver import Workspace
+
+    def run() -> None:
+        from .model import check_case
+        from .plot import check_figure_path, clearance_figure, mechanism_figure, save
+
+        source = str(model_path)
+        if kind not in ("mechanism", "joints"):
+            raise ModelError(f"--kind {kind!r}: expected 'mechanism' or 'joints'", source=source)
+        if magnify is not None and not 0.0 < magnify < float("inf"):
+            raise ModelError(
+                f"--magnify {magnify:g}: expected a factor above 0 (1 draws true size)",
+                source=source,
+            )
+        check_figure_path(output)
+        model = load(model_path)
+        check_case(model, case, source)
+        chosen = _first_case(model, case)
+        ws = Workspace.of(model)
+        result = ws.solve(loads=None if chosen is None else model.loads_of(chosen), exact=exact)
+        fig = (
+            mechanism_figure(model, result, magnify=magnify, case=chosen)
+            if kind == "mechanism"
+            else clearance_figure(model, result)
+        )
+        save(fig, output)
+        _note(f"wrote {output}")
+
+    _guarded(run, False)
+
+
+def _check_plot(path: Path | None) -> None:
+    if path is not None:
+        from .plot import check_figure_path
+
+        check_figure_path(path, "--plot")
+
+
+def _save_plot(fig: Any, path: Path) -> None:
+    from .plot import save
+
+    save(fig, path)
+    _note(f"wrote {path}")
+
+
+def sweep_envelopes(model: Any, source: str) -> dict[str, Any]:
+    """Each point's worst-case envelope at the nominal plays (those a sweep
+    solves with), for the sweep's figure; a point whose envelope is unbounded
+    (the joints leave it free along some direction) gets none."""
+    from .envelope import Envelope
+
+    out: dict[str, Any] = {}
+    for point in model.points:
+        try:
+            out[point.name] = Envelope(point.name, plays="mean").run(model, source=source)
+        except UnboundedMechanismError:
+            _note(f"point {point.name!r}: no envelope (the joints leave it free)")
+    return out
+
+
+def _first_case(model: Any, case: str | None) -> str | None:
+    """``case``, or the model's first load case (said on stderr) when it has some."""
+    if case is not None or not model.case_names:
+        return case
+    first = model.case_names[0]
+    others = ", ".join(repr(n) for n in model.case_names[1:])
+    _note(
+        f"drew load case {first!r}, the first"
+        + (f" (others: {others})" if others else "")
+        + "; choose one with --case"
+    )
+    return str(first)
+
+
+def _note(text: str) -> None:
+    Console(stderr=True, highlight=False, soft_wrap=True).print(f"jointplay: {text}", markup=False)
 
 
 def _with_progress(label: str, total: int, shown: bool, run: Callable[[Any], R]) -> R:
