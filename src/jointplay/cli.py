@@ -48,6 +48,68 @@ PlotOption = Annotated[
 ]
 
 
+VaryOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--vary",
+        metavar="PATH=START:STOP:COUNT",
+        help="Vary an entry of the model, named by its path in the file: "
+        "'loads[0].force[1]=0:10:11', 'joints[l2].clearance=0.1:0.3:5' (a bracket may "
+        "hold a name), values with units ('0:10 N:11') or a list 'PATH=1,2,5'. "
+        "Repeat for a grid.",
+    ),
+]
+RotateLoadOption = Annotated[
+    int | None,
+    typer.Option(
+        "--rotate-load",
+        metavar="N",
+        min=0,
+        help="Turn load N (counted from 0 in 'loads') about --about: its force and torque "
+        "turn, its point stays.",
+    ),
+]
+AboutOption = Annotated[
+    str, typer.Option("--about", metavar="AXIS", help="x, y, z, or 'ax,ay,az'.")
+]
+StepsOption = Annotated[
+    int, typer.Option("--steps", min=1, help="Steps of the turn (a full turn by default).")
+]
+FromOption = Annotated[
+    float, typer.Option("--from", metavar="DEG", help="First angle of the turn.")
+]
+ToOption = Annotated[
+    float | None,
+    typer.Option("--to", metavar="DEG", help="Last angle (taken); default: a full turn."),
+]
+
+
+def _sweep_settings(
+    vary: list[str] | None,
+    rotate_load: int | None,
+    about: str,
+    steps: int,
+    start_deg: float,
+    stop_deg: float | None,
+    case: str | None,
+    chunk: int,
+    source: str,
+) -> Any:
+    """The ``Sweep`` that the sweep options describe (a ``ModelError`` if they are wrong)."""
+    from .sweep import RotateLoad, Sweep, Vary
+
+    try:
+        varies = tuple(Vary.parse(v) for v in vary or ())
+        turn = (
+            None
+            if rotate_load is None
+            else RotateLoad(rotate_load, RotateLoad.axis(about), steps, start_deg, stop_deg)
+        )
+        return Sweep(varies, turn, case, chunk)
+    except ValueError as exc:
+        raise ModelError(str(exc), source=source) from None
+
+
 def _version(value: bool) -> None:
     if value:
         typer.echo(f"jointplay {__version__}")
@@ -252,40 +314,12 @@ def envelope(
 @app.command()
 def sweep(
     model_path: ModelPath,
-    vary: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--vary",
-            metavar="PATH=START:STOP:COUNT",
-            help="Vary an entry of the model, named by its path in the file: "
-            "'loads[0].force[1]=0:10:11', 'joints[l2].clearance=0.1:0.3:5' (a bracket may "
-            "hold a name), values with units ('0:10 N:11') or a list 'PATH=1,2,5'. "
-            "Repeat for a grid.",
-        ),
-    ] = None,
-    rotate_load: Annotated[
-        int | None,
-        typer.Option(
-            "--rotate-load",
-            metavar="N",
-            min=0,
-            help="Turn load N (counted from 0 in 'loads') about --about: its force and torque "
-            "turn, its point stays.",
-        ),
-    ] = None,
-    about: Annotated[
-        str, typer.Option("--about", metavar="AXIS", help="x, y, z, or 'ax,ay,az'.")
-    ] = "z",
-    steps: Annotated[
-        int, typer.Option("--steps", min=1, help="Steps of the turn (a full turn by default).")
-    ] = 72,
-    start_deg: Annotated[
-        float, typer.Option("--from", metavar="DEG", help="First angle of the turn.")
-    ] = 0.0,
-    stop_deg: Annotated[
-        float | None,
-        typer.Option("--to", metavar="DEG", help="Last angle (taken); default: a full turn."),
-    ] = None,
+    vary: VaryOption = None,
+    rotate_load: RotateLoadOption = None,
+    about: AboutOption = "z",
+    steps: StepsOption = 72,
+    start_deg: FromOption = 0.0,
+    stop_deg: ToOption = None,
     case: CaseOption = None,
     workers: Annotated[
         int | None,
@@ -314,21 +348,13 @@ def sweep(
     tabulate per step the points' displacements, the joints' torsors and the
     contacts (state and force)."""
     from .modelfile import load
-    from .sweep import RotateLoad, Sweep, Vary
     from .textreport import render_sweep
 
     def run() -> None:
         source = str(model_path)
-        try:
-            varies = tuple(Vary.parse(v) for v in vary or ())
-            turn = (
-                None
-                if rotate_load is None
-                else RotateLoad(rotate_load, RotateLoad.axis(about), steps, start_deg, stop_deg)
-            )
-            settings = Sweep(varies, turn, case, chunk)
-        except ValueError as exc:
-            raise ModelError(str(exc), source=source) from None
+        settings = _sweep_settings(
+            vary, rotate_load, about, steps, start_deg, stop_deg, case, chunk, source
+        )
         _check_plot(plot)
         model = load(model_path)
         n_workers = workers if workers is not None else (None if settings.steps >= 1000 else 1)
@@ -460,6 +486,75 @@ def plot(
         )
         save(fig, output)
         _note(f"wrote {output}")
+
+    _guarded(run, False)
+
+
+@app.command()
+def report(
+    model_path: ModelPath,
+    output: Annotated[
+        Path, typer.Option("--output", "-o", metavar="FILE", help="The page to write (.html).")
+    ],
+    case: Annotated[
+        str | None,
+        typer.Option("--case", metavar="NAME", help="Only this load case (default: every case)."),
+    ] = None,
+    magnify: Annotated[
+        float | None,
+        typer.Option("--magnify", metavar="FACTOR", help="The pictures' factor (default: round)."),
+    ] = None,
+    studies: Annotated[
+        bool,
+        typer.Option(
+            "--studies/--no-studies",
+            help="Each point's worst-case envelope and, when plays or loads vary, Monte Carlo "
+            "and contributions.",
+        ),
+    ] = True,
+    samples: Annotated[
+        int, typer.Option("--samples", "-n", min=1, help="Monte Carlo: sets of parts.")
+    ] = 10_000,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Monte Carlo: random seed.")] = 0,
+    vary: VaryOption = None,
+    rotate_load: RotateLoadOption = None,
+    about: AboutOption = "z",
+    steps: StepsOption = 72,
+    start_deg: FromOption = 0.0,
+    stop_deg: ToOption = None,
+    exact: Annotated[bool, typer.Option("--exact", help="Solve with exact rotations.")] = False,
+) -> None:
+    """Write one self-contained HTML page of MODEL for a browser (works offline):
+    the model, the solution of each load case with its contact forces, the
+    figures, an interactive 3D view, and the studies (add a sweep with --vary or
+    --rotate-load)."""
+    from .modelfile import load
+    from .report import Report
+
+    def run() -> None:
+        source = str(model_path)
+        if output.suffix.lower() not in (".html", ".htm"):
+            raise ModelError(
+                f"-o {output}: a report is an HTML page; name the file .html", source=source
+            )
+        if not output.parent.is_dir():
+            raise ModelError(
+                f"-o {output}: the folder '{output.parent}' does not exist; create it or write "
+                "elsewhere",
+                source=source,
+            )
+        if magnify is not None and not 0.0 < magnify < float("inf"):
+            raise ModelError(f"--magnify {magnify:g}: expected a factor above 0", source=source)
+        sweep = None
+        if vary or rotate_load is not None:
+            sweep = _sweep_settings(
+                vary, rotate_load, about, steps, start_deg, stop_deg, case, 64, source
+            )
+        model = load(model_path)
+        settings = Report(case, magnify, studies, samples, seed, sweep, exact)
+        page = settings.render(model, source, note=lambda text: _note(text))
+        output.write_text(page, encoding="utf-8")
+        _note(f"wrote {output} ({len(page) / 1e6:.1f} MB)")
 
     _guarded(run, False)
 
