@@ -1,0 +1,284 @@
+"""Pictures: the scene is faithful to the solution, and every figure kind draws.
+
+The scene's geometry is checked against the result (a touching contact's
+point lies on its magnified clearance domain, a free one inside); then every
+figure kind is rendered on the bundled examples, to PNG, SVG and PDF, from
+the API and from the command line.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from typer.testing import CliRunner
+
+import jointplay
+from conftest import MM, PAPER, ROOT
+from jointplay.cli import app
+from jointplay.contributions import Contributions
+from jointplay.envelope import Envelope
+from jointplay.montecarlo import MonteCarlo
+from jointplay.plot import (
+    clearance_figure,
+    contributions_figure,
+    envelope_figure,
+    mechanism_figure,
+    montecarlo_figure,
+    save,
+    sweep_figure,
+)
+from jointplay.scene import (
+    CIRCLE_POINTS,
+    auto_magnify,
+    joint_view,
+    mechanism_scene,
+    nice_factor,
+)
+from jointplay.sweep import RotateLoad, Sweep
+
+STUDIES = ROOT / "examples" / "studies"
+GALLERY = ROOT / "examples" / "gallery"
+EVERY_EXAMPLE = (
+    sorted(PAPER.glob("*.yaml")) + sorted(STUDIES.glob("*.yaml")) + sorted(GALLERY.glob("*.yaml"))
+)
+
+
+def _paper() -> tuple[jointplay.Model, jointplay.Result]:
+    model = jointplay.load(PAPER / "6.1.6.1.yaml")
+    return model, jointplay.solve(model)
+
+
+def _not_blank(path: Path) -> None:
+    """The PNG has a drawing on it: many pixels that are not the background."""
+    image = np.asarray(Image.open(path).convert("L"))
+    assert image.shape[0] > 300 and image.shape[1] > 300
+    assert np.count_nonzero(image < 200) > 0.01 * image.size
+
+
+# -- the scene is the solution, exaggerated --------------------------------------------
+def test_nice_factors() -> None:
+    assert [nice_factor(v) for v in (0.5, 1, 1.9, 2, 4.99, 5, 9.9, 10, 141, 999)] == [
+        1,
+        1,
+        1,
+        2,
+        2,
+        5,
+        5,
+        10,
+        100,
+        500,
+    ]
+    assert auto_magnify(300.0, 0.0) == 1.0  # nothing moves: true size
+    # 8 % of 300 mm over 0.177 mm is 136: the round factor below is 100
+    assert auto_magnify(300.0, 0.1769621435287896) == 100.0
+
+
+def test_the_paper_scene_places_every_point_by_the_solution() -> None:
+    model, result = _paper()
+    m = 100.0
+    scene = mechanism_scene(model, result, magnify=m)
+    assert scene.magnify == m and scene.size == pytest.approx(300.0, abs=MM)
+    d = result.bodies["S1"].displacement_of
+    # the shaft is one line O - O2-20 - O2 - O2+20 - B, initial and displaced
+    initial = [ln.points for ln in scene.lines if ln.role == "initial"]
+    displaced = [ln.points for ln in scene.lines if ln.role == "displaced"]
+    assert len(initial) == len(displaced) == 4
+    for before, after in zip(initial, displaced, strict=True):
+        for P, Q in zip(before, after, strict=True):
+            np.testing.assert_allclose(Q, P + m * d(P), atol=MM)
+    B = next(mk for mk in scene.markers if mk.role == "load point").at
+    np.testing.assert_allclose(B, [300, 0, 0] + m * d(np.array([300.0, 0, 0])), atol=MM)
+
+
+def test_contact_points_sit_on_or_inside_their_magnified_domains() -> None:
+    model, result = _paper()
+    m = 100.0
+    scene = mechanism_scene(model, result, magnify=m)
+    rings = [ln.points for ln in scene.lines if ln.role == "domain" and len(ln.points) == 73]
+    marks = {mk.label: mk for mk in scene.markers if mk.role in ("touching", "free")}
+    assert set(marks) == {"l1 ball", "l2 end-", "l2 end+"}
+    # l2's end+ circle: centre (220, 0, 0) (S0 does not move), radius m J/2 = 10 mm
+    end_plus = next(r for r in rings if abs(r[:, 0].mean() - 220.0) < 1e-9)
+    centre = end_plus[:-1].mean(axis=0)
+    np.testing.assert_allclose(np.linalg.norm(end_plus - centre, axis=1), 10.0, atol=MM)
+    # b's axis point is on the circle across the axis (it may slide along it)
+    touching = marks["l2 end+"]
+    assert touching.role == "touching"
+    np.testing.assert_allclose(np.linalg.norm((touching.at - centre)[1:]), 10.0, atol=1e-9 * m)
+    assert marks["l2 end-"].role == "free"
+    assert np.linalg.norm(marks["l2 end-"].at[1:]) == pytest.approx(
+        10.0 * result.joints["l2"].contacts[0].gap_used, abs=1e-9 * m
+    )
+    # l1's sphere: the ball's centre on its surface, m J1/2 from O
+    assert marks["l1 ball"].role == "touching"
+    assert np.linalg.norm(marks["l1 ball"].at) == pytest.approx(10.0, abs=1e-9 * m)
+
+
+def test_arrows_are_the_forces_at_one_scale() -> None:
+    model, result = _paper()
+    scene = mechanism_scene(model, result)
+    loads = [a for a in scene.arrows if a.role == "load"]
+    forces = [a for a in scene.arrows if a.role == "contact force"]
+    assert len(loads) == 1 and loads[0].magnitude == pytest.approx(3**0.5)
+    np.testing.assert_allclose(loads[0].vector, scene.force_scale * np.ones(3), atol=MM)
+    # the touching contacts' forces, in global axes, balance the load
+    total = sum(a.vector for a in forces) / scene.force_scale
+    np.testing.assert_allclose(total + np.ones(3), 0.0, atol=1e-8)
+    assert {a.label for a in forces} == {"l1 ball", "l2 end+"}
+    biggest = max(np.linalg.norm(a.vector) for a in scene.arrows)
+    assert biggest == pytest.approx(0.18 * scene.size)
+
+
+def test_joint_views_at_true_size() -> None:
+    model, result = _paper()
+    l1, l2 = (joint_view(j, result.joints[j.name]) for j in model.joints)
+    assert l1.plane == "yz" and l1.circles == ((0.1, True),)  # a sphere's section
+    assert l2.circles == ((0.1, False),)
+    end_minus, end_plus = l2.points
+    assert end_plus.touching and not end_minus.touching
+    assert np.hypot(*end_plus.at) == pytest.approx(0.1, abs=MM)
+    t, w = result.joints["l2"].translation, result.joints["l2"].rotation
+    expected = t + np.cross(w, [20.0, 0, 0])
+    np.testing.assert_allclose(end_plus.at, expected[1:], atol=MM)
+
+
+def test_views_of_every_joint_type() -> None:
+    model = jointplay.load(GALLERY / "lathe_slide.yaml")
+    result = jointplay.solve(model)
+    views = {j.name: joint_view(j, result.joints[j.name]) for j in model.joints}
+    guide = views["guide"]  # prismatic: a rectangle of the half plays (y, z)
+    assert guide.rectangle == pytest.approx((0.02, 0.015))
+    for p in guide.points:
+        assert abs(p.at[0]) <= 0.02 + MM and abs(p.at[1]) <= 0.015 + MM
+    thrust = views["thrust"]  # planar disc: seen across, walls at +-J/2
+    assert thrust.plane == "x-across" and thrust.walls == pytest.approx((-0.01, 0.01))
+    assert [p.touching for p in thrust.points] == [
+        c.in_contact for c in result.joints["thrust"].contacts
+    ]
+    bearing = views["bearing"]  # revolute: the circle, and the axial stop in words
+    assert bearing.circles == ((0.01, False),) and "axial (along x)" in bearing.note
+    assert views["tail"].circles == ((0.015, False),)
+    assert views["holder"].plane == "none" and views["holder"].note == "rigid: no play"
+    table = jointplay.load(STUDIES / "wobbly_table.yaml")
+    leaning = jointplay.solve(table, case="leaning on foot4")
+    foot4 = joint_view(table.joint("foot4"), leaning.joints["foot4"])
+    assert foot4.walls == pytest.approx((-0.05,))  # the plane, 50 um below the short foot
+    assert foot4.points[0].touching and foot4.points[0].at[0] == pytest.approx(-0.05, abs=MM)
+
+
+def test_magnify_one_is_true_size_and_rings_are_circles() -> None:
+    model, result = _paper()
+    scene = mechanism_scene(model, result, magnify=1.0)
+    for ln in scene.lines:
+        if ln.role == "domain" and len(ln.points) == CIRCLE_POINTS:
+            r = np.linalg.norm(ln.points - ln.points[:-1].mean(axis=0), axis=1)
+            np.testing.assert_allclose(r, 0.1, atol=MM)
+
+
+# -- every figure kind draws ------------------------------------------------------------
+@pytest.mark.parametrize("path", EVERY_EXAMPLE, ids=lambda p: p.name)
+def test_the_mechanism_figure_of_every_example(path: Path, tmp_path: Path) -> None:
+    model = jointplay.load(path)
+    cases = list(model.case_names) or [None]
+    for case in cases:
+        result = jointplay.solve(model, case=case)
+        out = save(mechanism_figure(model, result, case=case), tmp_path / "m.png")
+        _not_blank(out)
+        _not_blank(save(clearance_figure(model, result), tmp_path / "j.png"))
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg", ".pdf"])
+def test_every_format(suffix: str, tmp_path: Path) -> None:
+    model, result = _paper()
+    out = save(mechanism_figure(model, result), tmp_path / f"figure{suffix}")
+    head = out.read_bytes()[:200]
+    assert {".png": b"\x89PNG", ".svg": b"<?xml", ".pdf": b"%PDF"}[suffix] in head
+
+
+def test_study_figures(tmp_path: Path) -> None:
+    fits = jointplay.load(STUDIES / "shaft_fits.yaml")
+    env = Envelope("B").run(fits)
+    _not_blank(save(envelope_figure(env), tmp_path / "envelope.png"))
+    mc = MonteCarlo(samples=2000, seed=1).run(fits)
+    _not_blank(save(montecarlo_figure(mc), tmp_path / "montecarlo.png"))
+    co = Contributions().run(fits)
+    _not_blank(save(contributions_figure(co), tmp_path / "contributions.png"))
+    unbalance = jointplay.load(STUDIES / "rotating_unbalance.yaml")
+    sweep = Sweep(rotate=RotateLoad(0, (1.0, 0.0, 0.0), 24)).run(unbalance)
+    envelopes = {"B": Envelope("B", plays="mean").run(unbalance)}
+    # every step of the turn lies inside (here: on) the point's envelope
+    assert np.all(envelopes["B"].contains(sweep.point("B"), tol=1e-9))
+    _not_blank(save(sweep_figure(sweep, envelopes), tmp_path / "sweep.png"))
+    _not_blank(save(sweep_figure(sweep), tmp_path / "sweep_alone.png"))
+
+
+# -- the command line -------------------------------------------------------------------------
+def test_plot_command(tmp_path: Path) -> None:
+    out = tmp_path / "shaft.png"
+    run = CliRunner().invoke(app, ["plot", str(PAPER / "6.1.6.1.yaml"), "-o", str(out)])
+    assert run.exit_code == 0, run.output
+    _not_blank(out)
+    joints = tmp_path / "joints.svg"
+    run = CliRunner().invoke(
+        app, ["plot", str(PAPER / "6.1.6.1.yaml"), "-o", str(joints), "--kind", "joints"]
+    )
+    assert run.exit_code == 0 and joints.read_text().count("<svg") == 1
+    table = tmp_path / "table.pdf"
+    run = CliRunner().invoke(app, ["plot", str(STUDIES / "wobbly_table.yaml"), "-o", str(table)])
+    assert run.exit_code == 0 and table.read_bytes().startswith(b"%PDF")
+    assert "drew load case 'resting', the first" in run.output  # said, not silent
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["-o", "{tmp}/a.jpg"], "name the file .png, .svg or .pdf"),
+        (["-o", "{tmp}/no/such/a.png"], "does not exist; create it"),
+        (["-o", "{tmp}/a.png", "--kind", "3d"], "--kind '3d': expected 'mechanism' or 'joints'"),
+        (["-o", "{tmp}/a.png", "--magnify", "0"], "--magnify 0: expected a factor above 0"),
+        (["-o", "{tmp}/a.png", "--case", "nope"], "no load case 'nope'"),
+    ],
+)
+def test_plot_bad_input_exits_2(args: list[str], message: str, tmp_path: Path) -> None:
+    argv = ["plot", str(PAPER / "6.1.6.1.yaml"), *[a.format(tmp=tmp_path) for a in args]]
+    run = CliRunner().invoke(app, argv)
+    assert run.exit_code == 2, run.output
+    assert message in run.output and "Traceback" not in run.output
+    assert not list(tmp_path.glob("a.*"))
+
+
+def test_plot_of_a_mechanism_not_held_exits_3(tmp_path: Path) -> None:
+    path = tmp_path / "spin.yaml"
+    path.write_text(
+        """
+bodies: [{name: housing, ground: true}, {name: shaft}]
+joints:
+  - {name: l1, type: spherical, between: [housing, shaft], at: [0, 0, 0], clearance: 0.2}
+loads:
+  - {body: shaft, torque: ["1 N*m", 0, 0]}
+"""
+    )
+    run = CliRunner().invoke(app, ["plot", str(path), "-o", str(tmp_path / "a.png")])
+    assert run.exit_code == 3 and "is not held by any joint" in run.output
+    assert not (tmp_path / "a.png").exists()
+
+
+def test_plot_option_of_every_study(tmp_path: Path) -> None:
+    fits, unbalance = str(STUDIES / "shaft_fits.yaml"), str(STUDIES / "rotating_unbalance.yaml")
+    for argv, name in (
+        (["montecarlo", fits, "-n", "500"], "mc.png"),
+        (["envelope", fits, "--point", "B"], "env.svg"),
+        (["contributions", fits], "co.pdf"),
+        (["sweep", unbalance, "--rotate-load", "0", "--about", "x", "--steps", "12"], "sw.png"),
+    ):
+        out = tmp_path / name
+        run = CliRunner().invoke(app, [*argv, "--plot", str(out)])
+        assert run.exit_code == 0, run.output
+        assert out.stat().st_size > 10_000
+    # a bad figure name is refused before the study runs
+    run = CliRunner().invoke(app, ["montecarlo", fits, "--plot", str(tmp_path / "x.gif")])
+    assert run.exit_code == 2 and "--plot" in run.output and "name the file .png" in run.output
