@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import re
+from pathlib import Path
 
 from conftest import ROOT
 
@@ -21,3 +22,27 @@ def test_readme_python_example_runs() -> None:
         os.chdir(cwd)
     batch = namespace["batch"]
     assert len(batch) == 2  # type: ignore[arg-type]
+
+
+def test_readme_figure_is_drawn_by_jointplay(tmp_path: Path) -> None:
+    """The README's 6.1.6.1 figure exists and is what its command draws (same
+    size; matplotlib's name in the PNG's metadata)."""
+    from PIL import Image
+    from typer.testing import CliRunner
+
+    from jointplay.cli import app
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert "![The paper's 6.1.6.1 shaft drawn by jointplay](docs/figures/paper-6.1.6.1.png)" in text
+    assert "jointplay plot examples/paper/6.1.6.1.yaml -o shaft.png" in text
+    committed = Image.open(ROOT / "docs" / "figures" / "paper-6.1.6.1.png")
+    assert "Matplotlib" in committed.info.get("Software", "")
+    out = tmp_path / "shaft.png"
+    run = CliRunner().invoke(
+        app, ["plot", str(ROOT / "examples/paper/6.1.6.1.yaml"), "-o", str(out)]
+    )
+    assert run.exit_code == 0, run.output
+    drawn = Image.open(out)
+    # the same figure; a few pixels of slack for font metrics of other versions
+    assert abs(drawn.width - committed.width) <= 0.02 * committed.width
+    assert abs(drawn.height - committed.height) <= 0.02 * committed.height

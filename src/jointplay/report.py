@@ -198,7 +198,7 @@ def scene_figure(scene: Scene, title: str = "") -> go.Figure:
     for role, name, style in (
         ("touching", "touching contacts", {"color": TOUCHING, "size": 5}),
         ("free", "free contacts", {"color": FREE, "size": 3}),
-        ("point", "functional points", {"color": POINT, "size": 4, "symbol": "x"}),
+        ("point", "functional points", {"color": POINT, "size": 4, "symbol": "diamond"}),
     ):
         marks = [m for m in scene.markers if m.role == role]
         if not marks:

@@ -1,0 +1,174 @@
+"""The HTML report: its content, its self-containment, and a real browser.
+
+The browser test opens the page in Debian's Chromium (headless, driven by
+Playwright; ``apt-get install chromium`` is part of the README's test
+command), with the network cut off, and checks that the interactive 3D view
+and the tables render with no console error and no request leaving the
+file; it saves a screenshot in ``build/screenshots/``.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from PIL import Image
+from typer.testing import CliRunner
+
+import jointplay
+from conftest import PAPER, ROOT
+from jointplay.cli import app
+from jointplay.report import Report
+from jointplay.sweep import RotateLoad, Sweep
+
+STUDIES = ROOT / "examples" / "studies"
+SCREENSHOTS = ROOT / "build" / "screenshots"
+#: Software WebGL: a headless machine has no GPU, and the 3D view needs WebGL.
+CHROMIUM_ARGS = [
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--no-first-run",
+]
+
+
+def _chromium() -> str:
+    path = shutil.which("chromium") or shutil.which("chromium-browser")
+    assert path, (
+        "the report's browser test needs Debian's Chromium: run 'apt-get install -y chromium' "
+        "(the README's test command does)"
+    )
+    return path
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as pw:
+        chromium = pw.chromium.launch(
+            executable_path=_chromium(), args=CHROMIUM_ARGS, chromium_sandbox=False
+        )
+        yield chromium
+        chromium.close()
+
+
+def _open(browser: Any, page_path: Path) -> tuple[Any, list[str], list[str]]:
+    """The page, opened offline; the console errors and the requests made."""
+    context = browser.new_context(viewport={"width": 1280, "height": 900}, offline=True)
+    page = context.new_page()
+    errors: list[str] = []
+    requests: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("requestfailed", lambda r: errors.append(f"failed: {r.url}"))
+    page.on("request", lambda r: requests.append(r.url))
+    page.goto(page_path.as_uri())
+    page.wait_for_selector("body[data-rendered='true']", timeout=60_000)
+    return page, errors, requests
+
+
+def _drawn_pixels(path: Path) -> int:
+    image = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    # anything neither white nor Plotly's pale grid background
+    return int(np.count_nonzero(np.ptp(image, axis=2) > 60))
+
+
+def test_the_report_renders_in_a_real_browser(browser: Any, tmp_path: Path) -> None:
+    out = tmp_path / "report.html"
+    run = CliRunner().invoke(
+        app, ["report", str(STUDIES / "shaft_fits.yaml"), "-o", str(out), "-n", "2000"]
+    )
+    assert run.exit_code == 0, run.output
+    page, errors, requests = _open(browser, out)
+    assert errors == []
+    assert page.evaluate("document.body.dataset.errors") is None
+    assert requests == [out.as_uri()]  # nothing else: no network, no other file
+    # the interactive 3D view: a WebGL canvas, with the mechanism drawn on it
+    assert page.locator("#jp-view-0 canvas").count() >= 1
+    assert page.evaluate("document.getElementById('jp-view-0').data.length") >= 5
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    view = SCREENSHOTS / "report-3d-view.png"
+    page.locator("#jp-view-0").screenshot(path=str(view))
+    assert _drawn_pixels(view) > 500
+    page.screenshot(path=str(SCREENSHOTS / "report.png"), full_page=True)
+    # the tables, with the solution's numbers
+    captions = page.locator("table.jp-table caption").all_inner_texts()
+    for caption in ("Joints", "Contacts and forces", "Functional points", "What varies"):
+        assert caption in captions
+    contacts = page.locator("table.jp-table", has_text="Contacts and forces")
+    rows = contacts.locator("tbody tr").all_inner_texts()
+    assert [r.split("\t")[:2] for r in rows] == [["l1", "ball"], ["l2", "end-"], ["l2", "end+"]]
+    result = jointplay.solve(jointplay.load(STUDIES / "shaft_fits.yaml"))
+    force = result.joints["l2"].contacts[1].force_magnitude
+    assert f"{force:.6g}" in rows[2] and "touching" in rows[2]
+    # the figures are in the page
+    assert page.locator("img.figure").count() == 5  # mechanism, joints, envelope, MC, contrib.
+    for index in range(page.locator("img.figure").count()):
+        assert page.locator("img.figure").nth(index).evaluate("i => i.naturalWidth") > 300
+    page.context.close()
+
+
+def test_a_report_with_cases_and_a_sweep_renders(browser: Any, tmp_path: Path) -> None:
+    table = jointplay.load(STUDIES / "wobbly_table.yaml")
+    out = tmp_path / "table.html"
+    out.write_text(Report(studies=False).render(table, "wobbly_table.yaml"), encoding="utf-8")
+    page, errors, _ = _open(browser, out)
+    assert errors == []
+    assert page.locator(".jp-view canvas").count() >= 3  # one view per load case
+    headings = page.locator("h2").all_inner_texts()
+    assert [h for h in headings if h.startswith("Solution")] == [
+        f"Solution, load case '{c}'" for c in table.case_names
+    ]
+    page.context.close()
+    unbalance = jointplay.load(STUDIES / "rotating_unbalance.yaml")
+    sweep = Sweep(rotate=RotateLoad(0, (1.0, 0.0, 0.0), 12))
+    out = tmp_path / "sweep.html"
+    out.write_text(Report(sweep=sweep).render(unbalance, "unbalance"), encoding="utf-8")
+    page, errors, _ = _open(browser, out)
+    assert errors == []
+    steps = page.locator("table.jp-table", has_text="Steps").locator("tbody tr")
+    assert steps.count() == 12
+    page.context.close()
+
+
+def test_the_page_is_self_contained() -> None:
+    html = Report(studies=False).render(jointplay.load(PAPER / "6.1.6.1.yaml"), "6.1.6.1.yaml")
+    assert html.startswith("<!DOCTYPE html>")
+    assert not re.search(r"<script[^>]+src=", html)  # every script is inline
+    assert not re.search(r"<link[^>]+href=", html)
+    assert not re.search(r"""<img[^>]+src=["'](?!data:)""", html)
+    assert "Plotly" in html and html.count('<img class="figure"') == 2
+    assert "jp-view-0" in html and "data-rendered" not in html.split("<body>")[1][:50]
+
+
+def test_a_model_without_points_or_tolerances_says_why_no_study() -> None:
+    html = Report().render(jointplay.load(PAPER / "6.1.6.1.yaml"), "6.1.6.1.yaml")
+    assert "The model has no functional points, so there is nothing to study" in html
+    html = Report().render(jointplay.load(STUDIES / "rotating_unbalance.yaml"), "unbalance")
+    assert "Worst-case envelope of point &#x27;B&#x27;" in html
+    assert "No play or load varies from part to part" in html
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "message"),
+    [
+        (["-o", "{tmp}/r.txt"], 2, "a report is an HTML page; name the file .html"),
+        (["-o", "{tmp}/no/r.html"], 2, "does not exist; create it"),
+        (["-o", "{tmp}/r.html", "--case", "nope"], 2, "no load case 'nope'"),
+        (["-o", "{tmp}/r.html", "--magnify", "-2"], 2, "--magnify -2: expected a factor above 0"),
+        (["-o", "{tmp}/r.html", "--vary", "joints[9].clearance=1:2:3"], 2, "joints[9]"),
+    ],
+)
+def test_report_bad_input_exits_2(args: list[str], code: int, message: str, tmp_path: Path) -> None:
+    argv = ["report", str(PAPER / "6.1.6.1.yaml"), *[a.format(tmp=tmp_path) for a in args]]
+    run = CliRunner().invoke(app, argv)
+    assert run.exit_code == code, run.output
+    assert message in run.output and "Traceback" not in run.output
+    assert not list(tmp_path.glob("r.*"))
