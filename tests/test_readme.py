@@ -46,3 +46,19 @@ def test_readme_figure_is_drawn_by_jointplay(tmp_path: Path) -> None:
     # the same figure; a few pixels of slack for font metrics of other versions
     assert abs(drawn.width - committed.width) <= 0.02 * committed.width
     assert abs(drawn.height - committed.height) <= 0.02 * committed.height
+
+
+def test_readme_pictures_example_runs(tmp_path: Path) -> None:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    pictures = next(b for b in blocks if "mechanism_figure" in b)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        exec(compile(pictures, "README.md", "exec"), {})
+    finally:
+        os.chdir(cwd)
+    assert (tmp_path / "shaft.svg").read_text().count("<svg") == 1
+    assert (tmp_path / "joints.png").read_bytes().startswith(b"\x89PNG")
+    assert "jp-view-0" in (tmp_path / "shaft.html").read_text(encoding="utf-8")

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from .contributions import Contributions, ContributionsResult
     from .envelope import Envelope, EnvelopeResult
     from .montecarlo import MonteCarlo, MonteCarloResult
+    from .report import Report
     from .sweep import RotateLoad, Sweep, SweepResult, Vary
 
 __version__ = "0.1.0"
@@ -36,6 +37,7 @@ _STUDIES = {
     "RotateLoad": "sweep",
     "Contributions": "contributions",
     "ContributionsResult": "contributions",
+    "Report": "report",
 }
 
 
@@ -66,6 +68,7 @@ __all__ = [
     "ModelError",
     "MonteCarlo",
     "MonteCarloResult",
+    "Report",
     "Result",
     "RotateLoad",
     "SolverError",
