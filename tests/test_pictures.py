@@ -155,7 +155,7 @@ def test_views_of_every_joint_type() -> None:
     for p in guide.points:
         assert abs(p.at[0]) <= 0.02 + MM and abs(p.at[1]) <= 0.015 + MM
     thrust = views["thrust"]  # planar disc: seen across, walls at +-J/2
-    assert thrust.plane == "x-across" and thrust.walls == pytest.approx((-0.01, 0.01))
+    assert thrust.plane == "x-across" and thrust.walls == pytest.approx((-0.03, 0.03))
     assert [p.touching for p in thrust.points] == [
         c.in_contact for c in result.joints["thrust"].contacts
     ]
