@@ -54,6 +54,12 @@ BODY_COLOURS = ("#1f4e79", "#8c564b", "#9467bd", "#17becf", "#bcbd22", "#e377c2"
 #: The three orthographic views: (name, horizontal axis, vertical axis).
 VIEWS = (("XY (along Z)", 0, 1), ("XZ (along -Y)", 0, 2), ("YZ (along X)", 1, 2))
 JOINTS_PER_ROW = 4
+#: Joint views under the mechanism figure, and in the joints figure, at most:
+#: a larger mechanism shows its most loaded joints.
+JOINT_VIEWS_SHOWN = 8
+JOINT_PANELS_MOST = 48
+#: Bodies named in the legend, at most.
+LEGEND_BODIES = 6
 ARROW = r"$\rightarrow$"  # a legend marker
 
 
@@ -101,7 +107,8 @@ def mechanism_figure(
     (green), in 3D and in the three orthographic views; then, with
     ``joints``, each joint seen along its axis at true size."""
     scene = mechanism_scene(model, result, magnify=magnify, case=case)
-    views = [joint_view(j, result.joints[j.name]) for j in model.joints] if joints else []
+    chosen = most_loaded_joints(model, result, JOINT_VIEWS_SHOWN) if joints else []
+    views = [joint_view(model.joint(name), result.joints[name]) for name in chosen]
     joint_rows = math.ceil(len(views) / JOINTS_PER_ROW)
     lo, hi = _padded_bounds(scene)
     span = hi - lo
@@ -122,6 +129,8 @@ def mechanism_figure(
     what = model.name or "mechanism"
     if case is not None:
         what += f", case '{case}'"
+    if len(chosen) < len(model.joints) and joints:
+        what += f" (the views of the {len(chosen)} most loaded of {len(model.joints)} joints)"
     fig.suptitle(
         f"{what}: displacements and plays ×{scene.magnify:g} "
         f"(largest {scene.largest_displacement:.4g} mm); arrows {1 / scene.force_scale:.3g} N "
@@ -134,9 +143,25 @@ def mechanism_figure(
     return fig
 
 
-def clearance_figure(model: Model, result: Result) -> Figure:
-    """Each joint seen along its axis, at true size (the paper's figure 6)."""
-    views = [joint_view(j, result.joints[j.name]) for j in model.joints]
+def most_loaded_joints(model: Model, result: Result, most: int) -> list[str]:
+    """All the joints' names when there are at most ``most``; else the ``most``
+    that carry the largest reaction forces, in the model's order."""
+    names = [j.name for j in model.joints]
+    if len(names) <= most:
+        return names
+    force = {n: float(np.linalg.norm(result.joints[n].reaction_force)) for n in names}
+    kept = set(sorted(names, key=lambda n: -force[n])[:most])
+    return [n for n in names if n in kept]
+
+
+def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None = None) -> Figure:
+    """Each joint seen along its axis, at true size (the paper's figure 6).
+    ``joints``: their names (default: every joint, or the ``JOINT_PANELS_MOST``
+    most loaded of a larger mechanism, said in the title)."""
+    chosen = (
+        list(joints) if joints is not None else most_loaded_joints(model, result, JOINT_PANELS_MOST)
+    )
+    views = [joint_view(model.joint(name), result.joints[name]) for name in chosen]
     cols = min(len(views), JOINTS_PER_ROW)
     rows = math.ceil(len(views) / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.6 * rows), squeeze=False)
@@ -145,30 +170,74 @@ def clearance_figure(model: Model, result: Result) -> Figure:
         draw_joint_view(ax, view, reach)
     for ax in axes.flat[len(views) :]:
         ax.set_axis_off()
-    fig.suptitle(f"{model.name or 'mechanism'}: each joint at true size (mm), b relative to a")
+    some = "" if len(chosen) == len(model.joints) else f" ({len(chosen)} of {len(model.joints)})"
+    fig.suptitle(
+        f"{model.name or 'mechanism'}: each joint at true size (mm), b relative to a{some}"
+    )
     fig.tight_layout()
     return fig
 
 
-def _body_colour(scene: Scene, body: str) -> str:
+def _body_colours(scene: Scene) -> dict[str, str]:
     names = sorted({ln.label for ln in scene.lines if ln.role == "displaced"})
-    return BODY_COLOURS[names.index(body) % len(BODY_COLOURS)] if body in names else POINT
+    return {n: BODY_COLOURS[i % len(BODY_COLOURS)] for i, n in enumerate(names)}
+
+
+def _line_groups(scene: Scene) -> list[tuple[list[FloatArray], dict[str, Any]]]:
+    """The scene's lines in a few groups, one style each (drawn as one
+    collection: a mechanism of a thousand bodies draws as fast as one)."""
+    colours = _body_colours(scene)
+    initial = [ln.points for ln in scene.lines if ln.role == "initial"]
+    domain = [ln.points for ln in scene.lines if ln.role == "domain"]
+    moved = [ln for ln in scene.lines if ln.role == "displaced"]
+    return [
+        (initial, {"colors": INITIAL, "linestyles": "--", "linewidths": 1.0}),
+        (domain, {"colors": DOMAIN, "linewidths": 0.9}),
+        (
+            [ln.points for ln in moved],
+            {"colors": [colours[ln.label] for ln in moved], "linewidths": 2.4},
+        ),
+    ]
+
+
+def _arrow_groups(scene: Scene) -> list[tuple[FloatArray, FloatArray, str]]:
+    out = []
+    for role, colour in (("contact force", TOUCHING), ("load", LOAD)):
+        arrows = [a for a in scene.arrows if a.role == role]
+        if arrows:
+            out.append(
+                (np.array([a.start for a in arrows]), np.array([a.vector for a in arrows]), colour)
+            )
+    return out
 
 
 def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
     """The scene in 3D, with equal scales on the three axes."""
-    for ln in scene.lines:
-        P = ln.points
-        ax.plot(P[:, 0], P[:, 1], P[:, 2], **_line_style(scene, ln.role, ln.label))
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
+    for lines, style in _line_groups(scene):
+        if lines:
+            ax.add_collection3d(Line3DCollection(lines, **style))
+    for role in ("touching", "free", "point"):
+        marks = [m for m in scene.markers if m.role == role]
+        if marks:
+            P = np.array([m.at for m in marks])
+            ax.scatter(P[:, 0], P[:, 1], P[:, 2], **_marker_style(role))
     for mk in scene.markers:
-        style = _marker_style(mk.role)
-        if style:
-            ax.scatter(*mk.at, **style)
-            if mk.role == "point":
-                ax.text(*mk.at, f" {mk.label}", fontsize=8)
-    for ar in scene.arrows:
-        colour = TOUCHING if ar.role == "contact force" else LOAD
-        ax.quiver(*ar.start, *ar.vector, color=colour, linewidth=1.4, arrow_length_ratio=0.2)
+        if mk.role == "point":
+            ax.text(*mk.at, f" {mk.label}", fontsize=8)
+    for start, vector, colour in _arrow_groups(scene):
+        ax.quiver(
+            start[:, 0],
+            start[:, 1],
+            start[:, 2],
+            vector[:, 0],
+            vector[:, 1],
+            vector[:, 2],
+            color=colour,
+            linewidth=1.4,
+            arrow_length_ratio=0.2,
+        )
     lo, hi = _padded_bounds(scene)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -183,24 +252,32 @@ def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
 
 def draw_scene_view(ax: Axes, scene: Scene, h: int, v: int, title: str) -> None:
     """The scene projected on the plane of global axes ``h`` (across) and ``v`` (up)."""
-    for ln in scene.lines:
-        P = ln.points
-        ax.plot(P[:, h], P[:, v], **_line_style(scene, ln.role, ln.label))
+    from matplotlib.collections import LineCollection
+
+    for lines, style in _line_groups(scene):
+        if lines:
+            ax.add_collection(LineCollection([P[:, [h, v]] for P in lines], **style))
+    for role in ("touching", "free", "point"):
+        marks = [m for m in scene.markers if m.role == role]
+        if marks:
+            P = np.array([m.at for m in marks])
+            ax.scatter(P[:, h], P[:, v], **_marker_style(role))
     for mk in scene.markers:
-        style = _marker_style(mk.role)
-        if style:
-            ax.scatter(mk.at[h], mk.at[v], **style)
-            if mk.role == "point":
-                ax.annotate(mk.label, (mk.at[h], mk.at[v]), xytext=(4, 4), **_small)
-    for ar in scene.arrows:
-        colour = TOUCHING if ar.role == "contact force" else LOAD
-        if math.hypot(ar.vector[h], ar.vector[v]) > 1e-9 * scene.size:
-            ax.annotate(
-                "",
-                xy=(ar.start[h] + ar.vector[h], ar.start[v] + ar.vector[v]),
-                xytext=(ar.start[h], ar.start[v]),
-                arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.4},
-            )
+        if mk.role == "point":
+            ax.annotate(mk.label, (mk.at[h], mk.at[v]), xytext=(4, 4), **_small)
+    for start, vector, colour in _arrow_groups(scene):
+        ax.quiver(
+            start[:, h],
+            start[:, v],
+            vector[:, h],
+            vector[:, v],
+            color=colour,
+            angles="xy",
+            scale_units="xy",
+            scale=1.0,
+            width=0.004,
+            zorder=6,
+        )
     lo, hi = _padded_bounds(scene)
     ax.set_xlim(lo[h], hi[h])
     ax.set_ylim(lo[v], hi[v])
@@ -222,14 +299,6 @@ def _padded_bounds(scene: Scene) -> tuple[FloatArray, FloatArray]:
     return mid - half, mid + half
 
 
-def _line_style(scene: Scene, role: str, label: str) -> dict[str, Any]:
-    if role == "initial":
-        return {"color": INITIAL, "linestyle": "--", "linewidth": 1.0}
-    if role == "displaced":
-        return {"color": _body_colour(scene, label), "linewidth": 2.4}
-    return {"color": DOMAIN, "linewidth": 0.9}
-
-
 def _marker_style(role: str) -> dict[str, Any]:
     if role == "touching":
         return {"color": TOUCHING, "s": 22, "zorder": 5}
@@ -242,8 +311,8 @@ def _marker_style(role: str) -> dict[str, Any]:
 
 def _legend_handles(scene: Scene) -> list[Line2D]:
     out = [Line2D([], [], color=INITIAL, linestyle="--", label="initial position")]
-    for body in sorted({ln.label for ln in scene.lines if ln.role == "displaced"}):
-        out.append(Line2D([], [], color=_body_colour(scene, body), lw=2.4, label=body))
+    for body, colour in list(_body_colours(scene).items())[:LEGEND_BODIES]:
+        out.append(Line2D([], [], color=colour, lw=2.4, label=body))
     out += [
         Line2D([], [], color=DOMAIN, lw=0.9, label="clearance domain"),
         Line2D([], [], color=TOUCHING, marker="o", ls="", label="touching contact"),

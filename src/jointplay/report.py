@@ -41,6 +41,12 @@ if TYPE_CHECKING:
     from .sweep import Sweep, SweepResult
 
 
+#: Above this many moving bodies the 3D view draws them as one trace.
+MANY_BODIES = 12
+#: Up to this many lines the mechanism figure is SVG (sharp at any zoom); above, PNG.
+VECTOR_LINES = 600
+
+
 @dataclass(frozen=True)
 class Report:
     """Settings of a report; ``render`` returns the page (HTML text).
@@ -185,7 +191,10 @@ def scene_figure(scene: Scene, title: str = "") -> go.Figure:
         2,
         "dash",
     )
-    for i, body in enumerate(bodies):
+    if len(bodies) > MANY_BODIES:  # one trace: a legend of a thousand bodies helps no one
+        pts = [ln.points for ln in scene.lines if ln.role == "displaced"]
+        lines(pts, f"{len(bodies)} bodies, displaced", BODY_COLOURS[0], 6, "solid")
+    for i, body in enumerate(bodies if len(bodies) <= MANY_BODIES else []):
         pts = [ln.points for ln in scene.lines if ln.role == "displaced" and ln.label == body]
         lines(pts, body, BODY_COLOURS[i % len(BODY_COLOURS)], 6, "solid")
     lines(
@@ -262,17 +271,19 @@ def _arrow_lines(start: FloatArray, vector: FloatArray, size: float) -> FloatArr
 
 
 # -- the page ------------------------------------------------------------------------
-def _svg(fig: Figure) -> str:
-    """A matplotlib figure as an <img> holding its SVG (each figure kept apart)."""
+def _svg(fig: Figure, vector: bool = True) -> str:
+    """A matplotlib figure as an <img> holding its SVG (each figure kept apart),
+    or a PNG when ``vector`` is False (a large mechanism: SVG grows with every line)."""
     import matplotlib.pyplot as plt
 
     buf = io.BytesIO()
+    kind, mime = ("svg", "image/svg+xml") if vector else ("png", "image/png")
     try:
-        fig.savefig(buf, format="svg", bbox_inches="tight")
+        fig.savefig(buf, format=kind, bbox_inches="tight", dpi=110)
     finally:
         plt.close(fig)
     data = base64.b64encode(buf.getvalue()).decode("ascii")
-    return f'<img class="figure" alt="figure" src="data:image/svg+xml;base64,{data}">'
+    return f'<img class="figure" alt="figure" src="data:{mime};base64,{data}">'
 
 
 def _num(v: float, digits: int = 6) -> str:
@@ -480,7 +491,9 @@ class _Page:
         self.subsection(f"Interactive view (displacements and plays ×{scene.magnify:g})")
         self.view(scene_figure(scene, "drag to turn, scroll to zoom, hover for names"))
         self.subsection("Figures")
-        self.parts.append(_svg(mechanism_figure(model, result, magnify=magnify, case=case)))
+        vector = len(scene.lines) <= VECTOR_LINES
+        figure = mechanism_figure(model, result, magnify=magnify, case=case)
+        self.parts.append(_svg(figure, vector))
         self.parts.append(_svg(clearance_figure(model, result)))
 
     def view(self, fig: go.Figure) -> None:
