@@ -282,3 +282,22 @@ def test_plot_option_of_every_study(tmp_path: Path) -> None:
     # a bad figure name is refused before the study runs
     run = CliRunner().invoke(app, ["montecarlo", fits, "--plot", str(tmp_path / "x.gif")])
     assert run.exit_code == 2 and "--plot" in run.output and "name the file .png" in run.output
+
+
+def test_a_large_mechanism_shows_its_most_loaded_joints(tmp_path: Path) -> None:
+    from jointplay.generate import tube_string
+    from jointplay.plot import JOINT_VIEWS_SHOWN, most_loaded_joints
+
+    model = tube_string(30, closed=True)
+    result = jointplay.solve(model)
+    chosen = most_loaded_joints(model, result, JOINT_VIEWS_SHOWN)
+    assert len(chosen) == JOINT_VIEWS_SHOWN
+    force = {n: float(np.linalg.norm(j.reaction_force)) for n, j in result.joints.items()}
+    assert min(force[n] for n in chosen) >= max(force[n] for n in force if n not in chosen)
+    assert chosen == [j.name for j in model.joints if j.name in chosen]  # the model's order
+    fig = mechanism_figure(model, result)
+    assert f"the views of the 8 most loaded of {len(model.joints)} joints" in fig.get_suptitle()
+    _not_blank(save(fig, tmp_path / "string.png"))
+    some = clearance_figure(model, result, joints=chosen[:3])
+    assert "(3 of" in some.get_suptitle()
+    _not_blank(save(some, tmp_path / "three.png"))
