@@ -37,7 +37,13 @@ from .errors import SolverError, UnboundedMechanismError
 from .geometry import FloatArray, describe_motion
 from .linalg import Matrix
 from .model import Load, Model
-from .result import Certificate, Result, build_result, describe_free_motions
+from .result import (
+    EQUILIBRIUM_TOLERANCE,
+    Certificate,
+    Result,
+    build_result,
+    describe_free_motions,
+)
 
 if TYPE_CHECKING:
     from .batch import BatchSolution
@@ -308,7 +314,7 @@ class Workspace:
         to_newton = g_norm / self.asm.s  # scaled multipliers -> N
         rigid = self._rigid_multipliers(g_hat, point) * to_newton
         elapsed = time.perf_counter() - start
-        return build_result(
+        result = build_result(
             self.asm,
             point.x,
             point.lam * to_newton,
@@ -320,6 +326,18 @@ class Workspace:
             loads,
             g,
         )
+        # The certificate balances the forces in the solver's scaled unknowns;
+        # per body and in newtons (Result.check) a badly scaled mechanism can
+        # fall short. A number that fails its own check is not printed.
+        if result.equilibrium_residual > EQUILIBRIUM_TOLERANCE:
+            raise SolverError(
+                "the solver's answer could not be certified: its contact forces balance the "
+                f"loads on each body only to {result.equilibrium_residual:.3g} of the largest "
+                f"force ({EQUILIBRIUM_TOLERANCE:g} is required). "
+                + self._weak_hint()
+                + " If not, please report this model."
+            )
+        return result
 
     def _rigid_multipliers(self, g_hat: FloatArray, point: _Point) -> FloatArray:
         """Forces in the rigid rows (scaled): what the contacts leave of the loads.
