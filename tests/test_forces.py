@@ -151,3 +151,19 @@ def test_load_cases_add_to_the_common_loads() -> None:
 def test_bad_new_entries_are_model_errors(change: dict[str, Any], message: str) -> None:
     with pytest.raises(jointplay.ModelError, match=message):
         model_from_dict(spherical_shaft(**change))
+
+
+def test_an_answer_that_does_not_balance_per_body_is_declined() -> None:
+    """A property draw whose least-norm-face forces balanced a body only to
+    1.7e-8 of the largest force (newtons, per body) is declined, not printed."""
+    import yaml
+
+    path = (
+        Path(__file__).parent
+        / "property_cases"
+        / "declined"
+        / ("unbalanced_on_a_weakly_held_screw.yaml")
+    )
+    model = jointplay.model_from_dict(yaml.safe_load(path.read_text()))
+    with pytest.raises(jointplay.SolverError, match="balance the loads on each body only to"):
+        jointplay.solve(model)
