@@ -301,3 +301,12 @@ def test_a_large_mechanism_shows_its_most_loaded_joints(tmp_path: Path) -> None:
     some = clearance_figure(model, result, joints=chosen[:3])
     assert "(3 of" in some.get_suptitle()
     _not_blank(save(some, tmp_path / "three.png"))
+
+
+def test_a_figure_that_cannot_be_written_exits_2(tmp_path: Path) -> None:
+    (tmp_path / "taken.png").mkdir()  # a folder where the file should go
+    run = CliRunner().invoke(
+        app, ["plot", str(PAPER / "6.1.6.1.yaml"), "-o", str(tmp_path / "taken.png")]
+    )
+    assert run.exit_code == 2 and "cannot write it" in run.output
+    assert "Traceback" not in run.output

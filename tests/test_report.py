@@ -172,3 +172,13 @@ def test_report_bad_input_exits_2(args: list[str], code: int, message: str, tmp_
     assert run.exit_code == code, run.output
     assert message in run.output and "Traceback" not in run.output
     assert not list(tmp_path.glob("r.*"))
+
+
+def test_a_page_that_cannot_be_written_exits_2(tmp_path: Path) -> None:
+    (tmp_path / "taken.html").mkdir()
+    run = CliRunner().invoke(
+        app,
+        ["report", str(PAPER / "6.1.6.1.yaml"), "-o", str(tmp_path / "taken.html"), "--no-studies"],
+    )
+    assert run.exit_code == 2 and "cannot write it" in run.output
+    assert "Traceback" not in run.output

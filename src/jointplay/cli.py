@@ -245,16 +245,14 @@ def montecarlo(
                 source=str(model_path),
             ),
         )
-        if csv is not None:
-            result.to_dataframe().to_csv(csv, index=False)
-        if plot is not None:
-            from .plot import montecarlo_figure
-
-            _save_plot(montecarlo_figure(result), plot)
-        if as_json:
-            typer.echo(json.dumps(result.to_dict(), indent=2))
-        else:
-            render_montecarlo(result, str(model_path), _console())
+        _finish_study(
+            result,
+            csv,
+            plot,
+            lambda: _plots().montecarlo_figure(result),
+            as_json,
+            lambda: render_montecarlo(result, str(model_path), _console()),
+        )
 
     _guarded(run, as_json)
 
@@ -297,16 +295,14 @@ def envelope(
         model = load(model_path)
         settings = Envelope(point, directions, "max" if plays == "max" else "mean")
         result = settings.run(model, source=str(model_path))
-        if csv is not None:
-            result.to_dataframe().to_csv(csv, index=False)
-        if plot is not None:
-            from .plot import envelope_figure
-
-            _save_plot(envelope_figure(result), plot)
-        if as_json:
-            typer.echo(json.dumps(result.to_dict(), indent=2))
-        else:
-            render_envelope(result, str(model_path), model.name, _console())
+        _finish_study(
+            result,
+            csv,
+            plot,
+            lambda: _plots().envelope_figure(result),
+            as_json,
+            lambda: render_envelope(result, str(model_path), model.name, _console()),
+        )
 
     _guarded(run, as_json)
 
@@ -366,16 +362,14 @@ def sweep(
                 model, workers=n_workers, scheduler=scheduler, progress=progress, source=source
             ),
         )
-        if csv is not None:
-            result.to_dataframe().to_csv(csv, index=False)
-        if plot is not None:
-            from .plot import sweep_figure
-
-            _save_plot(sweep_figure(result, sweep_envelopes(model, source)), plot)
-        if as_json:
-            typer.echo(json.dumps(result.to_dict(), indent=2))
-        else:
-            render_sweep(result, source, _console(), csv)
+        _finish_study(
+            result,
+            csv,
+            plot,
+            lambda: _plots().sweep_figure(result, sweep_envelopes(model, source)),
+            as_json,
+            lambda: render_sweep(result, source, _console(), csv),
+        )
 
     _guarded(run, as_json)
 
@@ -410,16 +404,14 @@ def contributions(
         _check_plot(plot)
         model = load(model_path)
         result = settings.run(model, source=source)
-        if csv is not None:
-            result.to_dataframe().to_csv(csv, index=False)
-        if plot is not None:
-            from .plot import contributions_figure
-
-            _save_plot(contributions_figure(result), plot)
-        if as_json:
-            typer.echo(json.dumps(result.to_dict(), indent=2))
-        else:
-            render_contributions(result, source, _console())
+        _finish_study(
+            result,
+            csv,
+            plot,
+            lambda: _plots().contributions_figure(result),
+            as_json,
+            lambda: render_contributions(result, source, _console()),
+        )
 
     _guarded(run, as_json)
 
@@ -468,11 +460,7 @@ def plot(
         source = str(model_path)
         if kind not in ("mechanism", "joints"):
             raise ModelError(f"--kind {kind!r}: expected 'mechanism' or 'joints'", source=source)
-        if magnify is not None and not 0.0 < magnify < float("inf"):
-            raise ModelError(
-                f"--magnify {magnify:g}: expected a factor above 0 (1 draws true size)",
-                source=source,
-            )
+        _check_magnify(magnify, source)
         check_figure_path(output)
         model = load(model_path)
         check_case(model, case, source)
@@ -532,19 +520,12 @@ def report(
     from .report import Report
 
     def run() -> None:
+        from .plot import check_output_path
+
         source = str(model_path)
-        if output.suffix.lower() not in (".html", ".htm"):
-            raise ModelError(
-                f"-o {output}: a report is an HTML page; name the file .html", source=source
-            )
-        if not output.parent.is_dir():
-            raise ModelError(
-                f"-o {output}: the folder '{output.parent}' does not exist; create it or write "
-                "elsewhere",
-                source=source,
-            )
-        if magnify is not None and not 0.0 < magnify < float("inf"):
-            raise ModelError(f"--magnify {magnify:g}: expected a factor above 0", source=source)
+        fix = "a report is an HTML page; name the file .html"
+        check_output_path(output, (".html", ".htm"), "-o", fix)
+        _check_magnify(magnify, source)
         sweep = None
         if vary or rotate_load is not None:
             sweep = _sweep_settings(
@@ -553,10 +534,47 @@ def report(
         model = load(model_path)
         settings = Report(case, magnify, studies, samples, seed, sweep, exact)
         page = settings.render(model, source, note=lambda text: _note(text))
-        output.write_text(page, encoding="utf-8")
+        try:
+            output.write_text(page, encoding="utf-8")
+        except OSError as exc:
+            raise ModelError(f"-o {output}: cannot write it ({exc.strerror})") from None
         _note(f"wrote {output} ({len(page) / 1e6:.1f} MB)")
 
     _guarded(run, False)
+
+
+def _check_magnify(magnify: float | None, source: str) -> None:
+    if magnify is not None and not 0.0 < magnify < float("inf"):
+        raise ModelError(
+            f"--magnify {magnify:g}: expected a factor above 0 (1 draws true size)",
+            source=source,
+        )
+
+
+def _finish_study(
+    result: Any,
+    csv: Path | None,
+    plot: Path | None,
+    figure: Callable[[], Any],
+    as_json: bool,
+    render: Callable[[], None],
+) -> None:
+    """A study's outputs: the CSV table, the figure (``figure()`` draws it),
+    then the JSON document or the readable report."""
+    if csv is not None:
+        result.to_dataframe().to_csv(csv, index=False)
+    if plot is not None:
+        _save_plot(figure(), plot)
+    if as_json:
+        typer.echo(json.dumps(result.to_dict(), indent=2))
+    else:
+        render()
+
+
+def _plots() -> Any:
+    from . import plot
+
+    return plot
 
 
 def _check_plot(path: Path | None) -> None:
@@ -574,18 +592,14 @@ def _save_plot(fig: Any, path: Path) -> None:
 
 
 def sweep_envelopes(model: Any, source: str) -> dict[str, Any]:
-    """Each point's worst-case envelope at the nominal plays (those a sweep
-    solves with), for the sweep's figure; a point whose envelope is unbounded
-    (the joints leave it free along some direction) gets none."""
-    from .envelope import Envelope
+    """Each point's envelope at the nominal plays (those a sweep solves with),
+    for the sweep's figure; a point its joints leave free gets none, said."""
+    from .envelope import point_envelopes
 
-    out: dict[str, Any] = {}
-    for point in model.points:
-        try:
-            out[point.name] = Envelope(point.name, plays="mean").run(model, source=source)
-        except UnboundedMechanismError:
-            _note(f"point {point.name!r}: no envelope (the joints leave it free)")
-    return out
+    found, missing = point_envelopes(model, "mean", source=source)
+    for name in missing:
+        _note(f"point {name!r}: no envelope (the joints leave it free)")
+    return found
 
 
 def _first_case(model: Any, case: str | None) -> str | None:

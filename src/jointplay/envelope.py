@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from .assembly import assemble
-from .errors import ModelError
+from .errors import ModelError, UnboundedMechanismError
 from .geometry import FloatArray
 from .model import Model
 from .solver import Workspace
@@ -171,3 +171,18 @@ class EnvelopeResult:
                 "dz": self.hull[:, 2],
             }
         )
+
+
+def point_envelopes(
+    model: Model, plays: Literal["max", "mean"] = "max", *, source: str | None = None
+) -> tuple[dict[str, EnvelopeResult], dict[str, str]]:
+    """Every functional point's envelope, and why a point has none: its joints
+    leave it free along some direction (the message names the motion)."""
+    found: dict[str, EnvelopeResult] = {}
+    missing: dict[str, str] = {}
+    for point in model.points:
+        try:
+            found[point.name] = Envelope(point.name, plays=plays).run(model, source=source)
+        except UnboundedMechanismError as exc:
+            missing[point.name] = str(exc)
+    return found, missing

@@ -63,22 +63,25 @@ LEGEND_BODIES = 6
 ARROW = r"$\rightarrow$"  # a legend marker
 
 
-def check_figure_path(path: Path | str, option: str = "-o") -> str:
-    """The figure's format from its file name ('png', 'svg' or 'pdf'), or a
-    ``ModelError`` saying how to name it; checked before any work is done."""
+def check_output_path(path: Path | str, suffixes: Sequence[str], option: str, fix: str) -> Path:
+    """``path`` if it names a file of one of ``suffixes`` in a folder that
+    exists, else a ``ModelError`` ('{suffix}' in ``fix`` is the name's own);
+    checked before any work is done."""
     out = Path(path)
-    kind = FORMATS.get(out.suffix.lower())
-    if kind is None:
-        raise ModelError(
-            f"{option} {out}: cannot write a figure as '{out.suffix or 'a file with no suffix'}'; "
-            "name the file .png, .svg or .pdf"
-        )
+    if out.suffix.lower() not in suffixes:
+        raise ModelError(f"{option} {out}: " + fix.format(suffix=out.suffix or "no suffix"))
     if not out.parent.is_dir():
         raise ModelError(
             f"{option} {out}: the folder '{out.parent}' does not exist; create it or write "
             "elsewhere"
         )
-    return kind
+    return out
+
+
+def check_figure_path(path: Path | str, option: str = "-o") -> str:
+    """The figure's format from its file name ('png', 'svg' or 'pdf')."""
+    fix = "cannot write a figure as '{suffix}'; name the file .png, .svg or .pdf"
+    return FORMATS[check_output_path(path, tuple(FORMATS), option, fix).suffix.lower()]
 
 
 def save(fig: Figure, path: Path | str) -> Path:
@@ -87,6 +90,8 @@ def save(fig: Figure, path: Path | str) -> Path:
     kind = check_figure_path(out)
     try:
         fig.savefig(out, format=kind, dpi=150, bbox_inches="tight")
+    except OSError as exc:
+        raise ModelError(f"{out}: cannot write it ({exc.strerror})") from None
     finally:
         plt.close(fig)
     return out

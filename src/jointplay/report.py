@@ -25,7 +25,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import __version__
-from .errors import JointplayError, UnboundedMechanismError
 from .geometry import FloatArray
 from .scene import Scene, mechanism_scene
 
@@ -66,6 +65,12 @@ class Report:
     seed: int = 0
     sweep: Sweep | None = None
     exact: bool = False
+
+    def __post_init__(self) -> None:
+        if self.magnify is not None and not 0.0 < self.magnify < float("inf"):
+            raise ValueError("magnify: a factor above 0 (1 draws true size)")
+        if self.samples < 1:
+            raise ValueError("samples: at least 1")
 
     def render(
         self,
@@ -108,7 +113,7 @@ class Report:
 
     def _studies(self, model: Model, source: str, page: _Page, say: Callable[[str], None]) -> None:
         from .contributions import Contributions
-        from .envelope import Envelope
+        from .envelope import point_envelopes
         from .montecarlo import MonteCarlo
 
         if not model.points:
@@ -117,14 +122,15 @@ class Report:
                 "'points' (and 'requirements') to see envelopes, Monte Carlo and contributions."
             )
             return
+        say("envelopes")
+        envelopes, missing = point_envelopes(model, source=source)
         for point in model.points:
-            say(f"envelope of {point.name!r}")
-            try:
-                env = Envelope(point.name).run(model, source=source)
-            except UnboundedMechanismError as exc:
-                page.paragraph(f"Point '{point.name}': no worst-case envelope: {exc}")
-                continue
-            page.envelope(env)
+            if point.name in envelopes:
+                page.envelope(envelopes[point.name])
+            else:
+                page.paragraph(
+                    f"Point '{point.name}': no worst-case envelope: {missing[point.name]}"
+                )
         if not _varies(model, self.case, source):
             page.paragraph(
                 "No play or load varies from part to part, so there is no Monte Carlo study "
@@ -596,16 +602,11 @@ class _Page:
         self.parts.append(_svg(contributions_figure(co)))
 
     def sweep(self, model: Model, sw: SweepResult, source: str) -> None:
-        from .envelope import Envelope
+        from .envelope import point_envelopes
         from .plot import sweep_figure
 
         self.subsection(f"Sweep of {', '.join(sw.labels)}: {sw.steps} steps")
-        envelopes: dict[str, EnvelopeResult] = {}
-        for point in model.points:
-            try:
-                envelopes[point.name] = Envelope(point.name, plays="mean").run(model, source=source)
-            except JointplayError:
-                continue
+        envelopes, _ = point_envelopes(model, "mean", source=source)
         table = sw.to_dataframe()
         shown = [c for c in table.columns if c == "step" or c in sw.labels or c.endswith(".size")]
         rows = table[shown].head(400).itertuples(index=False)
