@@ -293,10 +293,12 @@ class ContactTables:
     """Every joint and contact at once, to turn an answer into per-joint
     results without a Python step per contact (``Assembly.contacts`` order)."""
 
-    tau_map: sp.csr_matrix  # (6 J, m): x -> each joint's torsor (t mm, w rad)
-    wrench_ball: sp.csr_matrix  # (6 nb, sum k): stacked f -> -(rows.T f) per ball
+    # dense for a small mechanism (scipy's constructors cost more than its
+    # whole solve), sparse for a large one (``Assembly.sparse``)
+    tau_map: Matrix  # (6 J, m): x -> each joint's torsor (t mm, w rad)
+    wrench_ball: Matrix  # (6 nb, sum k): stacked f -> -(rows.T f) per ball
     offset_ball: FloatArray  # (nb, 6): each ball's face row (0 for a plain ball)
-    wrench_fixed: sp.csr_matrix  # (6 nf, sum k): stacked multipliers -> -(rows.T nu)
+    wrench_fixed: Matrix  # (6 nf, sum k): stacked multipliers -> -(rows.T nu)
     is_ball: NDArray[np.bool_]  # (nc,)
     joint_of: IntArray  # (nc,)
     local_point: FloatArray  # (nc, 3) joint frame, mm: where each contact acts
@@ -305,14 +307,25 @@ class ContactTables:
     R_world_joint: FloatArray  # (J, 3, 3)
 
 
-def _wrench_map(contacts: Sequence[ContactRows]) -> sp.csr_matrix:
+def _wrench_map(contacts: Sequence[ContactRows], sparse: bool) -> Matrix:
     """Block-diagonal ``-rows.T`` of the contacts (their duals stacked)."""
     k = np.array([c.k for c in contacts], dtype=np.intp)
     rows = np.vstack([c.contact.rows for c in contacts]) if contacts else np.zeros((0, 6))
     owner = np.repeat(np.arange(len(contacts)), k)
     i = (6 * owner[:, None] + np.arange(6)).ravel()
     j = np.repeat(np.arange(rows.shape[0]), 6)
-    return sp.csr_matrix((-rows.ravel(), (i, j)), shape=(6 * len(contacts), rows.shape[0]))
+    return _matrix(-rows.ravel(), i, j, (6 * len(contacts), rows.shape[0]), sparse)
+
+
+def _matrix(
+    v: FloatArray, i: IntArray, j: IntArray, shape: tuple[int, int], sparse: bool
+) -> Matrix:
+    """The matrix with entries ``v`` at ``(i, j)`` (repeats add up)."""
+    if sparse:
+        return sp.csr_matrix((v, (i, j)), shape=shape)
+    out = np.zeros(shape)
+    np.add.at(out, (i, j), v)
+    return out
 
 
 @dataclass(frozen=True)
@@ -451,16 +464,16 @@ class Assembly:
         i = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, dtype=np.intp)
         j = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, dtype=np.intp)
         v = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0)
-        tau_map = sp.csr_matrix((v, (i, j)), shape=(6 * nj, self.m))
+        tau_map = _matrix(v, i, j, (6 * nj, self.m), self.sparse)
         offsets = [
             np.zeros(6) if c.contact.offset is None else c.contact.offset for c in self.balls
         ]
         contacts = self.contacts
         return ContactTables(
             tau_map,
-            _wrench_map(self.balls),
+            _wrench_map(self.balls, self.sparse),
             np.array(offsets).reshape(-1, 6),
-            _wrench_map(self.fixed),
+            _wrench_map(self.fixed, self.sparse),
             np.array([not c.is_fixed for c in contacts], dtype=bool),
             np.array([c.joint_index for c in contacts], dtype=np.intp),
             np.array([c.contact.point for c in contacts], dtype=float).reshape(-1, 3),
@@ -505,7 +518,7 @@ class Assembly:
         omega = self.turn[i] * x[..., 6 * i + 3 : 6 * i + 6]
         if x.ndim == 1:
             return omega, v_ref - cross(omega, self.body_ref[i])
-        return omega, v_ref - np.cross(omega, self.body_ref[i])
+        return omega, v_ref - cross(omega, self.body_ref[i])
 
 
 def assemble(model: Model) -> Assembly:

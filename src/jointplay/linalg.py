@@ -7,15 +7,13 @@ assembly builds (see ``SPARSE_FROM``).
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
-from functools import partial
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.linalg import lapack
 
 from .geometry import FloatArray
 
@@ -204,14 +202,17 @@ def _factored(K: Matrix) -> Any:
     try:
         if sp.issparse(K):
             return spla.splu(sp.csc_matrix(K)).solve
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", sla.LinAlgWarning)
-            factors = sla.lu_factor(K, check_finite=False)
+        # LAPACK directly: scipy's wrappers cost more than a small system's solve
+        lu, piv, info = lapack.dgetrf(K)
     except (RuntimeError, ValueError, np.linalg.LinAlgError):
         return None
-    if not np.all(np.diag(factors[0])):  # a zero pivot
+    if info != 0 or not np.all(np.diag(lu)):  # a zero pivot
         return None
-    return partial(sla.lu_solve, factors, check_finite=False)
+
+    def solve(b: FloatArray) -> FloatArray:
+        return np.asarray(lapack.dgetrs(lu, piv, b)[0])
+
+    return solve
 
 
 def _refined(K: Matrix, solve: Any, rhs: FloatArray, tol: float, rounds: int) -> FloatArray | None:

@@ -260,7 +260,7 @@ def build_result(
     n = len(asm.body_names)
     X = x.reshape(n, 6)
     omega = asm.turn[:, None] * X[:, 3:]
-    v_origin = asm.s * X[:, :3] - np.cross(omega, asm.body_ref)
+    v_origin = asm.s * X[:, :3] - cross(omega, asm.body_ref)
     omega, v_origin = _clean_rows(omega, asm.s / asm.ell), _clean_rows(v_origin, asm.s)
     index = asm.body_index
     zero = np.zeros(3)
@@ -410,7 +410,7 @@ def equilibrium_residual(
             on = idx >= 0
             rows = idx[on]
             np.add.at(F, rows, sign * force[on])
-            lever_force = np.cross(centre[on] - ref[rows], force[on])
+            lever_force = cross(centre[on] - ref[rows], force[on])
             np.add.at(M, rows, sign * (moment_centre[on] + lever_force))
     worst = max(
         float(np.max(np.linalg.norm(F, axis=1))) if n else 0.0,
