@@ -111,3 +111,20 @@ def test_batch_reports_a_driven_free_motion() -> None:
     wrenches = np.array([[1, 1, 1, 0, 0, 0], [0, 0, 0, 5, 0, 0]], float)
     with pytest.raises(jointplay.UnboundedMechanismError, match="rotation about the global X"):
         ws.solve_batch(wrenches @ W.T)
+
+
+def test_a_singular_row_drops_only_itself() -> None:
+    """The batched Newton solves its rows' KKT systems together; one exactly
+    singular system (a fresh clarabel's answer one ulp off can start a row on
+    one) is masked out and the others are still solved, together."""
+    from jointplay.batch import solve_rows
+
+    rng = np.random.default_rng(0)
+    K = rng.standard_normal((5, 4, 4))
+    K[2, 3, :] = 0.0  # an equation that says nothing: exactly singular
+    rhs = rng.standard_normal((5, 4))
+    step, regular = solve_rows(K, rhs)
+    assert regular.tolist() == [True, True, False, True, True]
+    for b in (0, 1, 3, 4):
+        np.testing.assert_allclose(K[b] @ step[b], rhs[b], rtol=0, atol=1e-12)
+    assert np.all(step[2] == 0.0)

@@ -141,3 +141,69 @@ def test_unknown_case_exits_2_with_a_suggestion() -> None:
     assert proc.returncode == 2
     assert "shaft_cases.yaml" in proc.stderr and "Did you mean 'lifting'?" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_a_tied_chain_prints_json_and_nothing_else(tmp_path: Path) -> None:
+    """50 shafts whose axial positions tie: the least-norm point is found on a
+    singular KKT system, which no library may print about (SuperLU, given one
+    exactly singular, fails inside BLAS, and OpenBLAS prints on stdout)."""
+    import yaml
+
+    from jointplay.generate import bearing_chain_dict
+
+    model = tmp_path / "chain.yaml"
+    model.write_text(yaml.safe_dump(bearing_chain_dict(50)), encoding="utf-8")
+    proc = run("solve", str(model), "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    doc = json.loads(proc.stdout)
+    assert doc["status"] == "optimal" and doc["accuracy"]["certified"]
+    assert len(doc["bodies"]) == 51
+
+
+STUDIES = {
+    "montecarlo": (["-n", "50"], "jointplay.montecarlo.MonteCarlo.run"),
+    "envelope": (["--point", "B"], "jointplay.envelope.Envelope.run"),
+    "sweep": (["--vary", "joints[l2].clearance=0.01:0.03:3"], "jointplay.sweep.Sweep.run"),
+    "contributions": ([], "jointplay.contributions.Contributions.run"),
+}
+
+
+@pytest.mark.parametrize("study", sorted(STUDIES))
+@pytest.mark.parametrize("option", ["--csv", "--plot"])
+def test_an_output_in_a_missing_folder_exits_2_before_any_solving(
+    study: str, option: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from typer.testing import CliRunner
+
+    from jointplay.cli import app
+
+    args, run_method = STUDIES[study]
+
+    def no_work(*_: object, **__: object) -> None:
+        raise AssertionError("the study ran before its output path was checked")
+
+    monkeypatch.setattr(run_method, no_work)
+    missing = tmp_path / "no such folder" / ("out.csv" if option == "--csv" else "out.png")
+    fits = ROOT / "examples" / "studies" / "shaft_fits.yaml"
+    out = CliRunner().invoke(app, [study, str(fits), *args, option, str(missing)])
+    assert out.exit_code == 2, out.output
+    assert f"{option} {missing}: the folder '{missing.parent}' does not exist" in out.output
+
+
+@pytest.mark.parametrize("command", ["sweep", "report"])
+def test_the_help_examples_run_when_copied(command: str, tmp_path: Path) -> None:
+    """Help texts are plain text: Rich markup once ate 'joints[l2]' into 'joints'."""
+    import re
+
+    from jointplay.sweep import Sweep, Vary
+
+    proc = run(command, "--help")
+    assert proc.returncode == 0, proc.stderr
+    text = " ".join(proc.stdout.split())  # the help wraps its lines
+    examples = re.findall(r"'(\w+\[\w+\][\w.\[\]]*=[\d.:]+)'", text)
+    assert examples == ["loads[0].force[1]=0:10:11", "joints[l2].clearance=0.1:0.3:5"]
+    model = jointplay.load(ROOT / "examples" / "studies" / "rotating_unbalance.yaml")
+    for example in examples:
+        table = Sweep(vary=(Vary.parse(example),)).run(model)
+        assert len(table.to_dataframe()) == int(example.rsplit(":", 1)[1])

@@ -278,11 +278,13 @@ def _newton_rows(
     todo = np.arange(B)
     conv = np.zeros(B, dtype=bool)
     for it in range(MAX_NEWTON + 1):
-        xs, ls = x[todo], lam[todo]
+        xs = x[todo]
         v = xs @ A.T
         rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
-        if na and not np.all(rho > 0):
-            return conv  # a contact at its centre: no direction; leave to the full solver
+        directed = np.all(rho > 0, axis=1)
+        if not np.all(directed):  # a contact at its centre has no direction: full solver
+            todo, xs, v, rho = todo[directed], xs[directed], v[directed], rho[directed]
+        ls = lam[todo]
         u = v / np.repeat(rho, k, axis=1) if na else v
         Ju = np.add.reduceat(A[None, :, :] * u[:, :, None], start, axis=1) if na else None
         grad = q[todo] + nu[todo] @ Eq
@@ -316,15 +318,28 @@ def _newton_rows(
             J = Ju + Bo
             Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
             Kb[:, m : m + na, :m] = J
-        try:
-            step = np.linalg.solve(Kb, -F[:, :, None])[:, :, 0]
-        except np.linalg.LinAlgError:
-            return conv  # a singular system in the batch: leave the rest to the full solver
+        step, regular = solve_rows(Kb, -F)
+        todo, step = todo[regular], step[regular]  # a singular row is left to the full solver
         x[todo] += step[:, :m]
         lam[todo] += step[:, m : m + na]
         nu[todo] += step[:, m + na :]
     # rows still in ``todo`` did not converge
     return conv
+
+
+def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """``K[b] step[b] = rhs[b]`` for every row b of a stack of square systems,
+    and the mask of the rows that have a solution: an exactly singular row
+    gets a zero step and ``False``, the others are solved together."""
+    try:
+        step = np.asarray(np.linalg.solve(K, rhs[:, :, None])[:, :, 0], dtype=np.float64)
+        return step, np.ones(len(K), dtype=bool)
+    except np.linalg.LinAlgError:  # some row is singular: find which (one LU each)
+        regular: BoolArray = np.linalg.slogdet(K)[0] != 0
+    step = np.zeros_like(rhs)
+    if np.any(regular):
+        step[regular] = np.linalg.solve(K[regular], rhs[regular][:, :, None])[:, :, 0]
+    return step, regular
 
 
 def _certificates(

@@ -23,6 +23,8 @@ app = typer.Typer(
     no_args_is_help=True,
     help="Where the parts of a mechanism really sit when its joints have clearance.",
     pretty_exceptions_enable=False,
+    # help texts are plain text: "joints[l2]" is a path, not Rich markup
+    rich_markup_mode=None,
 )
 
 
@@ -231,7 +233,7 @@ def montecarlo(
                     f"{name} {value:g}: expected a fraction between 0 and 1 (0.05 is 5 %)",
                     source=str(model_path),
                 )
-        _check_plot(plot)
+        _check_outputs(csv, plot)
         study = MonteCarlo(samples, seed, target, confidence, chunk, case)
         result = _with_progress(
             "solving samples",
@@ -291,7 +293,7 @@ def envelope(
     def run() -> None:
         if plays not in ("max", "mean"):
             raise ModelError(f"--plays {plays!r}: expected 'max' or 'mean'")
-        _check_plot(plot)
+        _check_outputs(csv, plot)
         model = load(model_path)
         settings = Envelope(point, directions, "max" if plays == "max" else "mean")
         result = settings.run(model, source=str(model_path))
@@ -351,7 +353,7 @@ def sweep(
         settings = _sweep_settings(
             vary, rotate_load, about, steps, start_deg, stop_deg, case, chunk, source
         )
-        _check_plot(plot)
+        _check_outputs(csv, plot)
         model = load(model_path)
         n_workers = workers if workers is not None else (None if settings.steps >= 1000 else 1)
         result = _with_progress(
@@ -401,7 +403,7 @@ def contributions(
             settings = Contributions(step, case)
         except ValueError as exc:
             raise ModelError(f"--{exc}", source=source) from None
-        _check_plot(plot)
+        _check_outputs(csv, plot)
         model = load(model_path)
         result = settings.run(model, source=source)
         _finish_study(
@@ -455,7 +457,8 @@ def plot(
 
     def run() -> None:
         from .model import check_case
-        from .plot import check_figure_path, clearance_figure, mechanism_figure, save
+        from .outputs import check_figure_path
+        from .plot import clearance_figure, mechanism_figure, save
 
         source = str(model_path)
         if kind not in ("mechanism", "joints"):
@@ -520,7 +523,7 @@ def report(
     from .report import Report
 
     def run() -> None:
-        from .plot import check_output_path
+        from .outputs import check_output_path
 
         source = str(model_path)
         fix = "a report is an HTML page; name the file .html"
@@ -562,7 +565,10 @@ def _finish_study(
     """A study's outputs: the CSV table, the figure (``figure()`` draws it),
     then the JSON document or the readable report."""
     if csv is not None:
-        result.to_dataframe().to_csv(csv, index=False)
+        try:
+            result.to_dataframe().to_csv(csv, index=False)
+        except OSError as exc:
+            raise ModelError(f"--csv {csv}: cannot write it ({exc.strerror})") from None
     if plot is not None:
         _save_plot(figure(), plot)
     if as_json:
@@ -577,11 +583,14 @@ def _plots() -> Any:
     return plot
 
 
-def _check_plot(path: Path | None) -> None:
-    if path is not None:
-        from .plot import check_figure_path
+def _check_outputs(csv: Path | None, plot: Path | None) -> None:
+    """A study's output files, before the work (which may take minutes)."""
+    from .outputs import check_figure_path, check_file_path
 
-        check_figure_path(path, "--plot")
+    if csv is not None:
+        check_file_path(csv, "--csv")
+    if plot is not None:
+        check_figure_path(plot, "--plot")
 
 
 def _save_plot(fig: Any, path: Path) -> None:

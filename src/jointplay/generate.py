@@ -99,6 +99,57 @@ def tube_string_dict(
     return {"bodies": bodies, "joints": joints, "loads": loads}
 
 
+def bearing_chain_dict(
+    n: int, *, force: tuple[float, float, float] = (0.0, 1.0, 1.0)
+) -> dict[str, Any]:
+    """The model file's content of an ``n``-shaft bearing chain (see the
+    module's docstring); ``force`` (N) acts on every shaft."""
+    if n < 1:
+        raise ValueError("a bearing chain needs at least one shaft")
+    bodies: list[dict[str, Any]] = [{"name": "ground", "ground": True}]
+    joints: list[dict[str, Any]] = []
+    loads: list[dict[str, Any]] = []
+    for i in range(1, n + 1):
+        name, before = f"S{i}", ("ground" if i == 1 else f"S{i - 1}")
+        x = (i - 1) * SEGMENT_MM
+        bodies.append({"name": name})
+        joints.append(
+            {
+                "name": f"bearing{i}",
+                "type": "cylindrical",
+                "between": ["ground", name],
+                "at": [x, 0, 0],
+                "axis": [1, 0, 0],
+                "length": 40,
+                "clearance": 0.2,
+            }
+        )
+        joints.append(
+            {
+                "name": f"coupling{i}",
+                "type": "revolute",
+                "between": [before, name],
+                "at": [x - SEGMENT_MM / 2, 0, 0],
+                "axis": [1, 0, 0],
+                "length": 40,
+                "clearance": 0.1,
+                "axial_clearance": 0.05,
+            }
+        )
+        loads.append({"body": name, "at": [x + 30, 0, 0], "force": list(force)})
+    return {
+        "name": f"bearing chain, {n} shafts",
+        "bodies": bodies,
+        "joints": joints,
+        "loads": loads,
+    }
+
+
+def bearing_chain(n: int, *, force: tuple[float, float, float] = (0.0, 1.0, 1.0)) -> Model:
+    """An ``n``-shaft bearing chain (see the module's docstring) as a ``Model``."""
+    return model_from_dict(bearing_chain_dict(n, force=force), source=f"<bearing chain, {n}>")
+
+
 def tube_string(n: int, *, closed: bool = False, seed: int = 0) -> Model:
     """An ``n``-segment tube string (see the module's docstring) as a ``Model``."""
     kind = "closed" if closed else "open"

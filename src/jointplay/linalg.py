@@ -29,6 +29,13 @@ Matrix = Any  # a dense 2-D FloatArray or a scipy sparse matrix
 #: could be missed, and the cone solver's own unboundedness test takes over.
 MAX_SUBSPACE = 256
 
+#: A sparse KKT matrix is factored shifted by this (relative to its largest
+#: entry; +1 on the primal diagonal, -1 on the dual): a round-off perturbation
+#: that keeps an exactly singular system (indeterminate contact forces, a tied
+#: face) away from SuperLU, which on such a matrix fails inside BLAS and BLAS
+#: prints on stdout. Refinement against the unshifted matrix takes the shift out.
+ROUND_OFF_SHIFT = 1e-15
+
 
 def is_sparse(a: Matrix) -> bool:
     return bool(sp.issparse(a))
@@ -177,16 +184,24 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
     nearest the current point in every unknown (a plain solve would take the
     round-off's huge step along the singular directions)."""
     size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
+    scale = max(1.0, float(abs(K).max()))
+    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
     if not prox:
-        # plain factors, with a few steps of iterative refinement (long chains need them)
-        step = _refined(K, _factored(K), rhs, 1e-8 * size, 4)
+        # plain factors, with a few steps of iterative refinement (long chains
+        # need them). A sparse K is shifted by round-off (ROUND_OFF_SHIFT),
+        # which makes it quasi-definite: SuperLU, given an exactly singular
+        # matrix (indeterminate forces), can fail inside BLAS, which then
+        # prints on our stdout.
+        plain = (
+            sp.csc_matrix(K + sp.diags(ROUND_OFF_SHIFT * scale * signs)) if sp.issparse(K) else K
+        )
+        step = _refined(K, _factored(plain), rhs, 1e-8 * size, 4)
         if step is not None:
             return step
     # Quasi-definite regularization, then refinement against K itself: a
     # proximal-point iteration that converges on a consistent system to the
     # solution nearest the current point, as a least-squares step does.
-    eps = max(prox, 1e-12 * max(1.0, float(abs(K).max())))
-    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
+    eps = max(prox, 1e-12 * scale)
     regular = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
     step = _refined(K, _factored(regular), rhs, 1e-10 * size, 40)
     if step is not None:

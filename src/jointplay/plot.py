@@ -28,6 +28,7 @@ from matplotlib.patches import Circle, Polygon, Rectangle
 
 from .errors import ModelError
 from .geometry import FloatArray
+from .outputs import check_figure_path
 from .scene import JointView, Scene, joint_view, mechanism_scene
 
 if TYPE_CHECKING:
@@ -41,7 +42,6 @@ if TYPE_CHECKING:
     from .sweep import SweepResult
 
 #: The file types ``save`` writes, by suffix.
-FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 
 INITIAL = "#9a9a9a"
 DOMAIN = "#2f6db5"
@@ -61,27 +61,6 @@ JOINT_PANELS_MOST = 48
 #: Bodies named in the legend, at most.
 LEGEND_BODIES = 6
 ARROW = r"$\rightarrow$"  # a legend marker
-
-
-def check_output_path(path: Path | str, suffixes: Sequence[str], option: str, fix: str) -> Path:
-    """``path`` if it names a file of one of ``suffixes`` in a folder that
-    exists, else a ``ModelError`` ('{suffix}' in ``fix`` is the name's own);
-    checked before any work is done."""
-    out = Path(path)
-    if out.suffix.lower() not in suffixes:
-        raise ModelError(f"{option} {out}: " + fix.format(suffix=out.suffix or "no suffix"))
-    if not out.parent.is_dir():
-        raise ModelError(
-            f"{option} {out}: the folder '{out.parent}' does not exist; create it or write "
-            "elsewhere"
-        )
-    return out
-
-
-def check_figure_path(path: Path | str, option: str = "-o") -> str:
-    """The figure's format from its file name ('png', 'svg' or 'pdf')."""
-    fix = "cannot write a figure as '{suffix}'; name the file .png, .svg or .pdf"
-    return FORMATS[check_output_path(path, tuple(FORMATS), option, fix).suffix.lower()]
 
 
 def save(fig: Figure, path: Path | str) -> Path:
