@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import clarabel
 import numpy as np
 
+from . import conic
 from .assembly import Assembly
 from .errors import SolverError
 from .finite import (
@@ -287,9 +288,8 @@ def _step(
     sol = clarabel.DefaultSolver(
         _csc(np.triu(P)), q, _csc(A), np.array(b_rows, dtype=float), cones, settings
     ).solve()
-    status = str(sol.status)
-    if not status.endswith("Solved"):
-        raise SolverError(f"--exact: the cone solver stopped with status {status}")
+    if not conic.has_answer(sol):
+        raise SolverError(f"--exact: the cone solver stopped with status {conic.status_name(sol)}")
     z = np.asarray(sol.z)
     lam = z[np.array(ball_first, dtype=np.intp)] if ball_first else np.zeros(0)
     f = -np.concatenate(ball_vec and [z[v] for v in ball_vec]) if ball_vec else np.zeros(0)

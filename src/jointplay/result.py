@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .errors import SolverError
 from .finite import IDENTITY, Linearization, Placement, linearization
 from .geometry import FloatArray, cross, describe_motion
 
@@ -210,12 +211,16 @@ class Result:
         }
 
     def check(self) -> None:
-        """Raise ``AssertionError`` unless the certificate holds."""
+        """Raise ``SolverError`` unless the certificate holds (a plain check,
+        not an ``assert``: ``python -O`` does not skip it)."""
         c = self.certificate
-        assert c.certified, f"uncertified result: {c}"
-        assert self.equilibrium_residual <= EQUILIBRIUM_TOLERANCE, (
-            f"forces do not balance the loads: residual {self.equilibrium_residual:.3g}"
-        )
+        if not c.certified:
+            raise SolverError(f"uncertified result: {c}")
+        if not self.equilibrium_residual <= EQUILIBRIUM_TOLERANCE:
+            raise SolverError(
+                f"forces do not balance the loads: residual {self.equilibrium_residual:.3g} "
+                f"of the largest force ({EQUILIBRIUM_TOLERANCE:g} is required)"
+            )
 
 
 def _clean(v: FloatArray, scale: float) -> FloatArray:

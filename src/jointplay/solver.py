@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from . import linalg
+from . import conic, linalg
 from .assembly import Assembly, BallStack, IntArray, assemble
 from .errors import SolverError, UnboundedMechanismError
 from .geometry import FloatArray, describe_motion
@@ -523,13 +523,13 @@ class Workspace:
 
     def _clarabel(self, prog: _ConeProgram, q: FloatArray) -> Any:
         sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
-        status = str(sol.status)
-        if status.endswith("DualInfeasible"):  # should have been caught by _check_driven
+        if conic.outcome(sol) == "unbounded":  # a one-sided motion (_check_driven took the rest)
             motion = self._driven_motion(-q[: self.m], np.asarray(sol.x))
             raise _unbounded(self.asm, motion, one_way=True)
-        if not status.endswith("Solved"):
+        if not conic.has_answer(sol):  # our programs are feasible (x = 0): numerical trouble
             raise SolverError(
-                f"the cone solver stopped with status {status} on this model. " + self._weak_hint()
+                f"the cone solver stopped with status {conic.status_name(sol)} on this model. "
+                + self._weak_hint()
             )
         return sol
 
