@@ -6,6 +6,10 @@ spigot (revolute) and a dowel pin, with a batch of real plays (seeded).
 ``chain`` is the open string loaded at its free end (axial pull, torque);
 ``loops`` also rests every segment in a bearing of its own and loads each
 one sideways, which closes a loop through the ground at every segment.
+``bearing`` is ``jointplay.generate.bearing_chain``: shafts each in a
+cylindrical bearing and coupled to the one before by a revolute joint with
+axial play, one force across the axis on each; every shaft's spin is free
+(as many free motions as bodies) and the axial positions tie.
 
 Each (kind, size) runs in a fresh Python process, so that its peak memory is
 its own. In it, after the model is built (pydantic validation, not timed as
@@ -46,10 +50,10 @@ def measure(kind: str, n: int, cvxpy: bool) -> dict[str, Any]:
     import jointplay
     from jointplay import solver as solver_module
     from jointplay.assembly import assemble
-    from jointplay.generate import tube_string
+    from jointplay.generate import bearing_chain, tube_string
     from jointplay.solver import Workspace
 
-    model = tube_string(n, closed=(kind == "loops"))
+    model = bearing_chain(n) if kind == "bearing" else tube_string(n, closed=(kind == "loops"))
     base_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     t0 = time.perf_counter()
     asm = assemble(model)
@@ -96,9 +100,12 @@ def measure(kind: str, n: int, cvxpy: bool) -> dict[str, Any]:
         st = asm.stack
         start = time.perf_counter()
         x = cp.Variable(asm.m)
-        A = sp.csr_matrix(st.A)
+        A, B = sp.csr_matrix(st.A), sp.csr_matrix(st.B)
         cons = [
-            cp.SOC(st.r[i], A[st.start[i] : st.start[i] + st.k[i]] @ x) for i in range(len(st.k))
+            cp.SOC(st.r[i] - B[i] @ x, A[st.start[i] : st.start[i] + st.k[i]] @ x)
+            if st.k[i]
+            else B[i] @ x <= st.r[i]
+            for i in range(len(st.k))
         ]
         if asm.E.shape[0]:
             cons.append(asm.E @ x == 0)
@@ -114,7 +121,7 @@ def measure(kind: str, n: int, cvxpy: bool) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100, 1000, 10000])
-    parser.add_argument("--kinds", nargs="+", default=["chain", "loops"])
+    parser.add_argument("--kinds", nargs="+", default=["chain", "loops", "bearing"])
     parser.add_argument("--cvxpy-max", type=int, default=1000)
     parser.add_argument("--child", nargs=3, metavar=("KIND", "N", "CVXPY"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from . import linalg
 from .assembly import Assembly, BallStack, IntArray
 from .errors import SolverError
 from .geometry import FloatArray
@@ -170,7 +171,7 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
 def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
     if ws.N.shape[1] == 0:
         return
-    drive = work @ ws.N
+    drive = linalg.times(ws.N.T, work)  # work @ N
     bad = np.linalg.norm(drive, axis=1) > ws.settings.drive_tolerance * norms
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])

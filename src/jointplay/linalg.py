@@ -15,6 +15,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.linalg import lapack
 
+from . import free_motions
 from .geometry import FloatArray
 
 #: Mechanisms with more unknowns than this (6 per moving body) are assembled
@@ -22,12 +23,6 @@ from .geometry import FloatArray
 SPARSE_FROM = 240
 
 Matrix = Any  # a dense 2-D FloatArray or a scipy sparse matrix
-
-#: The sparse null space search stops growing its subspace here (a very long
-#: chain has hundreds of weakly held motions, none free): its memory is m times
-#: this. Null directions it returns are checked; past this size a free motion
-#: could be missed, and the cone solver's own unboundedness test takes over.
-MAX_SUBSPACE = 256
 
 #: A sparse KKT matrix is factored shifted by this (relative to its largest
 #: entry; +1 on the primal diagonal, -1 on the dual): a round-off perturbation
@@ -93,69 +88,21 @@ def nonzero_rows(A: Matrix) -> FloatArray:
     return np.asarray(np.any(A != 0.0, axis=1))
 
 
-def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> FloatArray:
+def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> Matrix:
     """Orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``: singular
     values below ``rcond`` times the largest count as zero.
 
-    Dense: one SVD. Sparse: inverse subspace iteration on ``C^T C + delta I``
-    (one sparse factorization), then an SVD of ``C Z`` on the subspace found,
-    which decides with the same threshold as the dense SVD. The subspace
-    grows until it holds a direction that ``C`` moves by more than 1e-6 of
-    its largest: each iteration then shrinks that direction's share against
-    a null one's by ``delta / (1e-12 + delta) = 1e-2`` or better, so three
-    leave the null directions inside the subspace to 1e-6.
+    Dense: one SVD. Sparse: a sparse basis from an elimination by bodies
+    (``free_motions.null_basis``), in time linear in the mechanism's size.
     """
     if C.shape[0] == 0:
-        return np.eye(m)
-    if not sp.issparse(C):
-        _, sv, Vt = np.linalg.svd(C, full_matrices=True)
-        tol = rcond * (sv[0] if sv.size else 0.0)
-        rank = int(np.sum(sv > tol)) if sv.size and sv[0] > 0 else 0
-        return np.ascontiguousarray(Vt[rank:].T)
-    C = sp.csr_matrix(C)
-    Q = sp.csc_matrix(C.T @ C)
-    rng = np.random.default_rng(20140101)
-    s_max = _largest_singular_value(C, Q, rng)
-    if s_max == 0.0:
-        return np.eye(m)
-    delta = 1e-14 * s_max**2
-    lu = spla.splu(
-        sp.csc_matrix(Q + delta * sp.identity(m, format="csc")),
-        permc_spec="MMD_AT_PLUS_A",  # symmetric positive definite: keep the
-        diag_pivot_thresh=0.0,  # fill-reducing order, pivot on the diagonal
-    )
-    p = min(8, m)
-    while True:
-        Z = rng.standard_normal((m, p))
-        for _ in range(3):
-            Z, _ = np.linalg.qr(lu.solve(Z))
-        R = np.linalg.qr(np.asarray(C @ Z), mode="r")  # same singular values, p columns
-        _, sv, Vt = np.linalg.svd(R, full_matrices=True)
-        sv = np.concatenate([sv, np.zeros(p - len(sv))])  # fewer rows than p
-        if p >= min(m, MAX_SUBSPACE) or float(np.max(sv)) > 1e-6 * s_max:
-            break
-        p = min(2 * p, m, MAX_SUBSPACE)
-    keep = np.flatnonzero(sv <= rcond * s_max)
-    basis = Z @ Vt[keep].T
-    q, _ = np.linalg.qr(basis)
-    return np.ascontiguousarray(q)
-
-
-def _largest_singular_value(C: Any, Q: Any, rng: np.random.Generator) -> float:
-    """The largest singular value of C, by power iteration on C^T C (to a few
-    percent, which is all a relative threshold needs)."""
-    v = rng.standard_normal(Q.shape[0])
-    lam = 0.0
-    for _ in range(40):
-        w = Q @ v
-        norm = float(np.linalg.norm(w))
-        if norm == 0.0:
-            return 0.0
-        v = w / norm
-        if abs(norm - lam) <= 1e-3 * norm:
-            break
-        lam = norm
-    return float(np.linalg.norm(C @ v))
+        return sp.identity(m, format="csc") if sp.issparse(C) else np.eye(m)
+    if sp.issparse(C):
+        return free_motions.null_basis(C, m, rcond)
+    _, sv, Vt = np.linalg.svd(C, full_matrices=True)
+    tol = rcond * (sv[0] if sv.size else 0.0)
+    rank = int(np.sum(sv > tol)) if sv.size and sv[0] > 0 else 0
+    return np.ascontiguousarray(Vt[rank:].T)
 
 
 def full_column_rank(rows: Matrix, m: int, rcond: float = 1e-9) -> bool:
@@ -165,7 +112,7 @@ def full_column_rank(rows: Matrix, m: int, rcond: float = 1e-9) -> bool:
     if not sp.issparse(rows):
         sv = np.linalg.svd(rows, compute_uv=False)
         return bool(sv.size and sv[0] > 0 and np.sum(sv > rcond * sv[0]) == m)
-    return bool(null_space(rows, m, rcond).shape[1] == 0)
+    return free_motions.column_rank_deficit(rows, m, rcond) == 0
 
 
 class SingularSystemError(Exception):

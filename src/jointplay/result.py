@@ -13,9 +13,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from .errors import SolverError
 from .finite import IDENTITY, Linearization, Placement, linearization
+from .free_motions import IntArray, column_groups
 from .geometry import FloatArray, cross, describe_motion
 
 if TYPE_CHECKING:
@@ -434,9 +436,20 @@ def points_of(model: Model, bodies: dict[str, BodyResult]) -> dict[str, PointRes
     }
 
 
-def describe_free_motions(asm: Assembly, free_basis: FloatArray) -> tuple[str, ...]:
-    """The free motions (columns of ``free_basis``), one phrase each."""
-    return tuple(_describe_free(asm, d) for d in _echelon(free_basis.T))
+def describe_free_motions(asm: Assembly, free_basis: Any) -> tuple[str, ...]:
+    """The free motions (columns of ``free_basis``, dense or sparse), one phrase each."""
+    if not sp.issparse(free_basis):
+        bodies = np.arange(len(asm.body_names))
+        return tuple(_describe_free(asm, d, bodies) for d in _echelon(free_basis.T))
+    out = []
+    for cols, bodies in column_groups(free_basis):  # a large mechanism: group by group
+        rows = (6 * bodies[:, None] + np.arange(6)).ravel()
+        block = free_basis[rows][:, cols].toarray()
+        for local in _echelon(block.T):
+            d = np.zeros(asm.m)
+            d[rows] = local
+            out.append(_describe_free(asm, d, bodies))
+    return tuple(out)
 
 
 def _echelon(basis_rows: FloatArray, tol: float = 1e-9) -> list[FloatArray]:
@@ -460,10 +473,12 @@ def _echelon(basis_rows: FloatArray, tol: float = 1e-9) -> list[FloatArray]:
     return [row for row in a[:r]]
 
 
-def _describe_free(asm: Assembly, d: FloatArray) -> str:
+def _describe_free(asm: Assembly, d: FloatArray, bodies: IntArray) -> str:
+    """One free motion ``d`` in words (``bodies``: those it may move)."""
     parts = []
     sizes = []
-    for i, name in enumerate(asm.body_names):
+    for i in bodies.tolist():
+        name = asm.body_names[i]
         omega, v_origin = asm.body_motion(d, i)
         size = float(np.linalg.norm(d[6 * i : 6 * i + 6]))
         if size > 0:

@@ -195,8 +195,12 @@ class Workspace:
         self.stack = assembly.stack
         self.E = assembly.E
         self.sparse = assembly.sparse
-        self.N = self._free_motions()
-        self.K = assembly.metric_times(self.N).T
+        self.N = self._free_motions()  # dense, or sparse for a large mechanism
+        self.K = (
+            sp.csr_matrix((assembly.metric_matrix @ self.N).T)
+            if self.sparse
+            else assembly.metric_times(self.N).T
+        )
         self.Eq = linalg.vstack([self.E, self.K], self.m)
         largest = float(np.max(self.stack.r)) if len(self.stack.r) else 0.0
         self._max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
@@ -215,7 +219,7 @@ class Workspace:
         return cls(assemble(model), settings)
 
     # -- free motions -------------------------------------------------------
-    def _free_motions(self) -> FloatArray:
+    def _free_motions(self) -> Matrix:
         stack = self.stack
         C = linalg.vstack([stack.A, stack.B[np.flatnonzero(stack.has_offset)], self.E], self.m)
         return linalg.null_space(C, self.m, self.settings.free_motion_rcond)

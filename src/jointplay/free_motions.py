@@ -1,0 +1,338 @@
+"""Free motions of a large mechanism, in time linear in its size.
+
+The free motions are the null space of the stacked constraint rows ``C``
+(every contact's rows, the faces' rows, the rigid joints' rows). Each row
+touches the six unknowns of one or two bodies, so ``C`` is block-sparse by
+bodies. We eliminate the bodies one at a time, as a multifrontal QR does:
+body j's rows (and the rows passed on to it) are rotated so that its own six
+columns are split by their singular values. The directions with a singular
+value above ``rcond`` times C's largest are pivots: their rows express them
+through the bodies not yet eliminated. The other directions are free in the
+rows that are left; the rotated rest of the rows, which no longer touch body
+j, pass on to its neighbours. A free direction of body j becomes a free
+motion of the mechanism by back-substitution through the pivots of the
+bodies eliminated before it that it moves.
+
+Singular values are those of C's blocks, not of ``C^T C``: the threshold
+means what the dense SVD's does. Bodies go in a minimum-degree order, so a
+chain or a tree makes no fill; a free motion that one body makes alone (a
+shaft's spin) stays a vector on that body. The basis returned is sparse and
+orthonormal.
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+from scipy.linalg import lapack
+
+from .geometry import FloatArray
+
+IntArray = NDArray[np.intp]
+
+#: A back-substituted entry below this fraction of the free direction that
+#: started it is round-off (the direction does not move that body): dropped,
+#: so a local free motion stays local.
+ROUND_OFF = 1e-14
+
+
+@dataclass
+class _Pivot:
+    """Body j's pivot rows: ``s_r * (V_r^T x_j) + P_other @ x_other = 0``."""
+
+    V_r: FloatArray  # (6, rank)
+    s_r: FloatArray  # (rank,)
+    others: tuple[int, ...]
+    P_other: FloatArray  # (rank, 6 * len(others))
+
+
+@dataclass
+class _Elimination:
+    order: list[int] = field(default_factory=list)
+    pivots: dict[int, _Pivot] = field(default_factory=dict)
+    free: list[tuple[int, FloatArray]] = field(default_factory=list)  # (body, (6, q))
+
+
+def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
+    """C's rows grouped by the set of bodies they touch, each group a dense
+    block over those bodies' columns (vectorized: a large mechanism has
+    hundreds of thousands of rows)."""
+    C = sp.csr_matrix(C)
+    C.eliminate_zeros()
+    C.sort_indices()
+    row_of = np.repeat(np.arange(C.shape[0]), np.diff(C.indptr))
+    body_of = C.indices // 6
+    # each row's bodies, as (row, body) pairs in order
+    pair = np.unique(row_of.astype(np.int64) * (C.shape[1] // 6 + 1) + body_of)
+    pair_row, pair_body = np.divmod(pair, C.shape[1] // 6 + 1)
+    count = np.bincount(pair_row, minlength=C.shape[0])
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    keys: dict[tuple[int, ...], list[int]] = {}
+    two = count == 2  # the common case, a joint between two bodies
+    one = count == 1
+    for same, touched in ((np.flatnonzero(one), 1), (np.flatnonzero(two), 2)):
+        if not len(same):
+            continue
+        bodies = pair_body[first[same][:, None] + np.arange(touched)]
+        order = np.lexsort(bodies.T[::-1])
+        same, bodies = same[order], bodies[order]
+        cut = np.flatnonzero(np.any(np.diff(bodies, axis=0) != 0, axis=1)) + 1
+        for chunk_rows, chunk_bodies in zip(
+            np.split(same, cut), np.split(bodies, cut), strict=True
+        ):
+            keys[tuple(chunk_bodies[0].tolist())] = chunk_rows.tolist()
+    for row in np.flatnonzero(count > 2):  # rows that touch more bodies (rare)
+        key = tuple(pair_body[first[row] : first[row] + count[row]].tolist())
+        keys.setdefault(key, []).append(int(row))
+    # scatter every entry into one buffer that holds the groups' blocks
+    n_rows = np.array([len(rows) for rows in keys.values()], dtype=np.intp)
+    width = 6 * np.array([len(key) for key in keys], dtype=np.intp)
+    offset = np.concatenate([[0], np.cumsum(n_rows * width)[:-1]]).astype(np.intp)
+    group_of = np.zeros(C.shape[0], dtype=np.intp)
+    local_row = np.zeros(C.shape[0], dtype=np.intp)
+    for index, rows in enumerate(keys.values()):
+        group_of[rows] = index
+        local_row[rows] = np.arange(len(rows))
+    nb1 = C.shape[1] // 6 + 1
+    rank = np.searchsorted(pair, row_of.astype(np.int64) * nb1 + body_of) - first[row_of]
+    group = group_of[row_of]
+    flat = offset[group] + local_row[row_of] * width[group] + 6 * rank + C.indices % 6
+    buffer = np.zeros(int(np.sum(n_rows * width)))
+    buffer[flat] = C.data
+    return [
+        (key, buffer[offset[g] : offset[g] + n_rows[g] * width[g]].reshape(n_rows[g], width[g]))
+        for g, key in enumerate(keys)
+    ]
+
+
+def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimination:
+    n = m // 6
+    blocks = _row_blocks(C)
+    store: dict[int, tuple[tuple[int, ...], FloatArray]] = dict(enumerate(blocks))
+    on: list[set[int]] = [set() for _ in range(n)]  # body -> ids of its row blocks
+    for b, (bodies, _rows) in store.items():
+        for body in bodies:
+            on[body].add(b)
+    next_id = len(store)
+
+    def degree(body: int) -> int:
+        return len({o for b in on[body] for o in store[b][0]})
+
+    heap = [(degree(j), j) for j in range(n)]
+    heapq.heapify(heap)
+    done = np.zeros(n, dtype=bool)
+    out = _Elimination()
+    tol = rcond * s_max
+    while heap:
+        d, j = heapq.heappop(heap)
+        if done[j]:
+            continue
+        if d != degree(j):  # stale entry: its degree changed since
+            heapq.heappush(heap, (degree(j), j))
+            continue
+        done[j] = True
+        out.order.append(j)
+        mine = sorted(on[j])
+        others = tuple(sorted({o for b in mine for o in store[b][0]} - {j}))
+        where = {body: i for i, body in enumerate((j, *others))}
+        R = np.zeros((sum(store[b][1].shape[0] for b in mine), 6 * (1 + len(others))))
+        at = 0
+        for b in mine:
+            bodies, rows = store.pop(b)
+            for body in bodies:
+                if body != j:
+                    on[body].discard(b)
+            for k, body in enumerate(bodies):
+                R[at : at + rows.shape[0], 6 * where[body] : 6 * where[body] + 6] = rows[
+                    :, 6 * k : 6 * k + 6
+                ]
+            at += rows.shape[0]
+        on[j].clear()
+        U, sv, Vt, info = lapack.dgesdd(R[:, :6], full_matrices=1)
+        if info:  # pragma: no cover - LAPACK's SVD did not converge
+            U, sv, Vt = np.linalg.svd(R[:, :6], full_matrices=True)
+        rank = int(np.sum(sv > tol))
+        if rank < 6:
+            out.free.append((j, Vt[rank:].T.copy()))
+        if rank:
+            P = U[:, :rank].T @ R
+            out.pivots[j] = _Pivot(Vt[:rank].T.copy(), sv[:rank], others, P[:, 6:])
+        if others:
+            rest = U[:, rank:].T @ R[:, 6:]
+            if rest.shape[0] > rest.shape[1]:  # at most as many rows as columns
+                rest = np.triu(lapack.dgeqrf(rest)[0][: rest.shape[1]])
+            keep = np.max(np.abs(rest), axis=1, initial=0.0) > 0.0
+            if np.any(keep):
+                store[next_id] = (others, rest[keep])
+                for body in others:
+                    on[body].add(next_id)
+                next_id += 1
+            for body in others:
+                heapq.heappush(heap, (degree(body), body))
+    return out
+
+
+def _largest_singular_value(C: sp.csr_matrix) -> float:
+    """C's largest singular value, by power iteration on C^T C (to a few
+    percent, which is all a relative threshold needs)."""
+    rng = np.random.default_rng(20140101)
+    v = rng.standard_normal(C.shape[1])
+    previous = 0.0
+    for _ in range(60):
+        w = C.T @ (C @ v)
+        norm = float(np.linalg.norm(w))
+        if norm == 0.0:
+            return 0.0
+        v = w / norm
+        if abs(norm - previous) <= 1e-3 * norm:
+            break
+        previous = norm
+    return float(np.linalg.norm(C @ v))
+
+
+def null_basis(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> sp.csc_matrix:
+    """Sparse orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``
+    (singular values below ``rcond`` times C's largest count as zero)."""
+    C = sp.csr_matrix(C)
+    if C.shape[0] == 0 or C.nnz == 0:
+        return sp.identity(m, format="csc")
+    s_max = _largest_singular_value(C)
+    elim = _eliminate(C, m, rcond, s_max)
+    position = {body: i for i, body in enumerate(elim.order)}
+    # bodies eliminated before k whose pivot rows involve k
+    dependents: dict[int, list[int]] = {}
+    for i, pivot in elim.pivots.items():
+        for k in pivot.others:
+            dependents.setdefault(k, []).append(i)
+    vectors: list[dict[int, FloatArray]] = []
+    for j, V in elim.free:
+        for q in range(V.shape[1]):
+            vectors.append(_back_substitute(j, V[:, q], elim, position, dependents))
+    return _orthonormal(vectors, m)
+
+
+def column_rank_deficit(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> int:
+    """How many independent motions ``C`` does not move (0: its rows pin every unknown)."""
+    C = sp.csr_matrix(C)
+    if C.shape[0] == 0 or C.nnz == 0:
+        return m
+    elim = _eliminate(C, m, rcond, _largest_singular_value(C))
+    return sum(V.shape[1] for _, V in elim.free)
+
+
+def _back_substitute(
+    j: int,
+    v: FloatArray,
+    elim: _Elimination,
+    position: dict[int, int],
+    dependents: dict[int, list[int]],
+) -> dict[int, FloatArray]:
+    """The free motion that body j's free direction v starts: the bodies
+    eliminated before j follow through their pivot rows (latest first: a
+    pivot row involves only bodies eliminated after its own)."""
+    x = {j: v}
+    heap = [-position[i] for i in dependents.get(j, [])]
+    heapq.heapify(heap)
+    seen = set(heap)
+    floor = ROUND_OFF * float(np.linalg.norm(v))
+    while heap:
+        i = elim.order[-heapq.heappop(heap)]
+        pivot = elim.pivots[i]
+        moved = [k for k in pivot.others if k in x]
+        if not moved:
+            continue
+        x_other = np.zeros(6 * len(pivot.others))
+        for k, body in enumerate(pivot.others):
+            if body in x:
+                x_other[6 * k : 6 * k + 6] = x[body]
+        x_i = pivot.V_r @ (-(pivot.P_other @ x_other) / pivot.s_r)
+        if float(np.max(np.abs(x_i))) <= floor:
+            continue
+        x[i] = x_i
+        for dep in dependents.get(i, []):
+            if -position[dep] not in seen:
+                seen.add(-position[dep])
+                heapq.heappush(heap, -position[dep])
+    return x
+
+
+def _orthonormal(vectors: list[dict[int, FloatArray]], m: int) -> sp.csc_matrix:
+    """The vectors (body -> 6 entries) as orthonormal sparse columns: those
+    that share a body are orthonormalized together, the others alone."""
+    parent = list(range(len(vectors)))
+
+    def root(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    owner: dict[int, int] = {}
+    for a, vec in enumerate(vectors):
+        for body in vec:
+            if body in owner:
+                parent[root(a)] = root(owner[body])
+            else:
+                owner[body] = a
+    clusters: dict[int, list[int]] = {}
+    for a in range(len(vectors)):
+        clusters.setdefault(root(a), []).append(a)
+    rows: list[IntArray] = []
+    cols: list[IntArray] = []
+    vals: list[FloatArray] = []
+    p = 0
+    for members in clusters.values():
+        bodies = sorted({body for a in members for body in vectors[a]})
+        where = {body: i for i, body in enumerate(bodies)}
+        X = np.zeros((6 * len(bodies), len(members)))
+        for c, a in enumerate(members):
+            for body, entries in vectors[a].items():
+                X[6 * where[body] : 6 * where[body] + 6, c] = entries
+        Q = X / np.linalg.norm(X) if X.shape[1] == 1 else np.linalg.qr(X)[0]
+        index = (6 * np.asarray(bodies)[:, None] + np.arange(6)).ravel()
+        nz = np.nonzero(Q)
+        rows.append(index[nz[0]])
+        cols.append(p + nz[1])
+        vals.append(Q[nz])
+        p += len(members)
+    if not p:
+        return sp.csc_matrix((m, 0))
+    return sp.csc_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, p)
+    )
+
+
+def column_groups(basis: sp.spmatrix) -> list[tuple[IntArray, IntArray]]:
+    """The columns of a sparse basis in groups that share no body, each with
+    its bodies: ``[(columns, bodies), ...]`` (to describe them one group at a
+    time, in the few bodies each moves)."""
+    N = sp.csc_matrix(basis)
+    parent = list(range(N.shape[1]))
+
+    def root(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    owner: dict[int, int] = {}
+    bodies_of = []
+    for c in range(N.shape[1]):
+        bodies = np.unique(N.indices[N.indptr[c] : N.indptr[c + 1]] // 6)
+        bodies_of.append(bodies)
+        for body in bodies.tolist():
+            if body in owner:
+                parent[root(c)] = root(owner[body])
+            else:
+                owner[body] = c
+    groups: dict[int, list[int]] = {}
+    for c in range(N.shape[1]):
+        groups.setdefault(root(c), []).append(c)
+    return [
+        (np.array(cols, dtype=np.intp), np.unique(np.concatenate([bodies_of[c] for c in cols])))
+        for cols in groups.values()
+    ]
