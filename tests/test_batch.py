@@ -128,3 +128,73 @@ def test_a_singular_row_drops_only_itself() -> None:
     for b in (0, 1, 3, 4):
         np.testing.assert_allclose(K[b] @ step[b], rhs[b], rtol=0, atol=1e-12)
     assert np.all(step[2] == 0.0)
+
+
+def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The per-row bookkeeping of the batched Newton: rows that a step finds
+    singular leave the stack and the others go on; the dropped rows get their
+    answer later (from another start, or the full solver), the same answer."""
+    import jointplay.batch as batch_module
+
+    data = spherical_shaft()
+    forces = rotated_forces(40)
+    reference = Workspace.of(model_from_dict(data))
+    W = reference.asm.wrench_work("S1", [300, 0, 0])
+    work = np.hstack([forces, np.zeros_like(forces)]) @ W.T
+    expected = reference.solve_batch(work)
+
+    solve_rows = batch_module.solve_rows
+    calls = []
+
+    def singular_sometimes(K: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        step, regular = solve_rows(K, rhs)
+        calls.append(len(K))
+        if len(calls) == 1 and len(K) > 4:  # the first batched step: rows 1 and 4 "singular"
+            regular = regular.copy()
+            regular[[1, 4]] = False
+        return step, regular
+
+    monkeypatch.setattr(batch_module, "solve_rows", singular_sometimes)
+    ws = Workspace.of(model_from_dict(data))
+    got = ws.solve_batch(work)
+    assert calls[0] > 4  # the rows were stacked, and two of them dropped
+    assert got.full_solves < 5
+    np.testing.assert_allclose(got.x, expected.x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.forces, expected.forces, rtol=0, atol=1e-9)
+
+
+def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
+    """A start where a contact's relative position is exactly 0 has no
+    direction for its force; that row leaves the batch, the others converge."""
+    from jointplay.batch import _newton_rows
+
+    ws = Workspace.of(model_from_dict(spherical_shaft()))
+    forces = rotated_forces(3)
+    W = ws.asm.wrench_work("S1", [300, 0, 0])
+    work = np.hstack([forces, np.zeros_like(forces)]) @ W.T
+    solved = ws.solve_batch(work)
+    g_hat = work / np.linalg.norm(work, axis=1)[:, None]
+    point = ws._optimum(g_hat[0])
+    face = ws._face(point.active)
+    surface = list(point.active[0])
+    assert not point.active[1] and surface  # the shaft's contacts are on their surfaces
+    x = solved.x.copy()
+    x[1] = 0.0  # every contact at its centre
+    lam = np.zeros((3, len(surface))) + 1.0
+    nu = np.zeros((3, face.Eq.shape[0]))
+    conv = _newton_rows(
+        face.stack,
+        np.repeat(face.stack.r[None, :], 3, axis=0),
+        face.Eq,
+        np.repeat(face.e[None, :], 3, axis=0),
+        np.zeros((3, face.Eq.shape[0])),
+        -g_hat,
+        np.zeros((3, len(surface))),
+        x,
+        lam,
+        nu,
+    )
+    assert conv.tolist() == [True, False, True]
+    np.testing.assert_allclose(x[[0, 2]], solved.x[[0, 2]], rtol=0, atol=1e-12)

@@ -9,7 +9,13 @@
 from typing import TYPE_CHECKING
 
 from .batch import BatchSolution
-from .errors import JointplayError, ModelError, SolverError, UnboundedMechanismError
+from .errors import (
+    JointplayError,
+    ModelError,
+    OptionError,
+    SolverError,
+    UnboundedMechanismError,
+)
 from .joints import JOINT_TYPES, Joint
 from .model import Body, Load, Model
 from .modelfile import load, model_from_dict
@@ -68,6 +74,7 @@ __all__ = [
     "ModelError",
     "MonteCarlo",
     "MonteCarloResult",
+    "OptionError",
     "Report",
     "Result",
     "RotateLoad",

@@ -16,7 +16,7 @@ import typer
 from rich.console import Console
 
 from . import __version__
-from .errors import JointplayError, ModelError, UnboundedMechanismError
+from .errors import JointplayError, ModelError, OptionError, UnboundedMechanismError
 
 app = typer.Typer(
     add_completion=False,
@@ -109,7 +109,7 @@ def _sweep_settings(
         )
         return Sweep(varies, turn, case, chunk)
     except ValueError as exc:
-        raise ModelError(str(exc), source=source) from None
+        raise OptionError(str(exc), source=source) from None
 
 
 def _version(value: bool) -> None:
@@ -127,7 +127,7 @@ def _main(
     """Clearance equilibrium of mechanisms: positions, contacts, certificates."""
 
 
-@app.command()
+@app.command(short_help="Where the parts sit: positions, contacts, forces, certificate.")
 def solve(
     model_path: ModelPath,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
@@ -177,7 +177,7 @@ def solve(
     _guarded(run, as_json)
 
 
-@app.command()
+@app.command(short_help="Monte Carlo over real parts drawn from their tolerances.")
 def montecarlo(
     model_path: ModelPath,
     samples: Annotated[
@@ -229,7 +229,7 @@ def montecarlo(
         model = load(model_path)
         for name, value in (("--target", target), ("--confidence", confidence)):
             if value is not None and not 0.0 < value < 1.0:
-                raise ModelError(
+                raise OptionError(
                     f"{name} {value:g}: expected a fraction between 0 and 1 (0.05 is 5 %)",
                     source=str(model_path),
                 )
@@ -259,7 +259,7 @@ def montecarlo(
     _guarded(run, as_json)
 
 
-@app.command()
+@app.command(short_help="Worst-case envelope of a functional point under any load.")
 def envelope(
     model_path: ModelPath,
     point: Annotated[
@@ -292,7 +292,7 @@ def envelope(
 
     def run() -> None:
         if plays not in ("max", "mean"):
-            raise ModelError(f"--plays {plays!r}: expected 'max' or 'mean'")
+            raise OptionError(f"--plays {plays!r}: expected 'max' or 'mean'")
         _check_outputs(csv, plot)
         model = load(model_path)
         settings = Envelope(point, directions, "max" if plays == "max" else "mean")
@@ -309,7 +309,7 @@ def envelope(
     _guarded(run, as_json)
 
 
-@app.command()
+@app.command(short_help="Solve as model entries vary or a load turns; a table per step.")
 def sweep(
     model_path: ModelPath,
     vary: VaryOption = None,
@@ -376,7 +376,7 @@ def sweep(
     _guarded(run, as_json)
 
 
-@app.command()
+@app.command(short_help="Which toleranced play drives each functional point.")
 def contributions(
     model_path: ModelPath,
     case: CaseOption = None,
@@ -402,7 +402,7 @@ def contributions(
         try:
             settings = Contributions(step, case)
         except ValueError as exc:
-            raise ModelError(f"--{exc}", source=source) from None
+            raise OptionError(f"--{exc}", source=source) from None
         _check_outputs(csv, plot)
         model = load(model_path)
         result = settings.run(model, source=source)
@@ -418,7 +418,7 @@ def contributions(
     _guarded(run, as_json)
 
 
-@app.command()
+@app.command(short_help="Draw the solved mechanism and its joints (PNG, SVG, PDF).")
 def plot(
     model_path: ModelPath,
     output: Annotated[
@@ -462,7 +462,7 @@ def plot(
 
         source = str(model_path)
         if kind not in ("mechanism", "joints"):
-            raise ModelError(f"--kind {kind!r}: expected 'mechanism' or 'joints'", source=source)
+            raise OptionError(f"--kind {kind!r}: expected 'mechanism' or 'joints'", source=source)
         _check_magnify(magnify, source)
         check_figure_path(output)
         model = load(model_path)
@@ -481,7 +481,7 @@ def plot(
     _guarded(run, False)
 
 
-@app.command()
+@app.command(short_help="One self-contained HTML page: model, solution, figures, studies.")
 def report(
     model_path: ModelPath,
     output: Annotated[
@@ -540,7 +540,7 @@ def report(
         try:
             output.write_text(page, encoding="utf-8")
         except OSError as exc:
-            raise ModelError(f"-o {output}: cannot write it ({exc.strerror})") from None
+            raise OptionError(f"-o {output}: cannot write it ({exc.strerror})") from None
         _note(f"wrote {output} ({len(page) / 1e6:.1f} MB)")
 
     _guarded(run, False)
@@ -548,7 +548,7 @@ def report(
 
 def _check_magnify(magnify: float | None, source: str) -> None:
     if magnify is not None and not 0.0 < magnify < float("inf"):
-        raise ModelError(
+        raise OptionError(
             f"--magnify {magnify:g}: expected a factor above 0 (1 draws true size)",
             source=source,
         )
@@ -568,7 +568,7 @@ def _finish_study(
         try:
             result.to_dataframe().to_csv(csv, index=False)
         except OSError as exc:
-            raise ModelError(f"--csv {csv}: cannot write it ({exc.strerror})") from None
+            raise OptionError(f"--csv {csv}: cannot write it ({exc.strerror})") from None
     if plot is not None:
         _save_plot(figure(), plot)
     if as_json:
@@ -656,7 +656,9 @@ def _guarded(run: Any, as_json: bool) -> None:
             run()
     except JointplayError as exc:
         kind = (
-            "invalid model"
+            "invalid option"
+            if isinstance(exc, OptionError)
+            else "invalid model"
             if isinstance(exc, ModelError)
             else "not held"
             if isinstance(exc, UnboundedMechanismError)

@@ -31,6 +31,12 @@ class ModelError(JointplayError, ValueError):
         super().__init__(f"{where}: {message}" if where else message)
 
 
+class OptionError(ModelError):
+    """A command-line option is invalid (an output path that cannot be
+    written, a value out of range): exit code 2, like a model error, and
+    labelled 'invalid option'."""
+
+
 class UnboundedMechanismError(JointplayError):
     """The loads drive a motion that no joint limits: there is no equilibrium.
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from .errors import ModelError
+from .errors import OptionError
 
 #: Figure formats by file suffix.
 FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
@@ -14,10 +14,10 @@ FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 
 def check_output_path(path: Path | str, suffixes: Sequence[str], option: str, fix: str) -> Path:
     """``path`` if it names a file of one of ``suffixes`` in a folder that
-    exists, else a ``ModelError`` ('{suffix}' in ``fix`` is the name's own)."""
+    exists, else an ``OptionError`` ('{suffix}' in ``fix`` is the name's own)."""
     out = Path(path)
     if out.suffix.lower() not in suffixes:
-        raise ModelError(f"{option} {out}: " + fix.format(suffix=out.suffix or "no suffix"))
+        raise OptionError(f"{option} {out}: " + fix.format(suffix=out.suffix or "no suffix"))
     return check_file_path(out, option)
 
 
@@ -26,9 +26,9 @@ def check_file_path(path: Path | str, option: str) -> Path:
     folder exists."""
     out = Path(path)
     if out.is_dir():
-        raise ModelError(f"{option} {out}: cannot write it (it is a folder); name a file")
+        raise OptionError(f"{option} {out}: cannot write it (it is a folder); name a file")
     if not out.parent.is_dir():
-        raise ModelError(
+        raise OptionError(
             f"{option} {out}: the folder '{out.parent}' does not exist; create it or write "
             "elsewhere"
         )

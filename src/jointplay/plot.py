@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon, Rectangle
 
-from .errors import ModelError
+from .errors import OptionError
 from .geometry import FloatArray
 from .outputs import check_figure_path
 from .scene import JointView, Scene, joint_view, mechanism_scene
@@ -40,8 +40,6 @@ if TYPE_CHECKING:
     from .montecarlo import MonteCarloResult
     from .result import Result
     from .sweep import SweepResult
-
-#: The file types ``save`` writes, by suffix.
 
 INITIAL = "#9a9a9a"
 DOMAIN = "#2f6db5"
@@ -70,7 +68,7 @@ def save(fig: Figure, path: Path | str) -> Path:
     try:
         fig.savefig(out, format=kind, dpi=150, bbox_inches="tight")
     except OSError as exc:
-        raise ModelError(f"{out}: cannot write it ({exc.strerror})") from None
+        raise OptionError(f"{out}: cannot write it ({exc.strerror})") from None
     finally:
         plt.close(fig)
     return out
