@@ -7,7 +7,10 @@ assembly builds (see ``SPARSE_FROM``).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import os
+import sys
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -23,13 +26,6 @@ from .geometry import FloatArray
 SPARSE_FROM = 240
 
 Matrix = Any  # a dense 2-D FloatArray or a scipy sparse matrix
-
-#: A sparse KKT matrix is factored shifted by this (relative to its largest
-#: entry; +1 on the primal diagonal, -1 on the dual): a round-off perturbation
-#: that keeps an exactly singular system (indeterminate contact forces, a tied
-#: face) away from SuperLU, which on such a matrix fails inside BLAS and BLAS
-#: prints on stdout. Refinement against the unshifted matrix takes the shift out.
-ROUND_OFF_SHIFT = 1e-15
 
 
 def is_sparse(a: Matrix) -> bool:
@@ -132,23 +128,16 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
     round-off's huge step along the singular directions)."""
     size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
     scale = max(1.0, float(abs(K).max()))
-    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
     if not prox:
-        # plain factors, with a few steps of iterative refinement (long chains
-        # need them). A sparse K is shifted by round-off (ROUND_OFF_SHIFT),
-        # which makes it quasi-definite: SuperLU, given an exactly singular
-        # matrix (indeterminate forces), can fail inside BLAS, which then
-        # prints on our stdout.
-        plain = (
-            sp.csc_matrix(K + sp.diags(ROUND_OFF_SHIFT * scale * signs)) if sp.issparse(K) else K
-        )
-        step = _refined(K, _factored(plain), rhs, 1e-8 * size, 4)
+        # plain factors, with a few steps of iterative refinement (long chains need them)
+        step = _refined(K, _factored(K), rhs, 1e-8 * size, 4)
         if step is not None:
             return step
     # Quasi-definite regularization, then refinement against K itself: a
     # proximal-point iteration that converges on a consistent system to the
     # solution nearest the current point, as a least-squares step does.
     eps = max(prox, 1e-12 * scale)
+    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
     regular = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
     step = _refined(K, _factored(regular), rhs, 1e-10 * size, 40)
     if step is not None:
@@ -163,7 +152,8 @@ def _factored(K: Matrix) -> Any:
     exactly singular."""
     try:
         if sp.issparse(K):
-            return spla.splu(sp.csc_matrix(K)).solve
+            with _silenced():  # SuperLU on an exactly singular K fails inside BLAS, which prints
+                return spla.splu(sp.csc_matrix(K)).solve
         # LAPACK directly: scipy's wrappers cost more than a small system's solve
         lu, piv, info = lapack.dgetrf(K)
     except (RuntimeError, ValueError, np.linalg.LinAlgError):
@@ -175,6 +165,29 @@ def _factored(K: Matrix) -> Any:
         return np.asarray(lapack.dgetrs(lu, piv, b)[0])
 
     return solve
+
+
+@contextmanager
+def _silenced() -> Iterator[None]:
+    """Standard output and error of the process routed to /dev/null (file
+    descriptors 1 and 2, where C libraries write): a KKT system of a tied
+    face or of indeterminate forces is singular by construction, SuperLU then
+    fails, as it should, but OpenBLAS prints its complaint first; we catch
+    the failure and take the regularized step, and nothing but our own words
+    may reach the user. Only around a factorization, which prints nothing else."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, null):
+            os.close(fd)
 
 
 def _refined(K: Matrix, solve: Any, rhs: FloatArray, tol: float, rounds: int) -> FloatArray | None:
