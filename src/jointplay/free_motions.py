@@ -114,15 +114,15 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
     blocks = _row_blocks(C)
     store: dict[int, tuple[tuple[int, ...], FloatArray]] = dict(enumerate(blocks))
     on: list[set[int]] = [set() for _ in range(n)]  # body -> ids of its row blocks
+    near: list[set[int]] = [set() for _ in range(n)]  # body -> bodies its rows touch
     for b, (bodies, _rows) in store.items():
         for body in bodies:
             on[body].add(b)
+            near[body].update(bodies)
+    for body in range(n):
+        near[body].discard(body)
     next_id = len(store)
-
-    def degree(body: int) -> int:
-        return len({o for b in on[body] for o in store[b][0]})
-
-    heap = [(degree(j), j) for j in range(n)]
+    heap = [(len(near[j]), j) for j in range(n)]
     heapq.heapify(heap)
     done = np.zeros(n, dtype=bool)
     out = _Elimination()
@@ -131,27 +131,27 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
         d, j = heapq.heappop(heap)
         if done[j]:
             continue
-        if d != degree(j):  # stale entry: its degree changed since
-            heapq.heappush(heap, (degree(j), j))
+        if d != len(near[j]):  # stale entry: its degree changed since
+            heapq.heappush(heap, (len(near[j]), j))
             continue
         done[j] = True
         out.order.append(j)
-        mine = sorted(on[j])
-        others = tuple(sorted({o for b in mine for o in store[b][0]} - {j}))
+        others = tuple(sorted(near[j]))
         where = {body: i for i, body in enumerate((j, *others))}
-        R = np.zeros((sum(store[b][1].shape[0] for b in mine), 6 * (1 + len(others))))
+        mine = [store.pop(b) for b in sorted(on[j])]
+        R = np.zeros((sum(rows.shape[0] for _, rows in mine), 6 * (1 + len(others))))
         at = 0
-        for b in mine:
-            bodies, rows = store.pop(b)
-            for body in bodies:
-                if body != j:
-                    on[body].discard(b)
-            for k, body in enumerate(bodies):
-                R[at : at + rows.shape[0], 6 * where[body] : 6 * where[body] + 6] = rows[
-                    :, 6 * k : 6 * k + 6
-                ]
+        for bodies, rows in mine:
+            cols = [6 * where[body] + k for body in bodies for k in range(6)]
+            R[at : at + rows.shape[0], cols] = rows
             at += rows.shape[0]
+        for body in others:
+            on[body] -= on[j]
+            near[body].discard(j)
+            near[body].update(others)
+            near[body].discard(body)
         on[j].clear()
+        near[j].clear()
         U, sv, Vt, info = lapack.dgesdd(R[:, :6], full_matrices=1)
         if info:  # pragma: no cover - LAPACK's SVD did not converge
             U, sv, Vt = np.linalg.svd(R[:, :6], full_matrices=True)
@@ -172,7 +172,7 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
                     on[body].add(next_id)
                 next_id += 1
             for body in others:
-                heapq.heappush(heap, (degree(body), body))
+                heapq.heappush(heap, (len(near[body]), body))
     return out
 
 
