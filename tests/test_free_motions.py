@@ -101,3 +101,38 @@ def test_a_mechanism_with_no_free_motion_has_no_deficit() -> None:
     C, m = constraint_rows(tube_string(200, closed=True))
     assert column_rank_deficit(C, m) == 0
     assert null_basis(C, m).shape == (m, 0)
+
+
+def test_a_body_with_no_rows_is_free_and_nothing_is_printed(
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    """A row subset (a face's rows, say) may leave a body untouched: all six
+    of its motions are free, and LAPACK, which prints on stdout when given a
+    block of no rows, is not called on it."""
+    rng = np.random.default_rng(1)
+    C = np.zeros((10, 18))
+    C[:, :12] = rng.standard_normal((10, 12))  # bodies 0 and 1; body 2 has no rows
+    N = null_basis(sp.csr_matrix(C), 18)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+    assert N.shape[1] == 6 + 2  # body 2's six motions and two of 0 and 1 together
+    assert_same_null_space(sp.csr_matrix(C), 18)
+
+
+def test_repeated_entries_add_up_and_the_matrix_is_left_alone() -> None:
+    C = sp.csr_matrix(
+        (np.array([1.0, 1.0, 2.0]), np.array([0, 0, 1]), np.array([0, 2, 3])), shape=(2, 6)
+    )  # row 0 holds column 0 twice: 1 + 1
+    before = (C.data.copy(), C.indices.copy(), C.indptr.copy())
+    N = null_basis(C, 6).toarray()
+    assert N.shape[1] == 4
+    assert np.allclose(C.toarray() @ N, 0.0)
+    for got, kept in zip((C.data, C.indices, C.indptr), before, strict=True):
+        assert np.array_equal(got, kept)
+
+
+def test_columns_that_are_not_six_per_body_are_refused() -> None:
+    with pytest.raises(ValueError, match="6 columns per body"):
+        null_basis(sp.csr_matrix(np.ones((1, 7))), 7)
+    with pytest.raises(ValueError, match="6 columns per body"):
+        column_rank_deficit(sp.csr_matrix(np.ones((1, 12))), 6)

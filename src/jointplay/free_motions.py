@@ -13,8 +13,12 @@ j, pass on to its neighbours. A free direction of body j becomes a free
 motion of the mechanism by back-substitution through the pivots of the
 bodies eliminated before it that it moves.
 
-Singular values are those of C's blocks, not of ``C^T C``: the threshold
-means what the dense SVD's does. Bodies go in a minimum-degree order, so a
+Singular values are those of C's blocks, not of ``C^T C``, so none is lost
+to squaring. A block's singular value below the threshold is a motion that C
+moves less than that, so nothing held is called free; but a motion held only
+through many bodies together (a chain whose links each halve a motion holds
+it 2^-n) may be held far less than any one block shows: the dense SVD may
+call it free and this elimination held. Bodies go in a minimum-degree order, so a
 chain or a tree makes no fill; a free motion that one body makes alone (a
 shaft's spin) stays a vector on that body. The basis returned is sparse and
 orthonormal.
@@ -61,9 +65,9 @@ def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
     """C's rows grouped by the set of bodies they touch, each group a dense
     block over those bodies' columns (vectorized: a large mechanism has
     hundreds of thousands of rows)."""
-    C = sp.csr_matrix(C)
+    C = sp.csr_matrix(C, copy=True)  # the caller's matrix stays as it is
+    C.sum_duplicates()  # repeated entries add up, as in any sparse product
     C.eliminate_zeros()
-    C.sort_indices()
     row_of = np.repeat(np.arange(C.shape[0]), np.diff(C.indptr))
     body_of = C.indices // 6
     # each row's bodies, as (row, body) pairs in order
@@ -152,9 +156,12 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
             near[body].discard(body)
         on[j].clear()
         near[j].clear()
-        U, sv, Vt, info = lapack.dgesdd(R[:, :6], full_matrices=1)
-        if info:  # pragma: no cover - LAPACK's SVD did not converge
-            U, sv, Vt = np.linalg.svd(R[:, :6], full_matrices=True)
+        if not R.shape[0]:  # no rows left on j (LAPACK, given 0 rows, prints on stdout)
+            U, sv, Vt = np.zeros((0, 0)), np.zeros(0), np.eye(6)
+        else:
+            U, sv, Vt, info = lapack.dgesdd(R[:, :6], full_matrices=1)
+            if info:  # pragma: no cover - LAPACK's SVD did not converge
+                U, sv, Vt = np.linalg.svd(R[:, :6], full_matrices=True)
         rank = int(np.sum(sv > tol))
         if rank < 6:
             out.free.append((j, Vt[rank:].T.copy()))
@@ -174,6 +181,12 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
             for body in others:
                 heapq.heappush(heap, (len(near[body]), body))
     return out
+
+
+def _checked(C: sp.spmatrix, m: int) -> sp.csr_matrix:
+    if m % 6 or C.shape[1] != m:
+        raise ValueError(f"expected 6 columns per body and {m} in all, got {C.shape[1]}")
+    return sp.csr_matrix(C)
 
 
 def _largest_singular_value(C: sp.csr_matrix) -> float:
@@ -196,8 +209,9 @@ def _largest_singular_value(C: sp.csr_matrix) -> float:
 
 def null_basis(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> sp.csc_matrix:
     """Sparse orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``
-    (singular values below ``rcond`` times C's largest count as zero)."""
-    C = sp.csr_matrix(C)
+    (a singular value of a body's block below ``rcond`` times C's largest
+    counts as zero)."""
+    C = _checked(C, m)
     if C.shape[0] == 0 or C.nnz == 0:
         return sp.identity(m, format="csc")
     s_max = _largest_singular_value(C)
@@ -217,7 +231,7 @@ def null_basis(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> sp.csc_matrix:
 
 def column_rank_deficit(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> int:
     """How many independent motions ``C`` does not move (0: its rows pin every unknown)."""
-    C = sp.csr_matrix(C)
+    C = _checked(C, m)
     if C.shape[0] == 0 or C.nnz == 0:
         return m
     elim = _eliminate(C, m, rcond, _largest_singular_value(C))
