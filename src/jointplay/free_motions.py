@@ -277,29 +277,12 @@ def _back_substitute(
 def _orthonormal(vectors: list[dict[int, FloatArray]], m: int) -> sp.csc_matrix:
     """The vectors (body -> 6 entries) as orthonormal sparse columns: those
     that share a body are orthonormalized together, the others alone."""
-    parent = list(range(len(vectors)))
-
-    def root(a: int) -> int:
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    owner: dict[int, int] = {}
-    for a, vec in enumerate(vectors):
-        for body in vec:
-            if body in owner:
-                parent[root(a)] = root(owner[body])
-            else:
-                owner[body] = a
-    clusters: dict[int, list[int]] = {}
-    for a in range(len(vectors)):
-        clusters.setdefault(root(a), []).append(a)
+    clusters = _sharing([list(vec) for vec in vectors])
     rows: list[IntArray] = []
     cols: list[IntArray] = []
     vals: list[FloatArray] = []
     p = 0
-    for members in clusters.values():
+    for members in clusters:
         bodies = sorted({body for a in members for body in vectors[a]})
         where = {body: i for i, body in enumerate(bodies)}
         X = np.zeros((6 * len(bodies), len(members)))
@@ -325,7 +308,19 @@ def column_groups(basis: sp.spmatrix) -> list[tuple[IntArray, IntArray]]:
     its bodies: ``[(columns, bodies), ...]`` (to describe them one group at a
     time, in the few bodies each moves)."""
     N = sp.csc_matrix(basis)
-    parent = list(range(N.shape[1]))
+    bodies_of = [
+        np.unique(N.indices[N.indptr[c] : N.indptr[c + 1]] // 6) for c in range(N.shape[1])
+    ]
+    return [
+        (np.array(cols, dtype=np.intp), np.unique(np.concatenate([bodies_of[c] for c in cols])))
+        for cols in _sharing([b.tolist() for b in bodies_of])
+    ]
+
+
+def _sharing(bodies_of: list[list[int]]) -> list[list[int]]:
+    """Items (each with the bodies it moves) in groups: two items that move a
+    common body, directly or through others, are in one group (union-find)."""
+    parent = list(range(len(bodies_of)))
 
     def root(a: int) -> int:
         while parent[a] != a:
@@ -334,19 +329,13 @@ def column_groups(basis: sp.spmatrix) -> list[tuple[IntArray, IntArray]]:
         return a
 
     owner: dict[int, int] = {}
-    bodies_of = []
-    for c in range(N.shape[1]):
-        bodies = np.unique(N.indices[N.indptr[c] : N.indptr[c + 1]] // 6)
-        bodies_of.append(bodies)
-        for body in bodies.tolist():
+    for a, bodies in enumerate(bodies_of):
+        for body in bodies:
             if body in owner:
-                parent[root(c)] = root(owner[body])
+                parent[root(a)] = root(owner[body])
             else:
-                owner[body] = c
+                owner[body] = a
     groups: dict[int, list[int]] = {}
-    for c in range(N.shape[1]):
-        groups.setdefault(root(c), []).append(c)
-    return [
-        (np.array(cols, dtype=np.intp), np.unique(np.concatenate([bodies_of[c] for c in cols])))
-        for cols in groups.values()
-    ]
+    for a in range(len(bodies_of)):
+        groups.setdefault(root(a), []).append(a)
+    return list(groups.values())
