@@ -133,18 +133,45 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
         step = _refined(K, _factored(K), rhs, 1e-8 * size, 4)
         if step is not None:
             return step
-    # Quasi-definite regularization, then refinement against K itself: a
-    # proximal-point iteration that converges on a consistent system to the
-    # solution nearest the current point, as a least-squares step does.
-    eps = max(prox, 1e-12 * scale)
-    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
-    regular = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
-    step = _refined(K, _factored(regular), rhs, 1e-10 * size, 40)
-    if step is not None:
+    # Quasi-definite regularization, refined against K: on a consistent
+    # system, the solution nearest the current point
+    tol = 1e-10 * size
+    step = proximal_solve(K, rhs, n_primal, max(prox, 1e-12 * scale), tol)
+    if step is not None and float(np.max(np.abs(rhs - K @ step))) <= tol:
         return step
     if not sp.issparse(K):
         return np.asarray(np.linalg.lstsq(K, rhs, rcond=1e-13)[0])
     raise SingularSystemError
+
+
+def proximal_solve(
+    K: Matrix, rhs: FloatArray, n_primal: int, eps: float, tol: float = 0.0
+) -> FloatArray | None:
+    """Quasi-definite regularization (``+eps`` on the first ``n_primal``
+    unknowns, ``-eps`` on the others), then refinement against K itself: a
+    proximal-point iteration that converges on a consistent system to the
+    solution nearest 0, as a least-squares step does. Stops when
+    ``|K step - rhs| <= tol``, else returns the best of 40 rounds (None if
+    the regularized matrix cannot be factored): on a system consistent only
+    up to round-off, the caller checks what it needs."""
+    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
+    regular = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
+    solve = _factored(regular)
+    if solve is None:
+        return None
+    step = np.zeros(K.shape[0])
+    best, best_miss = step, float("inf")
+    for _ in range(41):
+        miss = rhs - K @ step
+        size = float(np.max(np.abs(miss), initial=0.0))
+        if size < best_miss:
+            best, best_miss = step, size
+        if size <= tol:
+            break
+        step = step + np.asarray(solve(miss), dtype=float)
+        if not np.all(np.isfinite(step)):
+            break
+    return np.asarray(best, dtype=np.float64)
 
 
 def _factored(K: Matrix) -> Any:

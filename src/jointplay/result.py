@@ -144,6 +144,16 @@ class BodyResult:
 
 
 @dataclass(frozen=True)
+class _Known:
+    """A lazy value already known (what a pickled ``Result`` keeps)."""
+
+    value: tuple[str, ...]
+
+    def __call__(self) -> tuple[str, ...]:
+        return self.value
+
+
+@dataclass(frozen=True)
 class Result:
     status: str
     potential_energy: float  # N*mm
@@ -184,6 +194,15 @@ class Result:
     @property
     def free_motions(self) -> tuple[str, ...]:
         return self.describe_free()
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled as plain data: the lazy parts (closures over the solver's
+        workspace) are evaluated and travel as values."""
+        state = dict(self.__dict__)
+        state["describe_free"] = _Known(self.free_motions)
+        state["_linearization"] = self.linearization
+        state["linearize"] = None
+        return state
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document of ``jointplay solve --json``."""

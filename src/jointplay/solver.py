@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from . import conic, linalg
+from . import conic, forces, linalg
 from .assembly import Assembly, BallStack, IntArray, assemble
 from .errors import SolverError, UnboundedMechanismError
 from .geometry import FloatArray, describe_motion
@@ -75,6 +75,10 @@ class SolverSettings:
     #: (the loads, or a contact force if larger).
     feasibility_tolerance: float = 1e-9
     equilibrium_tolerance: float = 1e-8
+    #: Regularization of a singular KKT system, relative to its largest
+    #: entry: small against every pivot of a well-posed one, large against
+    #: round-off (its refinement then converges to the least-norm solution).
+    kkt_round_off: float = 1e-12
 
 
 @dataclass
@@ -315,8 +319,10 @@ class Workspace:
         g_hat = g / g_norm if g_norm else g
         point = self._optimum(g_hat, self.softness(g_norm))
         assert point.certificate is not None
+        point, nu = self._split(g_hat, point)
+        assert point.certificate is not None
         to_newton = g_norm / self.asm.s  # scaled multipliers -> N
-        rigid = self._rigid_multipliers(g_hat, point) * to_newton
+        rigid = nu * to_newton
         elapsed = time.perf_counter() - start
         result = build_result(
             self.asm,
@@ -342,6 +348,26 @@ class Workspace:
                 + " If not, please report this model."
             )
         return result
+
+    def _split(self, g_hat: FloatArray, point: _Point) -> tuple[_Point, FloatArray]:
+        """The certified optimum with the least-squares split of its forces
+        (``forces.least_squares_split``), and the rigid rows' multipliers.
+        The solver's own split stays only if that one does not certify."""
+        if not np.any(g_hat):
+            return point, np.zeros(self.E.shape[0])
+        st = self.settings
+        apex = st.feasibility_tolerance * self._max_radius  # positions' round-off
+        nu = self._rigid_multipliers(g_hat, point)
+        split = forces.least_squares_split(
+            self.asm, point.x, point.lam, point.f, nu, g_hat, apex, st
+        )
+        if split is not None:
+            trial = replace(point, lam=split.lam, f=split.f, certificate=None)
+            cert = self._certify(g_hat, trial)
+            if cert.certified:
+                trial.certificate = cert
+                return trial, split.nu
+        return point, nu
 
     def _rigid_multipliers(self, g_hat: FloatArray, point: _Point) -> FloatArray:
         """Forces in the rigid rows (scaled): what the contacts leave of the loads.
