@@ -153,20 +153,28 @@ def test_bad_new_entries_are_model_errors(change: dict[str, Any], message: str) 
         model_from_dict(spherical_shaft(**change))
 
 
-def test_an_answer_that_does_not_balance_per_body_is_declined() -> None:
-    """A property draw whose least-norm-face forces balanced a body only to
-    1.7e-8 of the largest force (newtons, per body) is declined, not printed."""
-    import yaml
+def test_the_certificate_refuses_forces_that_leave_a_body_unbalanced() -> None:
+    """The one certificate (``certificate.check``, shared by every route and
+    by batches) checks each body's balance in newtons: forces off by 2e-8 of
+    the largest force fail it, on the one body they act on."""
+    from jointplay import certificate
+    from jointplay.solver import Workspace
 
-    path = (
-        Path(__file__).parent
-        / "property_cases"
-        / "declined"
-        / ("unbalanced_on_a_weakly_held_screw.yaml")
-    )
-    model = jointplay.model_from_dict(yaml.safe_load(path.read_text()))
-    with pytest.raises(jointplay.SolverError, match="balance the loads on each body only to"):
-        jointplay.solve(model)
+    ws = Workspace.of(model_from_dict(spherical_shaft()))
+    g = ws.asm.g / np.linalg.norm(ws.asm.g)
+    point = ws._optimum(g)
+    args = (g[None], point.x[None], point.lam[None], point.f[None], ws.sigma[None])
+    good = certificate.check(ws, *args)
+    assert good.passed(ws.settings, ws._max_radius)[0]
+    assert good.balance[0] < 1e-14
+    # the ball l1 pushes 2e-8 (of the largest force) harder, along its direction
+    lam, f = point.lam.copy(), point.f.copy()
+    grow = 1 + 2e-8 * float(np.max(point.lam)) / lam[0]
+    lam[0] *= grow
+    f[: ws.stack.k[0]] *= grow
+    bad = certificate.check(ws, g[None], point.x[None], lam[None], f[None], ws.sigma[None])
+    assert not bad.passed(ws.settings, ws._max_radius)[0]
+    assert 1e-8 < bad.balance[0] < 1e-7
 
 
 FEET = [(120.0, 80.0), (-120.0, 80.0), (-120.0, -80.0), (120.0, -80.0), (0.0, 80.0), (0.0, -80.0)]
@@ -289,8 +297,10 @@ def test_a_result_pickles_as_plain_data() -> None:
     model = jointplay.load(Path(PAPER).parent / "studies" / "wobbly_table.yaml")
     result = jointplay.solve(model, case="leaning on foot4")
     copy_ = pickle.loads(pickle.dumps(result))
-    assert copy_.free_motions == result.free_motions == (
-        "body 'table': rotation about the global Z axis",
+    assert (
+        copy_.free_motions
+        == result.free_motions
+        == ("body 'table': rotation about the global Z axis",)
     )
     assert copy_.linearization == result.linearization
     assert copy_.to_dict() == result.to_dict()

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from . import linalg
+from . import certificate, linalg
 from .assembly import Assembly, BallStack, IntArray
 from .errors import SolverError
 from .geometry import FloatArray
@@ -150,11 +150,8 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
         if point.active is not None:
             solved_by_set.setdefault(point.active, []).append(np.array([first]))
 
-    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f, r)
-    st = ws.settings
-    if np.any(feas > st.feasibility_tolerance * ws._max_radius) or np.any(
-        residual > st.equilibrium_tolerance
-    ):  # pragma: no cover - each row was certified on its own path
+    passed, feas, residual = _certificates(ws, g_hat, sigma, x, lam, f, r)
+    if not np.all(passed):  # pragma: no cover - each row was certified on its own path
         raise SolverError("a batch answer failed its final certificate; please report this model")
     return BatchSolution(
         asm=ws.asm,
@@ -243,15 +240,8 @@ def _newton_batch(
         f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
         inside = (f_norm < (1.0 - 1e-9) * lam[:, list(linear)]) | (lin.k == 0)
         strict &= np.all(inside, axis=1)
-    feas, residual = _certificates(ws, g_hat, sigma, x, lam, f, r)
-    st = ws.settings
-    ok = (
-        conv
-        & strict
-        & (feas <= st.feasibility_tolerance * ws._max_radius)
-        & (residual <= st.equilibrium_tolerance)
-    )
-    return ok, x, lam, f
+    passed, _, _ = _certificates(ws, g_hat, sigma, x, lam, f, r)
+    return conv & strict & passed, x, lam, f
 
 
 def _newton_rows(
@@ -351,21 +341,8 @@ def _certificates(
     lam: FloatArray,
     f: FloatArray,
     r: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
-    """Per row: feasibility (scaled, against the row's radii ``r``) and
-    relative equilibrium residual."""
-    B = x.shape[0]
-    stack = ws.stack
-    if len(stack.k):
-        _, _, level = stack.levels(x)
-        feas = np.max(level - r - sigma * np.maximum(lam, 0.0), axis=1)
-        residual_vec = g_hat - stack.adjoint(f, lam)
-    else:
-        feas = np.zeros(B)
-        residual_vec = g_hat.copy()
-    if len(ws.E):
-        feas = np.maximum(feas, np.max(np.abs(x @ ws.E.T), axis=1))
-    residual_vec = ws._rigid_residual(residual_vec)
-    residual = np.linalg.norm(residual_vec, axis=1) / ws._balance_scale(lam)
-    residual[~np.any(g_hat, axis=1)] = 0.0
-    return feas, residual
+) -> tuple[BoolArray, FloatArray, FloatArray]:
+    """Per row, from the one certificate (against the row's radii ``r``):
+    whether it passes, its feasibility (scaled) and its relative balance."""
+    checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
+    return checks.passed(ws.settings, ws._max_radius), checks.feasibility, checks.balance

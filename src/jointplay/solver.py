@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from . import conic, forces, linalg
+from . import certificate, conic, forces, linalg
 from .assembly import Assembly, BallStack, IntArray, assemble
 from .errors import SolverError, UnboundedMechanismError
 from .geometry import FloatArray, describe_motion
@@ -208,7 +208,7 @@ class Workspace:
         self.Eq = linalg.vstack([self.E, self.K], self.m)
         largest = float(np.max(self.stack.r)) if len(self.stack.r) else 0.0
         self._max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
-        self._rigid_basis = None if self.sparse else _range_basis(self.E.T)
+        self.balance = certificate.Balance(self)
         self._phase1_data: _ConeProgram | None = None
         self._faces: dict[_FaceKey, _Face] = {}
         self._last: _Point | None = None
@@ -227,25 +227,6 @@ class Workspace:
         stack = self.stack
         C = linalg.vstack([stack.A, stack.B[np.flatnonzero(stack.has_offset)], self.E], self.m)
         return linalg.null_space(C, self.m, self.settings.free_motion_rcond)
-
-    def _balance_scale(self, lam: FloatArray) -> FloatArray:
-        """The largest force in the balance (scaled; the unit loads count as 1),
-        per row of ``lam``: what an equilibrium residual is relative to, since
-        round-off grows with the contact forces (long levers make them large)."""
-        size = np.abs(lam) * self.stack.cone_size
-        return np.asarray(np.maximum(1.0, np.max(size, axis=-1, initial=0.0)), dtype=float)
-
-    def _rigid_residual(self, rest: FloatArray) -> FloatArray:
-        """What rigid joints cannot carry of the generalized forces ``rest``
-        (one per row): the residual of their least-squares share."""
-        if not self.E.shape[0]:
-            return rest
-        if self._rigid_basis is not None:
-            Q = self._rigid_basis
-            return rest - (rest @ Q) @ Q.T
-        rows = np.atleast_2d(rest)
-        out = np.array([r - linalg.adjoint(self.E, linalg.lstsq(self.E.T, r)) for r in rows])
-        return out if rest.ndim == 2 else out[0]
 
     def _check_driven(self, g: FloatArray) -> None:
         if self.N.shape[1] == 0:
@@ -363,7 +344,7 @@ class Workspace:
         )
         if split is not None:
             trial = replace(point, lam=split.lam, f=split.f, certificate=None)
-            cert = self._certify(g_hat, trial)
+            cert = self._certify(g_hat, trial, split.nu)
             if cert.certified:
                 trial.certificate = cert
                 return trial, split.nu
@@ -1012,46 +993,26 @@ class Workspace:
         return Vt[keep], (U[:, keep].T @ c) / sv[keep]
 
     # -- certificate --------------------------------------------------------
-    def _certify(self, g_hat: FloatArray, point: _Point) -> Certificate:
-        x, lam, f = point.x, point.lam, point.f
-        stack = self.stack
-        v, rho, level = stack.levels(x)
-        reach = stack.r + self.sigma * np.maximum(lam, 0.0)  # a compliant contact may go past r
-        feas = float(np.max(level - reach)) if len(level) else 0.0
-        if self.E.shape[0]:
-            feas = max(feas, float(np.max(np.abs(self.E @ x))))
-        # rigid joints carry any force
-        residual_vec = self._rigid_residual(g_hat - stack.adjoint(f, lam))
-        loaded = bool(np.any(g_hat))
-        residual = (
-            float(np.linalg.norm(residual_vec)) / float(self._balance_scale(lam)) if loaded else 0.0
-        )
-        if len(lam):
-            # lam_i (reach_i - B_i x) - f_i . A_i x: zero iff the force is
-            # complementary to the slack and along the contact's direction
-            gap = np.abs(lam) * np.abs(reach - level) + np.abs(lam * rho - stack.segment_sum(f * v))
-            comp = float(np.max(gap)) / self._max_radius
-            min_force = float(np.min(lam))
-            # the force lies in its cone: |f_i| <= lam_i
-            outside = float(np.max(np.sqrt(stack.segment_sum(f * f)) - lam))
-        else:
-            comp = min_force = outside = 0.0
-        lam_scale = max(1.0, float(np.max(np.abs(lam)))) if len(lam) else 1.0
-        st = self.settings
-        certified = (
-            feas <= st.feasibility_tolerance * self._max_radius
-            and residual <= st.equilibrium_tolerance
-            and min_force >= -st.equilibrium_tolerance * lam_scale
-            and outside <= st.equilibrium_tolerance * lam_scale
-            and comp <= st.equilibrium_tolerance * lam_scale
+    def _certify(
+        self, g_hat: FloatArray, point: _Point, nu: FloatArray | None = None
+    ) -> Certificate:
+        """The certificate (``certificate.check``) of one answer."""
+        c = certificate.check(
+            self,
+            g_hat[None],
+            point.x[None],
+            point.lam[None],
+            point.f[None],
+            self.sigma[None],
+            nu=None if nu is None else nu[None],
         )
         return Certificate(
-            certified=bool(certified),
+            certified=bool(c.passed(self.settings, self._max_radius)[0]),
             method=point.method,
-            feasibility_mm=max(feas, 0.0) * self.asm.s,
-            equilibrium_residual=residual,
-            complementarity=comp,
-            min_force=min_force,
+            feasibility_mm=max(float(c.feasibility[0]), 0.0) * self.asm.s,
+            equilibrium_residual=float(c.balance[0]),
+            complementarity=float(c.complementarity[0]),
+            min_force=float(c.min_force[0]),
             iterations=point.iterations,
         )
 
@@ -1074,15 +1035,6 @@ def _csc(a: FloatArray) -> sp.csc_matrix:
     indptr = np.zeros(a.shape[1] + 1, dtype=np.int64)
     np.cumsum(np.bincount(col, minlength=a.shape[1]), out=indptr[1:])
     return sp.csc_matrix((a[row, col], row.astype(np.int64), indptr), shape=a.shape)
-
-
-def _range_basis(a: FloatArray, rcond: float = 1e-12) -> FloatArray:
-    """Orthonormal basis of the column space of ``a``."""
-    if a.shape[1] == 0:
-        return np.zeros((a.shape[0], 0))
-    U, sv, _ = np.linalg.svd(a, full_matrices=False)
-    keep = sv > rcond * sv[0] if sv.size and sv[0] > 0 else np.zeros(0, dtype=bool)
-    return U[:, keep]
 
 
 def _column_max(a: Matrix, m: int) -> FloatArray:
