@@ -195,6 +195,7 @@ def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
         x,
         lam,
         nu,
+        ws.settings,
     )
     assert conv.tolist() == [True, False, True]
     np.testing.assert_allclose(x[[0, 2]], solved.x[[0, 2]], rtol=0, atol=1e-12)

@@ -20,7 +20,8 @@ from .joints import JOINT_TYPES, Joint
 from .model import Body, Load, Model
 from .modelfile import load, model_from_dict
 from .result import BodyResult, Certificate, ContactResult, JointResult, Result
-from .solver import SolverSettings, Workspace, solve, solve_cases
+from .settings import SolverSettings
+from .solver import Workspace, solve, solve_cases
 
 if TYPE_CHECKING:
     from .contributions import Contributions, ContributionsResult

@@ -35,6 +35,7 @@ from .geometry import FloatArray, cross, skew
 from .joints import Contact, Joint
 from .linalg import Matrix
 from .model import Load, Model
+from .settings import DEFAULT
 
 IntArray = NDArray[np.intp]
 
@@ -285,7 +286,8 @@ class BallStack:
         """Fraction of each cone's play used at ``level = |A_i x| + B_i x``, in
         [0, 1] (a limit with no play counts as used as soon as it is reached)."""
         r = np.where(self.r > 0, self.r, 1.0)
-        return np.clip(np.where(self.r > 0, level / r, level >= -1e-12), 0.0, 1.0)
+        reached = level >= -DEFAULT.zero_play_reach
+        return np.clip(np.where(self.r > 0, level / r, reached), 0.0, 1.0)
 
 
 @dataclass(frozen=True)

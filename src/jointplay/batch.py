@@ -22,16 +22,14 @@ from . import certificate, linalg
 from .assembly import Assembly, BallStack, IntArray
 from .errors import SolverError
 from .geometry import FloatArray
+from .settings import TINY
 
 BoolArray = NDArray[np.bool_]
 
 if TYPE_CHECKING:
+    from .settings import SolverSettings
     from .solver import Workspace, _FaceKey
 
-#: Newton steps tried on a batch before its leftovers go to the full solver ...
-MAX_NEWTON = 12
-#: ... and after this many, rows still far from converging are dropped.
-GIVE_UP_AFTER = 6
 #: Samples per batched linear solve (bounds the memory of the (B, n, n) stack).
 CHUNK_ENTRIES = 1 << 22
 
@@ -105,7 +103,7 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
             raise ValueError("radii must be finite and >= 0")
         varied = True
     # the nearest solved sample (loads, and plays when they vary) starts Newton
-    features = np.hstack([g_hat, r / max(ws._max_radius, 1e-300)]) if varied else g_hat
+    features = np.hstack([g_hat, r / max(ws._max_radius, TINY)]) if varied else g_hat
 
     x = np.zeros((B, ws.m))
     lam = np.zeros((B, n_balls))
@@ -226,6 +224,7 @@ def _newton_batch(
             x[sl],
             lam_s[sl],
             nu[sl],
+            ws.settings,
         )
 
     lam[:, list(surface)] = lam_s
@@ -234,11 +233,12 @@ def _newton_batch(
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
     lam_a = lam[:, list(surface) + list(linear)]
-    strict = np.min(lam_a, axis=1) > 1e-9 * np.max(lam_a, axis=1) if lam_a.shape[1] else conv
+    positive = ws.settings.positive_force
+    strict = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1) if lam_a.shape[1] else conv
     if linear:
         lin = stack.take(linear)
         f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
-        inside = (f_norm < (1.0 - 1e-9) * lam[:, list(linear)]) | (lin.k == 0)
+        inside = (f_norm < (1.0 - positive) * lam[:, list(linear)]) | (lin.k == 0)
         strict &= np.all(inside, axis=1)
     passed, _, _ = _certificates(ws, g_hat, sigma, x, lam, f, r)
     return conv & strict & passed, x, lam, f
@@ -255,6 +255,7 @@ def _newton_rows(
     x: FloatArray,
     lam: FloatArray,
     nu: FloatArray,
+    settings: SolverSettings,
 ) -> BoolArray:
     """Newton on the KKT equations (see ``solver._newton``), rows in place,
     each row with its own radii ``r`` (B, na) and right sides ``e`` (B, ne);
@@ -268,7 +269,7 @@ def _newton_rows(
     K0[m + na :, :m] = Eq
     todo = np.arange(B)
     conv = np.zeros(B, dtype=bool)
-    for it in range(MAX_NEWTON + 1):
+    for it in range(settings.batch_newton_steps + 1):
         xs = x[todo]
         v = xs @ A.T
         rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
@@ -290,11 +291,11 @@ def _newton_rows(
             axis=1,
         )
         err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
-        done = err <= 1e-14
+        done = err <= settings.round_off
         conv[todo[done]] = True
         keep = ~done
-        if it >= GIVE_UP_AFTER:  # far from quadratic convergence: a wrong start or set
-            keep &= err <= 1e-4
+        if it >= settings.batch_give_up:  # far from quadratic convergence: a wrong start or set
+            keep &= err <= settings.batch_continue
         if not np.any(keep):
             break
         todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]

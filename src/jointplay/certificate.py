@@ -33,7 +33,8 @@ from . import linalg
 from .geometry import FloatArray
 
 if TYPE_CHECKING:
-    from .solver import SolverSettings, Workspace
+    from .settings import SolverSettings
+    from .solver import Workspace
 
 
 @dataclass(frozen=True)
@@ -74,13 +75,18 @@ class Balance:
         self.per_contact = np.r_[np.ones(3), np.full(3, 1.0 / asm.ell)]
 
     @cached_property
-    def joint_sum(self) -> sp.csr_matrix:
-        """(joints, contacts): which contacts make each joint's reaction."""
+    def joint_sum(self) -> linalg.Matrix:
+        """(joints, contacts): which contacts make each joint's reaction
+        (dense for a small mechanism: scipy's constructors cost more than
+        its whole certificate)."""
         T = self.asm.tables
         nc = len(T.joint_of)
-        return sp.csr_matrix(
-            (np.ones(nc), (T.joint_of, np.arange(nc))), shape=(int(T.centre.shape[0]), nc)
-        )
+        shape = (int(T.centre.shape[0]), nc)
+        if self.asm.sparse:
+            return sp.csr_matrix((np.ones(nc), (T.joint_of, np.arange(nc))), shape=shape)
+        out = np.zeros(shape)
+        out[T.joint_of, np.arange(nc)] = 1.0
+        return out
 
     def rigid_multipliers(self, rest: FloatArray) -> FloatArray:
         """(B, rigid rows): what the rigid rows carry of the generalized

@@ -4,7 +4,7 @@ Start from the small-displacement answer. At the current placement of every
 body (``finite.placements``: P -> c_b + V + R(Omega)(P - c_b)), linearize
 each contact's exact cone (``Contact.exact_parts``) and the loads' virtual
 work, and solve that cone program for a step; repeat until the step and the
-exact overshoot of every clearance are below 1e-9 mm. A small proximal term
+exact overshoot of every clearance are below ``exact_tolerance_mm`` (1e-9 mm). A small proximal term
 (the joint metric) makes each step unique; it vanishes at the fixed point,
 where the step is 0, so the answer is an exact-geometry equilibrium: its
 contact forces (the last program's duals) balance the loads at the displaced
@@ -56,12 +56,6 @@ from .solver import _csc
 if TYPE_CHECKING:
     from .solver import Workspace
 
-#: Converged when the step and every exact overshoot are below this (mm).
-EXACT_TOLERANCE = 1e-9
-MAX_ITERATIONS = 60
-#: Weight of the proximal term (the loads are scaled to unit norm).
-PROXIMAL = 1e-3
-
 
 def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     """The equilibrium of ``ws``'s model with exact rotations (see module doc)."""
@@ -71,18 +65,19 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     linear = ws.solve(loads=loads)
     x = asm.unknowns_of(linear.bodies)
     iterations = 0
-    for iterations in range(1, MAX_ITERATIONS + 1):  # noqa: B007 - reported below
+    st = ws.settings
+    for iterations in range(1, st.exact_max_steps + 1):  # noqa: B007 - reported below
         parts = _contact_parts(asm, x)
         g = _virtual_work(asm, x, loads)
         g_norm = float(np.linalg.norm(g))
         step, lam, f, nu = _step(ws, x, parts, g, g_norm)
         x = x + step
         moved = float(np.max(np.abs(step))) * asm.s  # mm (a turn: mm at the length scale)
-        if moved <= EXACT_TOLERANCE * 1e-2:
+        if moved <= st.exact_settle_mm:
             break
     else:
         raise SolverError(
-            f"--exact: the re-linearization did not settle in {MAX_ITERATIONS} steps "
+            f"--exact: the re-linearization did not settle in {st.exact_max_steps} steps "
             f"(last step {moved:.3g} mm); the small-displacement answer is the one printed "
             "without --exact"
         )
@@ -102,7 +97,8 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     fixed = max([float(np.max(np.abs(a))) for a, _ in parts.fixed if len(a)] + [0.0])
     feas_mm = max(feas, fixed)
     cert = Certificate(
-        certified=feas_mm <= EXACT_TOLERANCE and result.equilibrium_residual <= 1e-8,
+        certified=feas_mm <= st.exact_tolerance_mm
+        and result.equilibrium_residual <= st.equilibrium_tolerance,
         method=f"exact rotations ({iterations} re-linearizations)",
         feasibility_mm=max(feas_mm, 0.0),
         equilibrium_residual=result.equilibrium_residual,
@@ -242,7 +238,8 @@ def _step(
     # free motions of the current placement (no cone or fixed row moves them):
     # the step leaves them alone, as the small-displacement answer did
     _, sv, Vt = np.linalg.svd(J, full_matrices=True)
-    rank = int(np.sum(sv > 1e-9 * sv[0])) if sv.size and sv[0] > 0 else 0
+    rcond = ws.settings.free_motion_rcond
+    rank = int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
     K = (asm.metric @ Vt[rank:].T).T
     if len(K):
         Z.append(np.hstack([K, np.zeros((len(K), n_soft))]))
@@ -275,15 +272,16 @@ def _step(
         b_rows.extend(np.zeros(n_soft))
         cones.append(clarabel.NonnegativeConeT(n_soft))
     P = np.zeros((n_var, n_var))
-    P[:m, :m] = PROXIMAL * asm.metric
+    P[:m, :m] = ws.settings.exact_proximal * asm.metric
     if n_soft:
         P[m + np.arange(n_soft), m + np.arange(n_soft)] = 1.0 / ws.sigma[soft]
     q = np.zeros(n_var)
     q[:m] = -g / g_norm if g_norm else 0.0
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-12
-    settings.max_iter = 400
+    fine = ws.settings.fine_ipm_tolerance
+    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = fine
+    settings.max_iter = ws.settings.exact_ipm_iterations
     A = np.vstack(A_rows) if A_rows else np.zeros((0, n_var))
     sol = clarabel.DefaultSolver(
         _csc(np.triu(P)), q, _csc(A), np.array(b_rows, dtype=float), cones, settings
@@ -309,6 +307,7 @@ def _build(
     """The exact answer as a ``Result``: bodies with their exact rotations,
     joint torsors of the exact relative placement, forces at the displaced points."""
     asm = ws.asm
+    st = ws.settings
     model = asm.model
     place = placements(asm, x)
     bodies = {}
@@ -347,8 +346,9 @@ def _build(
                 local_point = c.contact.acting_point(fi, float(lam[i]))
                 level = c.contact.exact_level(R_rel, phi, t_rel)
                 r = c.contact.radius
-                gap = float(np.clip(level / r, 0.0, 1.0)) if r > 0 else float(level >= -1e-12)
-                touching = gap >= 1.0 - 1e-8
+                reached = level >= -st.zero_play_reach
+                gap = float(np.clip(level / r, 0.0, 1.0)) if r > 0 else float(reached)
+                touching = gap >= st.touching
                 past = max(level - r, 0.0) if c.stiffness > 0 else 0.0
             total += wrench
             q = t_rel + R_rel @ local_point  # where b's contact point is, in a's joint frame

@@ -34,10 +34,10 @@ from numpy.typing import NDArray
 from . import conic, linalg
 from .assembly import Assembly, BallStack, IntArray
 from .geometry import FloatArray
-from .result import TOUCHING
+from .settings import TINY
 
 if TYPE_CHECKING:
-    from .solver import SolverSettings
+    from .settings import SolverSettings
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,7 @@ def least_squares_split(
     stack = asm.stack
     v, rho, level = stack.levels(x)
     hard = stack.spring == 0
-    touching = hard & (stack.gap_used(level) >= TOUCHING)
+    touching = hard & (stack.gap_used(level) >= settings.touching)
     apex = touching & ((stack.k == 0) | (rho <= apex_level))
     surface = touching & ~apex
     keep_lam = np.where(hard, 0.0, lam)
@@ -236,7 +236,7 @@ def _inside(split: Split, stack: BallStack, tol: float) -> bool:
     inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force."""
     if not len(split.lam):
         return True
-    size = tol * max(float(np.max(np.abs(split.lam))), 1e-300)
+    size = tol * max(float(np.max(np.abs(split.lam))), TINY)
     f_norm = np.sqrt(stack.segment_sum(split.f * split.f))
     return bool(np.all(split.lam >= -size) and np.all(f_norm <= split.lam + size))
 

@@ -35,13 +35,9 @@ from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from .geometry import FloatArray
+from .settings import DEFAULT
 
 IntArray = NDArray[np.intp]
-
-#: A back-substituted entry below this fraction of the free direction that
-#: started it is round-off (the direction does not move that body): dropped,
-#: so a local free motion stays local.
-ROUND_OFF = 1e-14
 
 
 @dataclass
@@ -201,13 +197,13 @@ def _largest_singular_value(C: sp.csr_matrix) -> float:
         if norm == 0.0:
             return 0.0
         v = w / norm
-        if abs(norm - previous) <= 1e-3 * norm:
+        if abs(norm - previous) <= DEFAULT.orthonormal_stall * norm:
             break
         previous = norm
     return float(np.linalg.norm(C @ v))
 
 
-def null_basis(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> sp.csc_matrix:
+def null_basis(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> sp.csc_matrix:
     """Sparse orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``
     (a singular value of a body's block below ``rcond`` times C's largest
     counts as zero)."""
@@ -229,7 +225,7 @@ def null_basis(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> sp.csc_matrix:
     return _orthonormal(vectors, m)
 
 
-def column_rank_deficit(C: sp.spmatrix, m: int, rcond: float = 1e-9) -> int:
+def column_rank_deficit(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> int:
     """How many independent motions ``C`` does not move (0: its rows pin every unknown)."""
     C = _checked(C, m)
     if C.shape[0] == 0 or C.nnz == 0:
@@ -252,7 +248,9 @@ def _back_substitute(
     heap = [-position[i] for i in dependents.get(j, [])]
     heapq.heapify(heap)
     seen = set(heap)
-    floor = ROUND_OFF * float(np.linalg.norm(v))
+    # an entry below round-off of the free direction that started it does not
+    # move that body: dropped, so a local free motion stays local
+    floor = DEFAULT.round_off * float(np.linalg.norm(v))
     while heap:
         i = elim.order[-heapq.heappop(heap)]
         pivot = elim.pivots[i]

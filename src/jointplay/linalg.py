@@ -20,6 +20,7 @@ from scipy.linalg import lapack
 
 from . import free_motions
 from .geometry import FloatArray
+from .settings import DEFAULT
 
 #: Mechanisms with more unknowns than this (6 per moving body) are assembled
 #: into sparse matrices. Below it, dense LAPACK calls are faster.
@@ -84,7 +85,7 @@ def nonzero_rows(A: Matrix) -> FloatArray:
     return np.asarray(np.any(A != 0.0, axis=1))
 
 
-def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> Matrix:
+def null_space(C: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> Matrix:
     """Orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``: singular
     values below ``rcond`` times the largest count as zero.
 
@@ -101,7 +102,7 @@ def null_space(C: Matrix, m: int, rcond: float = 1e-9) -> Matrix:
     return np.ascontiguousarray(Vt[rank:].T)
 
 
-def full_column_rank(rows: Matrix, m: int, rcond: float = 1e-9) -> bool:
+def full_column_rank(rows: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> bool:
     """Whether only ``d = 0`` has ``rows @ d = 0`` (the rows pin every unknown)."""
     if rows.shape[0] < m:
         return False
@@ -130,17 +131,17 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
     scale = max(1.0, float(abs(K).max()))
     if not prox:
         # plain factors, with a few steps of iterative refinement (long chains need them)
-        step = _refined(K, _factored(K), rhs, 1e-8 * size, 4)
+        step = _refined(K, _factored(K), rhs, DEFAULT.kkt_plain * size, 4)
         if step is not None:
             return step
     # Quasi-definite regularization, refined against K: on a consistent
     # system, the solution nearest the current point
-    tol = 1e-10 * size
-    step = proximal_solve(K, rhs, n_primal, max(prox, 1e-12 * scale), tol)
+    tol = DEFAULT.kkt_refined * size
+    step = proximal_solve(K, rhs, n_primal, max(prox, DEFAULT.kkt_round_off * scale), tol)
     if step is not None and float(np.max(np.abs(rhs - K @ step))) <= tol:
         return step
     if not sp.issparse(K):
-        return np.asarray(np.linalg.lstsq(K, rhs, rcond=1e-13)[0])
+        return np.asarray(np.linalg.lstsq(K, rhs, rcond=DEFAULT.lstsq_rcond)[0])
     raise SingularSystemError
 
 
@@ -239,5 +240,6 @@ def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
         return np.zeros(0)
     if not sp.issparse(A):
         return np.asarray(np.linalg.lstsq(A, b, rcond=None)[0])
-    out = spla.lsmr(A, b, atol=1e-15, btol=1e-15, maxiter=20 * max(A.shape))
+    tol = DEFAULT.lsmr_tolerance
+    out = spla.lsmr(A, b, atol=tol, btol=tol, maxiter=20 * max(A.shape))
     return np.asarray(out[0])

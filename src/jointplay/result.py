@@ -19,16 +19,17 @@ from .errors import SolverError
 from .finite import IDENTITY, Linearization, Placement, linearization
 from .free_motions import IntArray, column_groups
 from .geometry import FloatArray, cross, describe_motion
+from .settings import DEFAULT, TINY
 
 if TYPE_CHECKING:
     from .assembly import Assembly
     from .model import Load, Model
 
 #: Largest relative imbalance of loads and contact forces that ``check`` accepts.
-EQUILIBRIUM_TOLERANCE = 1e-8
+EQUILIBRIUM_TOLERANCE = DEFAULT.equilibrium_tolerance
 
 #: A contact counts as touching when it uses this much of its play or more.
-TOUCHING = 1.0 - 1e-8
+TOUCHING = DEFAULT.touching
 
 
 @dataclass(frozen=True)
@@ -245,16 +246,17 @@ class Result:
 
 
 def _clean(v: FloatArray, scale: float) -> FloatArray:
-    """Zero the round-off (below 1e-14 of the scale) that the solver leaves in exact zeros."""
+    """Zero the round-off (below ``round_off`` of the scale) that the solver
+    leaves in exact zeros."""
     out = np.array(v, dtype=float)
-    out[np.abs(out) < 1e-14 * scale] = 0.0
+    out[np.abs(out) < DEFAULT.round_off * scale] = 0.0
     return out
 
 
 def _clean_rows(v: FloatArray, scale: float | FloatArray) -> FloatArray:
     """``_clean`` on each row of ``v`` (n, 3), with one scale or one per row."""
     out = np.array(v, dtype=float)
-    out[np.abs(out) < 1e-14 * np.reshape(scale, (-1, 1))] = 0.0
+    out[np.abs(out) < DEFAULT.round_off * np.reshape(scale, (-1, 1))] = 0.0
     return out
 
 
@@ -323,7 +325,7 @@ def build_result(
         local[c] = asm.contacts[c].contact.acting_point(f, float(ball_forces[i]))
     point = T.centre[T.joint_of] + np.einsum("cab,cb->ca", T.R_world_joint[T.joint_of], local)
     force = wrench[:, :3]
-    force = _clean_rows(force, np.maximum(1e-300, np.max(np.abs(force), axis=1, initial=0.0)))
+    force = _clean_rows(force, np.maximum(TINY, np.max(np.abs(force), axis=1, initial=0.0)))
     wrench_sum = np.zeros((len(model.joints), 6))
     np.add.at(wrench_sum, T.joint_of, wrench)
 
@@ -471,7 +473,7 @@ def describe_free_motions(asm: Assembly, free_basis: Any) -> tuple[str, ...]:
     return tuple(out)
 
 
-def _echelon(basis_rows: FloatArray, tol: float = 1e-9) -> list[FloatArray]:
+def _echelon(basis_rows: FloatArray, tol: float = DEFAULT.free_motion_rcond) -> list[FloatArray]:
     """Reduced row-echelon form of a basis, so that each free motion involves as
     few bodies and components as possible (one spin per shaft, say)."""
     a = np.array(basis_rows, dtype=float)
@@ -504,4 +506,5 @@ def _describe_free(asm: Assembly, d: FloatArray, bodies: IntArray) -> str:
             sizes.append(size)
             parts.append((size, f"body '{name}': {describe_motion(omega, v_origin, asm.ell)}"))
     biggest = max(sizes, default=0.0)
-    return ", with ".join(text for size, text in parts if size > 1e-9 * biggest)
+    shown = DEFAULT.free_motion_rcond * biggest  # a unit null vector's round-off
+    return ", with ".join(text for size, text in parts if size > shown)

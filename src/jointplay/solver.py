@@ -44,41 +44,10 @@ from .result import (
     build_result,
     describe_free_motions,
 )
+from .settings import DEFAULT, TINY, SolverSettings
 
 if TYPE_CHECKING:
     from .batch import BatchSolution
-
-
-#: Clarabel's tolerance of the second try, when an answer does not certify.
-FINE_IPM = 1e-12
-
-
-@dataclass(frozen=True)
-class SolverSettings:
-    """Knobs of the solve; the defaults are what the tests and the CLI use."""
-
-    #: Clarabel's gap and feasibility tolerances (relative, scaled problem).
-    ipm_tolerance: float = 1e-10
-    max_iterations: int = 200
-    #: Refine the interior-point answer on its active set (Newton on the KKT system).
-    polish: bool = True
-    #: Singular values below this (relative) span the free motions.
-    free_motion_rcond: float = 1e-9
-    #: A load component on a free motion below this fraction of the load is taken as 0.
-    drive_tolerance: float = 1e-9
-    #: Start each solve after the first from the previous active set, solving
-    #: its KKT equations directly; the interior-point method runs only when
-    #: that answer does not certify as the unique optimum.
-    warm_start: bool = True
-    #: Certificate thresholds: feasibility as a fraction of the largest play,
-    #: equilibrium residual as a fraction of the largest force in the balance
-    #: (the loads, or a contact force if larger).
-    feasibility_tolerance: float = 1e-9
-    equilibrium_tolerance: float = 1e-8
-    #: Regularization of a singular KKT system, relative to its largest
-    #: entry: small against every pivot of a well-posed one, large against
-    #: round-off (its refinement then converges to the least-norm solution).
-    kkt_round_off: float = 1e-12
 
 
 @dataclass
@@ -153,36 +122,6 @@ def solve_cases(
     return {case: ws.solve(loads=model.loads_of(case), exact=exact) for case in model.case_names}
 
 
-#: An active force below this fraction of the largest is not "strictly" positive.
-STRICT = 1e-8
-#: ``_refine_active`` starts from the cones within this fraction of their play
-#: from their limit, and changes its guess at most this many times.
-NEAR_LIMIT = 1e-3
-#: ... or, failing that, from the active cones without the faintly loaded ones.
-FAINT = 1e-4
-REFINE_ROUNDS = 6
-#: A body turning by more than this (rad) in the answer is reported as not
-#: held (``UnboundedMechanismError``): a linear answer means nothing there.
-#: (Turns above 0.05 rad are answered with a warning, ``finite.py``; random
-#: mechanisms held by design reach 30 rad, a mechanism whose joints are
-#: nearly coincident or whose axes lean 1e-7 rad from a free motion 1e5 rad.)
-FREE_TURN_RAD = 1e3
-#: Contact forces (scaled: loads of unit size) at this level are the
-#: interior-point method's round-off when rigid joints carry the loads.
-NOISE_FORCE = 1e-6
-#: Proximal weight of Newton's steps on a face that may be tied (scaled
-#: unknowns, loads of unit size): the steps along the tie stay short.
-TIE_PROX = 1e-9
-#: ... taken on a large system when a plain Newton step goes this many times
-#: farther than the size of the position (or of the forces).
-FAR = 1e3
-#: Newton's answer on a face that may be tied is kept when its equations
-#: hold to this (relative; it stops at 1e-14, or where round-off stalls it,
-#: which on a nearly degenerate mechanism may be far above): the
-#: certificate's tolerance, and the certificate has the last word.
-NEWTON_ACCEPT = 1e-8
-
-
 class Workspace:
     """The solver's side: assembled matrices, free motions and scratch data.
 
@@ -252,11 +191,12 @@ class Workspace:
         else:
             rho = np.sqrt(S.T @ stack.A**2)
         e_cols = _column_max(abs(self.E), m)
+        tol = self.settings.feasibility_tolerance  # a unit motion that moves nothing
         best, best_work = fallback[:m], 0.0
         for sign in (1.0, -1.0):
-            held = _column_max(rho + sign * stack.B, m) > 1e-9
+            held = _column_max(rho + sign * stack.B, m) > tol
             works = sign * g
-            free = ~held & (e_cols <= 1e-9) & (works > best_work)
+            free = ~held & (e_cols <= tol) & (works > best_work)
             if np.any(free):
                 j = int(np.flatnonzero(free)[np.argmax(works[free])])
                 best, best_work = sign * np.eye(1, m, j)[0], float(works[j])
@@ -267,9 +207,9 @@ class Workspace:
                     if work <= best_work:
                         continue
                     _, _, level = stack.levels(sd)
-                    if len(level) and float(np.max(level)) > 1e-9:
+                    if len(level) and float(np.max(level)) > tol:
                         continue
-                    if self.E.shape[0] and float(np.max(np.abs(self.E @ sd))) > 1e-9:
+                    if self.E.shape[0] and float(np.max(np.abs(self.E @ sd))) > tol:
                         continue
                     best, best_work = sd, work
         return best
@@ -402,11 +342,12 @@ class Workspace:
                 point = self._polish(g_hat, point)
             self._last = point if point.active is not None else None
         cert = point.certificate or self._certify(g_hat, point)
-        if not cert.certified and np.any(g_hat) and self.settings.ipm_tolerance > FINE_IPM:
+        fine_ipm = self.settings.fine_ipm_tolerance
+        if not cert.certified and np.any(g_hat) and self.settings.ipm_tolerance > fine_ipm:
             # a nearly degenerate mechanism can leave the interior-point answer
             # (and its polish) 1e-7 mm off at the usual tolerance: once more, finer
             fine = Workspace(
-                self.asm, replace(self.settings, ipm_tolerance=FINE_IPM, warm_start=False)
+                self.asm, replace(self.settings, ipm_tolerance=fine_ipm, warm_start=False)
             )
             try:
                 point = fine._optimum(g_hat, sigma)
@@ -427,14 +368,14 @@ class Workspace:
         return point
 
     def _check_turns(self, x: FloatArray) -> None:
-        """A body that the loads turn by more than ``FREE_TURN_RAD`` is not
+        """A body that the loads turn by more than ``free_turn_rad`` is not
         held in any sense a small-displacement answer can describe."""
         asm = self.asm
         if not self.m:
             return
         turns = np.linalg.norm(x.reshape(-1, 6)[:, 3:], axis=1) * asm.turn
         worst = int(np.argmax(turns))
-        if turns[worst] > FREE_TURN_RAD:
+        if turns[worst] > self.settings.free_turn_rad:
             raise _unbounded(asm, x, one_way=True, turn=float(turns[worst]))
 
     # -- phase 1: the cone program -----------------------------------------
@@ -529,7 +470,8 @@ class Workspace:
         # refine each step's linear solve further than the default: with
         # stiff springs pressed far past their play, the default leaves some
         # programs "AlmostSolved" at a 1e-7 gap
-        settings.iterative_refinement_reltol = settings.iterative_refinement_abstol = 1e-14
+        refine = self.settings.ipm_refinement
+        settings.iterative_refinement_reltol = settings.iterative_refinement_abstol = refine
         return _ConeProgram(P_upper, A, b, cones, settings, soc_first, ball_rows)
 
     def _clarabel(self, prog: _ConeProgram, q: FloatArray) -> Any:
@@ -666,12 +608,13 @@ class Workspace:
         lam_a = point.lam[both]
         if not len(lam_a):
             return both
-        weak = lam_a <= STRICT * float(np.max(lam_a))
+        strict = self.settings.positive_force
+        weak = lam_a <= strict * float(np.max(lam_a))
         if linear:
             lin = self.stack.take(linear)
             f_norm = np.sqrt(lin.segment_sum(point.f[self.stack.rows_of(linear)] ** 2))
             at_apex = lin.k > 0
-            weak[len(surface) :] |= at_apex & (f_norm >= (1.0 - STRICT) * point.lam[list(linear)])
+            weak[len(surface) :] |= at_apex & (f_norm >= (1.0 - strict) * point.lam[list(linear)])
         return both[weak]
 
     def _kkt_point(
@@ -709,8 +652,9 @@ class Workspace:
             max_iter,
             self.sigma[list(surface)],
             eq_soft,
-            prox=0.0 if pinned else TIE_PROX,
-            accept=1e-11 if pinned else NEWTON_ACCEPT,
+            settings=self.settings,
+            prox=0.0 if pinned else self.settings.tie_prox,
+            accept=self.settings.newton_accept if pinned else self.settings.equilibrium_tolerance,
         )
         if out is None:
             return None
@@ -751,7 +695,7 @@ class Workspace:
         lam: FloatArray,
         f: FloatArray,
         stack: BallStack,
-        lam_scale: float = NOISE_FORCE,
+        lam_scale: float | None = None,
     ) -> _FaceKey:
         """Contacts whose multiplier outweighs their slack (both relative),
         split into those on their cone's surface and those at its apex (or
@@ -760,13 +704,17 @@ class Workspace:
         loads, the contacts' multipliers are round-off)."""
         if len(lam) == 0:
             return (), ()
-        lam_max = max(float(np.max(lam)), lam_scale, 1e-300)
+        st = self.settings
+        floor = st.noise_force if lam_scale is None else lam_scale
+        lam_max = max(float(np.max(lam)), floor, TINY)
         _, rho, level = stack.levels(x)
         r = np.where(stack.r > 0, stack.r, self._max_radius)
         slack = (stack.r - level) / r
-        active = np.flatnonzero(lam / lam_max > np.maximum(slack, 1e-9))
+        active = np.flatnonzero(lam / lam_max > np.maximum(slack, st.feasibility_tolerance))
         f_norm = np.sqrt(stack.segment_sum(f * f))
-        apex = (stack.k == 0) | ((rho <= 1e-6 * r) & (f_norm < (1.0 - 1e-6) * np.maximum(lam, 0.0)))
+        apex = (stack.k == 0) | (
+            (rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * np.maximum(lam, 0.0))
+        )
         surface = tuple(int(i) for i in active if not apex[i])
         linear = tuple(int(i) for i in active if apex[i])
         return surface, linear
@@ -797,12 +745,14 @@ class Workspace:
         _, rho, level = stack.levels(point.x)
         r = np.where(stack.r > 0, stack.r, self._max_radius)
         f_norm = np.sqrt(stack.segment_sum(point.f * point.f))
-        at_apex = (stack.k == 0) | ((rho <= 1e-6 * r) & (f_norm < (1.0 - 1e-6) * point.lam))
-        near = set(np.flatnonzero((stack.r - level) / r <= NEAR_LIMIT).tolist())
+        st = self.settings
+        at_apex = (stack.k == 0) | ((rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * point.lam))
+        near = set(np.flatnonzero((stack.r - level) / r <= st.near_limit).tolist())
         # a contact the interior point loads faintly may be one that nearly
         # touches (its equations then contradict the others')
         both = np.array([*key[0], *key[1]], dtype=np.intp)
-        faint = set(both[point.lam[both] < FAINT * float(np.max(point.lam, initial=0.0))].tolist())
+        top = float(np.max(point.lam, initial=0.0))
+        faint = set(both[point.lam[both] < st.faint * top].tolist())
         seen: set[frozenset[int]] = set()
         for start in ({*key[0], *key[1]}, near, {*key[0], *key[1]} - faint):
             found = self._active_set_steps(g_hat, point, start, at_apex, seen)
@@ -823,7 +773,8 @@ class Workspace:
         r = np.where(stack.r > 0, stack.r, self._max_radius)
         lam_scale = float(np.max(np.abs(point.lam)))
         x, lam = point.x, point.lam
-        for _ in range(REFINE_ROUNDS):
+        st = self.settings
+        for _ in range(st.refine_rounds):
             if frozenset(active) in seen:
                 return None
             seen.add(frozenset(active))
@@ -838,7 +789,7 @@ class Workspace:
                 return None
             weak = self._weak_forces(trial, trial_key)
             _, _, level = stack.levels(trial.x)
-            past = np.flatnonzero((level - stack.r) / r > 1e-9)
+            past = np.flatnonzero((level - stack.r) / r > st.feasibility_tolerance)
             past = past[[i not in active for i in past]]
             if not past.size:
                 trial.certificate = self._certify(g_hat, trial)
@@ -857,12 +808,12 @@ class Workspace:
             tilts = {
                 int(i)
                 for i in weak
-                if at_apex[i] and self.stack.k[i] and trial.lam[i] > STRICT * lam_top
+                if at_apex[i] and self.stack.k[i] and trial.lam[i] > st.positive_force * lam_top
             }
             at_apex = at_apex.copy()
             at_apex[list(tilts)] = False
             active = (active - (set(weak.tolist()) - tilts)) | set(past.tolist())
-            x, lam = trial.x, np.maximum(trial.lam, STRICT * lam_scale)
+            x, lam = trial.x, np.maximum(trial.lam, st.positive_force * lam_scale)
         return None
 
     def _face_equalities(
@@ -879,7 +830,7 @@ class Workspace:
         for j, i in enumerate((*surface, *linear)):
             Ai = stack.cone_rows(i)
             if j < len(surface) and stack.k[i]:
-                u = v[stack.start[i] : stack.start[i] + stack.k[i]] / max(rho[i], 1e-300)
+                u = v[stack.start[i] : stack.start[i] + stack.k[i]] / max(rho[i], TINY)
                 if not stack.has_offset[i]:
                     rows.append(Ai)
                     rhs.append(reach[j] * u)
@@ -953,7 +904,8 @@ class Workspace:
         active = {*surface, *linear}
         apex = set(linear)
         r = np.where(rest.r > 0, rest.r, self._max_radius)
-        for _ in range(REFINE_ROUNDS):
+        st = self.settings
+        for _ in range(st.refine_rounds):
             on_surface = sorted(i for i in active if i not in apex)
             at_apex = sorted(i for i in active if i in apex)
             L2, l2 = self._face_equalities(rest, ((), tuple(at_apex)), x, rest.r[at_apex])
@@ -965,11 +917,13 @@ class Workspace:
                 rest.take(on_surface),
                 x,
                 np.maximum(lam[on_surface], 0.0),
+                settings=st,
             )
             if polished is None:
                 break
             _, _, level = rest.levels(polished[0])
-            past = set(np.flatnonzero((level - rest.r) / r > 1e-9).tolist()) - active
+            past = set(np.flatnonzero((level - rest.r) / r > st.feasibility_tolerance).tolist())
+            past -= active
             if not past:
                 return polished[0]
             active |= past
@@ -1046,7 +1000,7 @@ def _column_max(a: Matrix, m: int) -> FloatArray:
     return np.asarray(np.max(a, axis=0))
 
 
-def _rank(a: FloatArray, rcond: float = 1e-9) -> int:
+def _rank(a: FloatArray, rcond: float = DEFAULT.free_motion_rcond) -> int:
     sv = np.linalg.svd(a, compute_uv=False)
     return int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
 
@@ -1062,8 +1016,9 @@ def _newton(
     max_iter: int = 30,
     soft: FloatArray | None = None,
     eq_soft: FloatArray | None = None,
+    settings: SolverSettings = DEFAULT,
     prox: float = 0.0,
-    accept: float = 1e-11,
+    accept: float = DEFAULT.newton_accept,
 ) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
     """Newton's method on the KKT equations of an active set.
 
@@ -1129,8 +1084,8 @@ def _newton(
         if best is None or err < best[0]:
             best = (err, x, lam, nu, it)
         history.append(err)
-        stalled = it >= 3 and err > 0.5 * min(history[-4:-1])
-        if err <= 1e-14 or it == max_iter or stalled:
+        stalled = it >= 3 and err > settings.newton_stall * min(history[-4:-1])
+        if err <= settings.round_off or it == max_iter or stalled:
             break
         if na:
             c = lam / rho
@@ -1167,8 +1122,8 @@ def _newton(
                 prox
                 and sparse
                 and (
-                    float(np.max(np.abs(step[:m]))) > FAR * length_scale
-                    or float(np.max(np.abs(step[m:]), initial=0.0)) > FAR * force_scale
+                    float(np.max(np.abs(step[:m]))) > settings.far * length_scale
+                    or float(np.max(np.abs(step[m:]), initial=0.0)) > settings.far * force_scale
                 )
             ):  # round-off's step along a tie or an indeterminate force
                 step = linalg.solve_kkt(Kmat, -F, m, prox)
@@ -1209,7 +1164,7 @@ def _unbounded(
         moves.append((size, name, omega, v_origin))
     moves.sort(key=lambda t: -t[0])
     biggest = moves[0][0]
-    moving = [mv for mv in moves if mv[0] > 1e-6 * biggest]
+    moving = [mv for mv in moves if mv[0] > DEFAULT.mover_share * biggest]
     _, body, omega, v_origin = moving[0]
     motion = describe_motion(omega, v_origin, asm.ell, signed=one_way)
     others = [mv[1] for mv in moving[1:]]
@@ -1227,7 +1182,7 @@ def _unbounded(
             "contact or an axis almost along this motion, leave it practically free: "
             "move them apart, add a joint that holds it, or balance the loads on it."
         )
-    scale = 1.0 / max(biggest, 1e-300)
+    scale = 1.0 / max(biggest, TINY)
     direction_map = {
         mv[1]: (
             tuple(float(c) for c in mv[2] * scale),

@@ -1,0 +1,145 @@
+"""Every tolerance and limit of the solve, named once, with its reason.
+
+The algorithms read these from ``SolverSettings`` (a workspace's
+``settings``, or ``DEFAULT`` for the helpers that have none) and hold no
+numeric literals of their own. Lengths are relative to the largest play and
+forces to the largest force (the problem is scaled to loads of unit norm),
+unless a field says otherwise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Knobs of the solve; the defaults are what the tests and the CLI use."""
+
+    # -- what an answer must prove (the certificate) --------------------------
+    #: Feasibility: no contact past its play by more than this fraction of the
+    #: largest play. Also where a position counts as on a limit, past it, or
+    #: moving at all: below it, a length is the solver's round-off.
+    feasibility_tolerance: float = 1e-9
+    #: Balance: per body, in newtons, relative to the largest force in the
+    #: balance; also how far a force may fall below 0 or outside its cone.
+    equilibrium_tolerance: float = 1e-8
+    #: A contact counts as touching when it uses this much of its own play:
+    #: the certificate's feasibility, with room for a play 10x smaller than
+    #: the largest.
+    touching: float = 1.0 - 1e-8
+
+    # -- the interior-point method (Clarabel) ---------------------------------
+    #: Gap and feasibility tolerances (relative, scaled problem): the answer
+    #: then certifies on its own on every paper model.
+    ipm_tolerance: float = 1e-10
+    #: The one retry when an answer does not certify (a nearly degenerate
+    #: mechanism), and the exact-rotation steps' tolerance.
+    fine_ipm_tolerance: float = 1e-12
+    max_iterations: int = 200
+    #: Iterative refinement of each interior-point step's linear solve: with
+    #: stiff springs pressed far past their play, Clarabel's default leaves
+    #: some programs "AlmostSolved" at a 1e-7 gap.
+    ipm_refinement: float = 1e-14
+
+    # -- rank and free motions -------------------------------------------------
+    #: Singular values below this fraction of the largest count as zero: they
+    #: span the free motions, dependent rows, indeterminate forces.
+    free_motion_rcond: float = 1e-9
+    #: A load component on a free motion below this fraction of the load is 0.
+    drive_tolerance: float = 1e-9
+    #: A body turning by more than this (rad) in the answer is reported as not
+    #: held: a linear answer means nothing there. (Turns above 0.05 rad are
+    #: answered with a warning, ``finite.py``; random mechanisms held by
+    #: design reach 30 rad, a mechanism whose joints are nearly coincident or
+    #: whose axes lean 1e-7 rad from a free motion 1e5 rad.)
+    free_turn_rad: float = 1e3
+
+    # -- polishing on the active set (Newton on the KKT equations) -------------
+    #: Refine the interior-point answer on its active set.
+    polish: bool = True
+    #: Start each solve after the first from the previous active set.
+    warm_start: bool = True
+    #: Double-precision round-off of a well-scaled quantity: where Newton
+    #: stops, and what results and eliminations treat as an exact zero.
+    round_off: float = 1e-14
+    #: Regularization of a singular KKT system, relative to its largest
+    #: entry: small against every pivot of a well-posed one, large against
+    #: round-off (its refinement then converges to the least-norm solution).
+    kkt_round_off: float = 1e-12
+    #: A plain KKT solve is refined until its residual is this small
+    #: (relative to the right-hand side); a regularized one, ``kkt_refined``.
+    kkt_plain: float = 1e-8
+    kkt_refined: float = 1e-10
+    #: Newton has stalled when a step gains less than this factor on the best
+    #: of the three before it (round-off, or a slow mode of a long chain).
+    newton_stall: float = 0.5
+    #: Newton on a face that pins the position is accepted when its
+    #: equations hold to this (relative): well above where it stops, well
+    #: below the certificate.
+    newton_accept: float = 1e-11
+    #: An active force below this fraction of the largest is not strictly
+    #: positive: its contact may leave the active set.
+    positive_force: float = 1e-8
+    #: Contact forces (loads of unit size) at this level are the interior-point
+    #: method's round-off when rigid joints carry the loads.
+    noise_force: float = 1e-6
+    #: A cone rests at its apex (a face flat, a ball centred) when |A_i x| is
+    #: below this fraction of its play and its force vector this far inside.
+    apex: float = 1e-6
+    #: The active-set rounds start from the cones within this fraction of their
+    #: play from their limit, or from the active cones without those loaded
+    #: below ``faint`` of the largest force; they change their guess at most
+    #: ``refine_rounds`` times.
+    near_limit: float = 1e-3
+    faint: float = 1e-4
+    refine_rounds: int = 6
+    #: Proximal weight of Newton's steps on a face that may be tied: the steps
+    #: along the tie stay short ...
+    tie_prox: float = 1e-9
+    #: ... taken on a large system when a plain step goes this many times
+    #: farther than the size of the position (or of the forces).
+    far: float = 1e3
+
+    #: A contact with no play counts as used when its level is within this of
+    #: its limit (round-off of a scaled length, or of mm).
+    zero_play_reach: float = 1e-12
+    #: Re-orthonormalizing a free-motion basis stops when a vector's norm
+    #: changes by less than this fraction.
+    orthonormal_stall: float = 1e-3
+    #: Dense least squares of a singular KKT system: singular values below this
+    #: fraction of the largest are dropped (round-off, not rank).
+    lstsq_rcond: float = 1e-13
+    #: LSMR's stopping tolerances (large rigid systems): one digit past
+    #: round-off, so that long chains' rigid forces balance to the certificate.
+    lsmr_tolerance: float = 1e-15
+    #: A body whose motion is below this fraction of the biggest one is not
+    #: named as moving along (words only).
+    mover_share: float = 1e-6
+
+    # -- exact rotations (``exact``) ------------------------------------------
+    #: The exact geometry's overshoot of every clearance must stay below this
+    #: (mm); a re-linearization step below ``exact_settle`` (mm) ends the
+    #: iteration, after at most ``exact_max_steps``; ``exact_proximal`` damps
+    #: its steps (loads of unit norm).
+    exact_tolerance_mm: float = 1e-9
+    exact_settle_mm: float = 1e-11
+    exact_max_steps: int = 60
+    exact_proximal: float = 1e-3
+    #: Clarabel's iteration limit on an exact step's program (at the fine
+    #: tolerance, nearly degenerate placements need more than the default).
+    exact_ipm_iterations: int = 400
+
+    # -- many loads at once (``batch``) ---------------------------------------
+    #: Newton steps per batch; a row still above ``batch_continue`` after
+    #: ``batch_give_up`` steps leaves for the conic path.
+    batch_newton_steps: int = 12
+    batch_give_up: int = 6
+    batch_continue: float = 1e-4
+
+
+DEFAULT = SolverSettings()
+
+#: A positive floor for dividing by a size that may be 0 (not a tolerance:
+#: any size it replaces is exactly 0).
+TINY = 1e-300
