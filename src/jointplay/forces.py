@@ -65,7 +65,8 @@ def least_squares_split(
     its compliant contacts keep theirs. ``apex_level``: a cone with
     ``|A_i x|`` at or below it rests at its apex, its force vector free
     inside the cone (the position's round-off). None when no split with
-    these contacts is found (the caller keeps its own). ``settings``: the
+    these contacts is found, or when only one balances the loads (the
+    caller keeps its own). ``settings``: the
     equilibrium tolerance (how far a force may fall below 0 or outside its
     cone by round-off), the rank cutoff, the KKT regularization and the
     interior-point tolerance."""
@@ -83,7 +84,10 @@ def least_squares_split(
     Z, owner = _unknowns(stack, surface, apex, u, asm.E.shape[0], asm.sparse)
     if Z.shape[1] == 0:
         return None
-    G, P = _work_and_wrenches(asm, Z)
+    G = _work(asm, Z)
+    if not asm.sparse and _determined(G, settings.free_motion_rcond):
+        return None  # one split balances the loads: the solver's own
+    P = _wrenches(asm, Z)
     n, n_rows = len(stack.k), stack.A.shape[0]
     centred = apex & ~stack.has_offset
 
@@ -174,9 +178,27 @@ def _unknowns(
     return Z, np.concatenate(owner_l).astype(np.intp)
 
 
-def _work_and_wrenches(asm: Assembly, Z: Any) -> tuple[Any, Any]:
-    """``G = [A^T B^T E^T] Z``: the unknowns' work; ``P``: their wrenches at
-    the joint centres (6 per contact, moments over ``ell``)."""
+def _work(asm: Assembly, Z: Any) -> Any:
+    """``G = [A^T B^T E^T] Z``: the unknowns' work."""
+    stack = asm.stack
+    if asm.sparse:
+        G_full = sp.hstack([stack.A.T, stack.B.T, sp.csr_matrix(asm.E).T], format="csr")
+        return sp.csr_matrix(G_full @ Z)
+    G_full = np.hstack([np.asarray(stack.A).T, np.asarray(stack.B).T, np.asarray(asm.E).T])
+    return G_full @ Z
+
+
+def _determined(G: FloatArray, rcond: float) -> bool:
+    """Whether G's columns are independent: a single split balances the loads."""
+    if G.shape[1] > G.shape[0]:
+        return False
+    sv = np.linalg.svd(G, compute_uv=False)
+    return bool(sv.size and sv[-1] > rcond * sv[0])
+
+
+def _wrenches(asm: Assembly, Z: Any) -> Any:
+    """``P``: the unknowns' wrenches at the joint centres (6 per contact,
+    moments over ``ell``)."""
     stack, T = asm.stack, asm.tables
     n_rows, n = stack.A.shape[0], len(stack.k)
     per = np.r_[np.ones(3), np.full(3, 1.0 / asm.ell)]
@@ -186,7 +208,6 @@ def _work_and_wrenches(asm: Assembly, Z: Any) -> tuple[Any, Any]:
     o_rows = np.arange(6 * n)
     o_cols = np.repeat(np.arange(n), 6)
     if asm.sparse:
-        G_full = sp.hstack([stack.A.T, stack.B.T, sp.csr_matrix(asm.E).T], format="csr")
         ball = sp.hstack(
             [
                 sp.diags(w_ball) @ T.wrench_ball,
@@ -194,14 +215,13 @@ def _work_and_wrenches(asm: Assembly, Z: Any) -> tuple[Any, Any]:
             ]
         )
         P_full = sp.block_diag([ball, sp.diags(w_fixed) @ T.wrench_fixed], format="csr")
-        return sp.csr_matrix(G_full @ Z), sp.csr_matrix(P_full @ Z)
+        return sp.csr_matrix(P_full @ Z)
     n_e = asm.E.shape[0]
-    G_full = np.hstack([np.asarray(stack.A).T, np.asarray(stack.B).T, np.asarray(asm.E).T])
     P_full = np.zeros((n_ball + n_fixed, n_rows + n + n_e))
     P_full[:n_ball, :n_rows] = w_ball[:, None] * T.wrench_ball
     P_full[o_rows, n_rows + o_cols] = offset
     P_full[n_ball:, n_rows + n :] = w_fixed[:, None] * T.wrench_fixed
-    return G_full @ Z, P_full @ Z
+    return P_full @ Z
 
 
 def _least_squares(
