@@ -20,7 +20,6 @@ from scipy.spatial import cKDTree
 
 from . import certificate, linalg
 from .assembly import Assembly, BallStack, IntArray
-from .errors import SolverError
 from .geometry import FloatArray
 from .settings import TINY
 
@@ -109,6 +108,8 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
     lam = np.zeros((B, n_balls))
     f = np.zeros((B, ws.stack.A.shape[0]))
     batched = np.zeros(B, dtype=bool)
+    feas = np.zeros(B)  # each row's certificate, where it was certified
+    residual = np.zeros(B)
     pending = np.flatnonzero(norms > 0)
     solved_by_set: dict[_FaceKey, list[IntArray]] = {}  # active set -> solved rows
     full = 0
@@ -122,7 +123,7 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
                     break
                 ref = np.concatenate(rows)
                 nearest = ref[cKDTree(features[ref]).query(features[pending])[1]]
-                ok, xs, lams, fs = _newton_batch(
+                ok, xs, lams, fs, checks = _newton_batch(
                     ws,
                     active,
                     g_hat[pending],
@@ -134,6 +135,8 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
                 if np.any(ok):
                     won = pending[ok]
                     x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
+                    assert checks is not None  # rows were accepted: they were checked
+                    feas[won], residual[won] = checks.feasibility[ok], checks.balance[ok]
                     rows.append(won)
                     pending = pending[~ok]
                     progress = True
@@ -145,12 +148,12 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
         point = solver._optimum(g_hat[first], sigma[first])
         full += 1
         x[first], lam[first], f[first] = point.x, point.lam, point.f
+        assert point.certificate is not None  # _optimum certifies or raises
+        feas[first] = point.certificate.feasibility_mm / ws.asm.s
+        residual[first] = point.certificate.equilibrium_residual
         if point.active is not None:
             solved_by_set.setdefault(point.active, []).append(np.array([first]))
 
-    passed, feas, residual = _certificates(ws, g_hat, sigma, x, lam, f, r)
-    if not np.all(passed):  # pragma: no cover - each row was certified on its own path
-        raise SolverError("a batch answer failed its final certificate; please report this model")
     return BatchSolution(
         asm=ws.asm,
         x=x,
@@ -181,13 +184,14 @@ def _newton_batch(
     x0: FloatArray,
     lam0: FloatArray,
     r: FloatArray,
-) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray]:
+) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
     each from its own start (rows of ``x0``, ``lam0``) and with its own
     cone radii (rows of ``r``).
 
-    Returns (accepted mask, x, full multipliers, force vectors); a row is
-    accepted only if it converged and passes the certificate of a unique optimum.
+    Returns (accepted mask, x, full multipliers, force vectors, their
+    certificate); a row is accepted only if it converged and passes the
+    certificate of a unique optimum.
     """
     B, m = g_hat.shape
     stack = ws.stack
@@ -196,7 +200,7 @@ def _newton_batch(
     f = np.zeros((B, stack.A.shape[0]))
     face = ws._face(key)
     if not face.determined:  # a tie, or a tilting face (uniqueness depends on x)
-        return np.zeros(B, dtype=bool), x, lam, f
+        return np.zeros(B, dtype=bool), x, lam, f, None
     surface, linear = key
     ne0 = ws.Eq.shape[0]
     Eq, e = face.Eq, face.e
@@ -240,8 +244,8 @@ def _newton_batch(
         f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
         inside = (f_norm < (1.0 - positive) * lam[:, list(linear)]) | (lin.k == 0)
         strict &= np.all(inside, axis=1)
-    passed, _, _ = _certificates(ws, g_hat, sigma, x, lam, f, r)
-    return conv & strict & passed, x, lam, f
+    checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
+    return conv & strict & checks.passed(ws.settings, ws._max_radius), x, lam, f, checks
 
 
 def _newton_rows(
@@ -332,18 +336,3 @@ def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, BoolArray]:
     if np.any(regular):
         step[regular] = np.linalg.solve(K[regular], rhs[regular][:, :, None])[:, :, 0]
     return step, regular
-
-
-def _certificates(
-    ws: Workspace,
-    g_hat: FloatArray,
-    sigma: FloatArray,
-    x: FloatArray,
-    lam: FloatArray,
-    f: FloatArray,
-    r: FloatArray,
-) -> tuple[BoolArray, FloatArray, FloatArray]:
-    """Per row, from the one certificate (against the row's radii ``r``):
-    whether it passes, its feasibility (scaled) and its relative balance."""
-    checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
-    return checks.passed(ws.settings, ws._max_radius), checks.feasibility, checks.balance

@@ -30,6 +30,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from . import linalg
+from .assembly import IntArray
 from .geometry import FloatArray
 
 if TYPE_CHECKING:
@@ -75,18 +76,37 @@ class Balance:
         self.per_contact = np.r_[np.ones(3), np.full(3, 1.0 / asm.ell)]
 
     @cached_property
-    def joint_sum(self) -> linalg.Matrix:
-        """(joints, contacts): which contacts make each joint's reaction
-        (dense for a small mechanism: scipy's constructors cost more than
-        its whole certificate)."""
+    def reaction_maps(self) -> tuple[linalg.Matrix, linalg.Matrix, linalg.Matrix]:
+        """Each joint's reaction (6 per joint: force, moment over ell) from
+        the force vectors ``f``, the forces ``lam`` and the rigid rows' ``nu``:
+        the sum of its contacts' wrenches, one map each, built once."""
         T = self.asm.tables
-        nc = len(T.joint_of)
-        shape = (int(T.centre.shape[0]), nc)
+        n_joints = int(T.centre.shape[0])
+        ball_joint = T.joint_of[T.is_ball]
+        fixed_joint = T.joint_of[~T.is_ball]
+        w = np.tile(self.per_contact, n_joints)
+
+        def gather(joint_of: IntArray) -> linalg.Matrix:  # contacts' 6-rows -> joints' 6-rows
+            rows = (6 * joint_of[:, None] + np.arange(6)).ravel()
+            cols = np.arange(6 * len(joint_of))
+            if self.asm.sparse:
+                return sp.csr_matrix(
+                    (w[rows], (rows, cols)), shape=(6 * n_joints, 6 * len(joint_of))
+                )
+            out = np.zeros((6 * n_joints, 6 * len(joint_of)))
+            out[rows, cols] = w[rows]
+            return out
+
+        n = len(ball_joint)
+        offsets = T.offset_ball.ravel()
+        rows, cols = np.arange(6 * n), np.repeat(np.arange(n), 6)
         if self.asm.sparse:
-            return sp.csr_matrix((np.ones(nc), (T.joint_of, np.arange(nc))), shape=shape)
-        out = np.zeros(shape)
-        out[T.joint_of, np.arange(nc)] = 1.0
-        return out
+            offset_map: linalg.Matrix = sp.csr_matrix((-offsets, (rows, cols)), shape=(6 * n, n))
+        else:
+            offset_map = np.zeros((6 * n, n))
+            offset_map[rows, cols] = -offsets
+        to_ball, to_fixed = gather(ball_joint), gather(fixed_joint)
+        return to_ball @ T.wrench_ball, to_ball @ offset_map, to_fixed @ T.wrench_fixed
 
     def rigid_multipliers(self, rest: FloatArray) -> FloatArray:
         """(B, rigid rows): what the rigid rows carry of the generalized
@@ -100,22 +120,15 @@ class Balance:
 
     def largest_reaction(self, lam: FloatArray, f: FloatArray, nu: FloatArray) -> FloatArray:
         """(B,): the largest joint reaction, force or moment over ell."""
-        T = self.asm.tables
         B = lam.shape[0]
-        nc = len(T.joint_of)
-        if not nc:
+        if not self.asm.tables.centre.shape[0]:
             return np.zeros(B)
-        wrench = np.zeros((nc, B, 6))
-        if len(lam[0]):
-            balls = linalg.times(T.wrench_ball, f).reshape(B, -1, 6)
-            balls = balls - lam[:, :, None] * T.offset_ball[None]
-            wrench[T.is_ball] = balls.transpose(1, 0, 2)
+        of_f, of_lam, of_nu = self.reaction_maps
+        joints = linalg.times(of_f, f) + linalg.times(of_lam, lam)
         if nu.shape[1]:
-            fixed = linalg.times(T.wrench_fixed, nu).reshape(B, -1, 6)
-            wrench[~T.is_ball] = fixed.transpose(1, 0, 2)
-        joints = (self.joint_sum @ wrench.reshape(nc, B * 6)).reshape(-1, B, 6)
-        sizes = np.linalg.norm((joints * self.per_contact).reshape(-1, B, 2, 3), axis=-1)
-        return np.asarray(np.max(sizes, axis=(0, 2)))
+            joints = joints + linalg.times(of_nu, nu)
+        sizes = np.linalg.norm(joints.reshape(B, -1, 3), axis=-1)
+        return np.asarray(np.max(sizes, axis=1, initial=0.0))
 
     def residual(
         self, g_hat: FloatArray, lam: FloatArray, f: FloatArray, nu: FloatArray | None
