@@ -61,6 +61,7 @@ class _Point:
     iterations: int = 0
     certificate: Certificate | None = None
     active: _FaceKey | None = None  # the active set that determines x, if any
+    nu: FloatArray | None = None  # the rigid rows' multipliers (None: least squares)
 
 
 #: An active set: (cones on their surface, cones whose rows all hold as equalities).
@@ -240,9 +241,8 @@ class Workspace:
         g_hat = g / g_norm if g_norm else g
         point = self._optimum(g_hat, self.softness(g_norm))
         assert point.certificate is not None
-        point, nu = self._split(g_hat, point)
-        assert point.certificate is not None
         to_newton = g_norm / self.asm.s  # scaled multipliers -> N
+        nu = point.nu if point.nu is not None else self._rigid_multipliers(g_hat, point)
         rigid = nu * to_newton
         elapsed = time.perf_counter() - start
         result = build_result(
@@ -270,12 +270,11 @@ class Workspace:
             )
         return result
 
-    def _split(self, g_hat: FloatArray, point: _Point) -> tuple[_Point, FloatArray]:
-        """The certified optimum with the least-squares split of its forces
-        (``forces.least_squares_split``), and the rigid rows' multipliers.
-        The solver's own split stays only if that one does not certify."""
-        if not np.any(g_hat):
-            return point, np.zeros(self.E.shape[0])
+    def _split(self, g_hat: FloatArray, point: _Point) -> _Point:
+        """The optimum with the least-squares split of its forces
+        (``forces.least_squares_split``: forces from the positions, by the
+        documented rule) and its rigid multipliers, if that split certifies;
+        else the route's own forces."""
         st = self.settings
         apex = st.feasibility_tolerance * self._max_radius  # positions' round-off
         nu = self._rigid_multipliers(g_hat, point)
@@ -283,12 +282,12 @@ class Workspace:
             self.asm, point.x, point.lam, point.f, nu, g_hat, apex, st
         )
         if split is not None:
-            trial = replace(point, lam=split.lam, f=split.f, certificate=None)
+            trial = replace(point, lam=split.lam, f=split.f, nu=split.nu, certificate=None)
             cert = self._certify(g_hat, trial, split.nu)
             if cert.certified:
                 trial.certificate = cert
-                return trial, split.nu
-        return point, nu
+                return trial
+        return replace(point, nu=nu)
 
     def _rigid_multipliers(self, g_hat: FloatArray, point: _Point) -> FloatArray:
         """Forces in the rigid rows (scaled): what the contacts leave of the loads.
@@ -341,7 +340,8 @@ class Workspace:
             if warm is None and self.settings.polish:
                 point = self._polish(g_hat, point)
             self._last = point if point.active is not None else None
-        cert = point.certificate or self._certify(g_hat, point)
+            point = self._split(g_hat, point)
+        cert = point.certificate or self._certify(g_hat, point, point.nu)
         fine_ipm = self.settings.fine_ipm_tolerance
         if not cert.certified and np.any(g_hat) and self.settings.ipm_tolerance > fine_ipm:
             # a nearly degenerate mechanism can leave the interior-point answer
