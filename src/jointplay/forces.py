@@ -100,7 +100,7 @@ def least_squares_split(
 
     given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
     given = given / np.asarray((Z.multiply(Z) if asm.sparse else Z * Z).sum(axis=0)).ravel()
-    y = _least_squares(P, G, b, given, settings.free_motion_rcond, settings.kkt_round_off)
+    y = _least_squares(P, G, b, given, settings)
     if y is not None:
         split = split_of(y)
         if _inside(split, stack, settings.equilibrium_tolerance):
@@ -112,11 +112,9 @@ def least_squares_split(
     split = split_of(y)
     # the cone program's answer is good to its tolerance; the contacts it
     # leaves unloaded out, the least-squares split of the others is exact
-    pushing = split.lam > settings.equilibrium_tolerance * float(np.max(np.abs(split.lam)))
+    pushing = split.lam > settings.positive_force * float(np.max(np.abs(split.lam)))
     cols = np.flatnonzero((owner < 0) | pushing[np.maximum(owner, 0)])
-    y = _least_squares(
-        P[:, cols], G[:, cols], b, y[cols], settings.free_motion_rcond, settings.kkt_round_off
-    )
+    y = _least_squares(P[:, cols], G[:, cols], b, y[cols], settings)
     if y is not None:
         exact = split_of(y, cols)
         if _inside(exact, stack, settings.equilibrium_tolerance):
@@ -137,45 +135,47 @@ def _unknowns(
     order: a surface cone's force along ``u``; a face at its apex, its force
     and vector (``lam_i >= |f_i|``); a ball at its centre (no face row, no
     play), its vector (its force is ``|f_i|``, see ``_split``); a rigid row."""
-    k, start = stack.k, stack.start
+    k = stack.k
     n_rows, n = int(np.sum(k)), len(k)
-    # (cone, rows of (f, lam, nu), values, one column for all of them)
-    blocks: list[tuple[int, IntArray, FloatArray, bool]] = []
-    for i in np.flatnonzero(surface):
-        rows = start[i] + np.arange(k[i])
-        blocks.append((int(i), np.r_[rows, n_rows + i], np.r_[u[rows], 1.0], True))
-    for i in np.flatnonzero(apex & stack.has_offset):
-        rows = np.r_[n_rows + i, start[i] + np.arange(k[i])]
-        blocks.append((int(i), rows, np.ones(1 + k[i]), False))
-    for i in np.flatnonzero(apex & ~stack.has_offset):
-        blocks.append((int(i), start[i] + np.arange(k[i]), np.ones(k[i]), False))
-    rows_l: list[IntArray] = []
-    cols_l: list[IntArray] = []
-    vals_l: list[FloatArray] = []
-    owner_l: list[IntArray] = []
-    col = 0
-    for cone, rows, vals, single in blocks:
-        width = 1 if single else len(rows)
-        cols_l.append(np.full(len(rows), col) if single else col + np.arange(len(rows)))
-        rows_l.append(rows)
-        vals_l.append(vals)
-        owner_l.append(np.full(width, cone))
-        col += width
-    rows_l.append(n_rows + n + np.arange(n_e))
-    cols_l.append(col + np.arange(n_e))
-    vals_l.append(np.ones(n_e))
-    owner_l.append(np.full(n_e, -1))
+    s_idx = np.flatnonzero(surface)
+    a_idx = np.flatnonzero(apex & stack.has_offset)
+    c_idx = np.flatnonzero(apex & ~stack.has_offset)
+    ns, ka, kc = len(s_idx), k[a_idx], k[c_idx]
+    # surface cones: one column, f_i = u_i lam_i
+    s_rows = stack.rows_of(s_idx)
+    rows = [s_rows, n_rows + s_idx]
+    cols = [np.repeat(np.arange(ns), k[s_idx]), np.arange(ns)]
+    vals = [u[s_rows], np.ones(ns)]
+    # faces at their apex: lam_i, then f_i
+    first = (ns + np.cumsum(1 + ka) - (1 + ka)).astype(np.intp)
+    within = np.arange(int(np.sum(ka))) - np.repeat(np.cumsum(ka) - ka, ka)
+    rows += [n_rows + a_idx, stack.rows_of(a_idx)]
+    cols += [first, np.repeat(first + 1, ka) + within]
+    vals += [np.ones(len(a_idx)), np.ones(int(np.sum(ka)))]
+    # balls at their centre: f_i
+    col = ns + int(np.sum(1 + ka))
+    rows.append(stack.rows_of(c_idx))
+    cols.append(col + np.arange(int(np.sum(kc))))
+    vals.append(np.ones(int(np.sum(kc))))
+    col += int(np.sum(kc))
+    # rigid rows
+    rows.append(n_rows + n + np.arange(n_e))
+    cols.append(col + np.arange(n_e))
+    vals.append(np.ones(n_e))
     col += n_e
+    owner = np.concatenate(
+        [s_idx, np.repeat(a_idx, 1 + ka), np.repeat(c_idx, kc), np.full(n_e, -1)]
+    ).astype(np.intp)
     shape = (n_rows + n + n_e, col)
-    i_all = np.concatenate(rows_l).astype(np.intp)
-    j_all = np.concatenate(cols_l).astype(np.intp)
-    v_all = np.concatenate(vals_l)
+    i_all = np.concatenate(rows).astype(np.intp)
+    j_all = np.concatenate(cols).astype(np.intp)
+    v_all = np.concatenate(vals)
     if sparse:
         Z: Any = sp.csc_matrix((v_all, (i_all, j_all)), shape=shape)
     else:
         Z = np.zeros(shape)
         Z[i_all, j_all] = v_all
-    return Z, np.concatenate(owner_l).astype(np.intp)
+    return Z, owner
 
 
 def _work(asm: Assembly, Z: Any) -> Any:
@@ -225,16 +225,21 @@ def _wrenches(asm: Assembly, Z: Any) -> Any:
 
 
 def _least_squares(
-    P: Any, G: Any, b: FloatArray, given: FloatArray, rcond: float, round_off: float
+    P: Any, G: Any, b: FloatArray, given: FloatArray, settings: SolverSettings
 ) -> FloatArray | None:
     """The ``y`` of least ``|P y|`` with ``G y = b``. Dense: from an SVD of
     G (rows below ``rcond`` of the largest are dependent ones), to machine
     precision. Sparse: ``given + z``, a split near the answer (``G given = b``
     to round-off) corrected by the ``z`` of least ``|P (given + z)|`` with
     ``G z = b - G given``: one KKT solve, singular where G's rows depend on
-    each other, regularized by ``round_off`` (relative) and refined
+    each other, regularized (``kkt_round_off``) and refined to round-off
     (``linalg.proximal_solve``); the certificate judges the answer."""
     n_y = G.shape[1]
+    rcond, round_off, kkt_round_off = (
+        settings.free_motion_rcond,
+        settings.round_off,
+        settings.kkt_round_off,
+    )
     if not linalg.is_sparse(G):
         U, sv, Vt = np.linalg.svd(G, full_matrices=True)
         rank = int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
@@ -247,7 +252,9 @@ def _least_squares(
     PtP = sp.csr_matrix(P.T @ P)
     K = sp.bmat([[PtP, G.T], [G, None]], format="csc")
     rhs = np.r_[-(PtP @ given), b - G @ given]
-    step = linalg.proximal_solve(K, rhs, n_y, round_off * float(abs(K).max()))
+    size = float(np.max(np.abs(rhs), initial=0.0))
+    eps = kkt_round_off * float(abs(K).max())
+    step = linalg.proximal_solve(K, rhs, n_y, eps, round_off * size, settings.newton_stall)
     return None if step is None else np.asarray(given + step[:n_y])
 
 
@@ -283,6 +290,9 @@ def _cone_program(
     options = clarabel.DefaultSettings()
     options.verbose = False
     options.tol_gap_abs = options.tol_gap_rel = options.tol_feas = settings.ipm_tolerance
+    options.max_iter = settings.max_iterations
+    refine = settings.ipm_refinement
+    options.iterative_refinement_reltol = options.iterative_refinement_abstol = refine
     Q = sp.csc_matrix(P.T @ P)
     sol = clarabel.DefaultSolver(
         sp.triu(Q, format="csc"),

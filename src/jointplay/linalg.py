@@ -146,15 +146,21 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
 
 
 def proximal_solve(
-    K: Matrix, rhs: FloatArray, n_primal: int, eps: float, tol: float = 0.0
+    K: Matrix,
+    rhs: FloatArray,
+    n_primal: int,
+    eps: float,
+    tol: float = 0.0,
+    stall: float | None = None,
 ) -> FloatArray | None:
     """Quasi-definite regularization (``+eps`` on the first ``n_primal``
     unknowns, ``-eps`` on the others), then refinement against K itself: a
     proximal-point iteration that converges on a consistent system to the
     solution nearest 0, as a least-squares step does. Stops when
-    ``|K step - rhs| <= tol``, else returns the best of 40 rounds (None if
-    the regularized matrix cannot be factored): on a system consistent only
-    up to round-off, the caller checks what it needs."""
+    ``|K step - rhs| <= tol``, or (``stall``) when a round gains less than
+    that factor on the best before it, else returns the best of 40 rounds
+    (None if the regularized matrix cannot be factored): on a system
+    consistent only up to round-off, the caller checks what it needs."""
     signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
     regular = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
     solve = _factored(regular)
@@ -165,10 +171,12 @@ def proximal_solve(
     for _ in range(41):
         miss = rhs - K @ step
         size = float(np.max(np.abs(miss), initial=0.0))
+        if size <= tol or (stall is not None and size > stall * best_miss):
+            if size < best_miss:
+                best = step
+            break
         if size < best_miss:
             best, best_miss = step, size
-        if size <= tol:
-            break
         step = step + np.asarray(solve(miss), dtype=float)
         if not np.all(np.isfinite(step)):
             break
