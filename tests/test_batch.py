@@ -10,7 +10,6 @@ import pytest
 import jointplay
 from conftest import MM, RAD, spherical_shaft
 from jointplay import Load, Workspace, model_from_dict
-from jointplay.settings import DEFAULT
 
 
 def rotated_forces(n: int) -> np.ndarray:
@@ -157,11 +156,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
             regular[[1, 4]] = False
         return step, regular
 
-    def no_step(K: np.ndarray, rhs: np.ndarray, *_: object) -> tuple[np.ndarray, np.ndarray]:
-        return np.zeros_like(rhs), np.zeros(len(K), dtype=bool)  # no regularized step either
-
     monkeypatch.setattr(batch_module, "solve_rows", singular_sometimes)
-    monkeypatch.setattr(batch_module, "proximal_rows", no_step)
     ws = Workspace.of(model_from_dict(data))
     got = ws.solve_batch(work)
     assert calls[0] > 4  # the rows were stacked, and two of them dropped
@@ -189,7 +184,7 @@ def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
     x[1] = 0.0  # every contact at its centre
     lam = np.zeros((3, len(surface))) + 1.0
     nu = np.zeros((3, face.Eq.shape[0]))
-    conv, _ = _newton_rows(
+    conv = _newton_rows(
         face.stack,
         np.repeat(face.stack.r[None, :], 3, axis=0),
         face.Eq,
@@ -204,47 +199,3 @@ def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
     )
     assert conv.tolist() == [True, False, True]
     np.testing.assert_allclose(x[[0, 2]], solved.x[[0, 2]], rtol=0, atol=1e-12)
-
-
-def test_proximal_rows_solve_consistent_singular_systems_only() -> None:
-    """Redundant contacts make a row's KKT system singular but consistent:
-    the regularized, refined step solves it; an inconsistent row gets none."""
-    from jointplay.batch import proximal_rows
-
-    rng = np.random.default_rng(1)
-    H = rng.standard_normal((3, 3))
-    J = np.vstack([rng.standard_normal((1, 3))] * 2)  # two equal constraint rows
-    K = np.zeros((5, 5))
-    K[:3, :3] = H @ H.T + np.eye(3)
-    K[:3, 3:] = J.T
-    K[3:, :3] = J
-    consistent = K @ rng.standard_normal(5)
-    inconsistent = consistent + np.r_[0, 0, 0, 1.0, -1.0]  # the two rows disagree
-    step, ok = proximal_rows(np.stack([K, K]), np.stack([consistent, inconsistent]), 3, DEFAULT)
-    assert ok.tolist() == [True, False]
-    np.testing.assert_allclose(K @ step[0], consistent, rtol=0, atol=1e-9)
-    assert np.all(step[1] == 0.0)
-
-
-def test_a_plate_on_redundant_feet_is_solved_by_the_batch() -> None:
-    """Four feet under a plate: three balance equations for four forces, so
-    every row's KKT system is singular. The batch takes regularized steps,
-    then the documented least-squares split row by row: nearly every row is
-    batched, and each equals its single solve, forces included."""
-    from test_forces import _table_on_feet
-
-    model = model_from_dict(_table_on_feet([10, 5, 0]))
-    ws = Workspace.of(model)
-    rng = np.random.default_rng(0)
-    points = np.c_[rng.uniform(-60, 60, 40), rng.uniform(-40, 40, 40), np.zeros(40)]
-    work = np.array([ws.asm.wrench_work("plate", p) @ np.r_[0, 0, -100.0, 0, 0, 0] for p in points])
-    batch = ws.solve_batch(work)
-    assert batch.full_solves <= 2
-    for i in range(0, 40, 7):
-        load = jointplay.Load(body="plate", at=tuple(points[i]), force=(0, 0, -100))
-        single = Workspace.of(model).solve(loads=[load])
-        forces = [c.force_magnitude for j in single.joints.values() for c in j.contacts]
-        np.testing.assert_allclose(batch.forces[i], forces, rtol=0, atol=1e-10)
-        np.testing.assert_allclose(
-            batch.body_displacement("plate")[i][:3], single.bodies["plate"].translation, atol=MM
-        )

@@ -282,14 +282,12 @@ class BallStack:
         safe = np.where(rho > 0.0, rho, 1.0)
         return v * np.repeat(lam / safe, self.k, axis=-1)
 
-    def gap_used(self, level: FloatArray, radii: FloatArray | None = None) -> FloatArray:
-        """Fraction of each cone's play (``radii``, default ``r``) used at
-        ``level = |A_i x| + B_i x``, in [0, 1] (a limit with no play counts
-        as used as soon as it is reached)."""
-        play = self.r if radii is None else radii
-        r = np.where(play > 0, play, 1.0)
+    def gap_used(self, level: FloatArray) -> FloatArray:
+        """Fraction of each cone's play used at ``level = |A_i x| + B_i x``, in
+        [0, 1] (a limit with no play counts as used as soon as it is reached)."""
+        r = np.where(self.r > 0, self.r, 1.0)
         reached = level >= -DEFAULT.zero_play_reach
-        return np.clip(np.where(play > 0, level / r, reached), 0.0, 1.0)
+        return np.clip(np.where(self.r > 0, level / r, reached), 0.0, 1.0)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from . import certificate, forces, linalg
+from . import certificate, linalg
 from .assembly import Assembly, BallStack, IntArray
 from .geometry import FloatArray
 from .settings import TINY
@@ -214,11 +214,10 @@ def _newton_batch(
     lam_s = lam0[:, list(surface)].copy()
     nu = np.zeros((B, ne))
     conv = np.zeros(B, dtype=bool)
-    indeterminate = np.zeros(B, dtype=bool)
     chunk = max(1, CHUNK_ENTRIES // (n * n))
     for lo in range(0, B, chunk):
         sl = slice(lo, min(B, lo + chunk))
-        conv[sl], indeterminate[sl] = _newton_rows(
+        conv[sl] = _newton_rows(
             face.stack,
             r_surface[sl],
             Eq,
@@ -237,18 +236,6 @@ def _newton_batch(
     f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
-    # redundant contacts: Newton's split is the one nearest its start; the
-    # documented one is the least-squares split (``forces``), row by row
-    st = ws.settings
-    apex = st.feasibility_tolerance * ws._max_radius
-    for b in np.flatnonzero(conv & indeterminate):
-        rest = g_hat[b] - stack.adjoint(f[b], lam[b])
-        nu_b = ws.balance.rigid_multipliers(rest[None])[0]
-        split = forces.least_squares_split(
-            ws.asm, x[b], lam[b], f[b], nu_b, g_hat[b], apex, st, radii=r[b]
-        )
-        if split is not None:
-            lam[b], f[b] = split.lam, split.f
     lam_a = lam[:, list(surface) + list(linear)]
     positive = ws.settings.positive_force
     strict = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1) if lam_a.shape[1] else conv
@@ -273,12 +260,10 @@ def _newton_rows(
     lam: FloatArray,
     nu: FloatArray,
     settings: SolverSettings,
-) -> tuple[BoolArray, BoolArray]:
+) -> BoolArray:
     """Newton on the KKT equations (see ``solver._newton``), rows in place,
-    each row with its own radii ``r`` (B, na) and right sides ``e`` (B, ne).
-    A row whose KKT system is singular (redundant contacts: its forces are
-    not unique) takes regularized steps (``proximal_rows``). Returns the
-    converged mask and the mask of the rows that took such steps."""
+    each row with its own radii ``r`` (B, na) and right sides ``e`` (B, ne);
+    returns the converged mask."""
     B, m = q.shape
     A, start, k, Bo = sub.A, sub.start, sub.k, sub.B
     na, ne = len(k), Eq.shape[0]
@@ -288,7 +273,6 @@ def _newton_rows(
     K0[m + na :, :m] = Eq
     todo = np.arange(B)
     conv = np.zeros(B, dtype=bool)
-    proximal = np.zeros(B, dtype=bool)
     for it in range(settings.batch_newton_steps + 1):
         xs = x[todo]
         v = xs @ A.T
@@ -331,40 +315,12 @@ def _newton_rows(
             Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
             Kb[:, m : m + na, :m] = J
         step, regular = solve_rows(Kb, -F)
-        if not np.all(regular):  # redundant contacts, or a row with no solution
-            singular = np.flatnonzero(~regular)
-            step[singular], regular[singular] = proximal_rows(
-                Kb[singular], -F[singular], m, settings
-            )
-            proximal[todo[singular]] = True
-        todo, step = todo[regular], step[regular]  # a row with no step is left to the full solver
+        todo, step = todo[regular], step[regular]  # a singular row is left to the full solver
         x[todo] += step[:, :m]
         lam[todo] += step[:, m : m + na]
         nu[todo] += step[:, m + na :]
     # rows still in ``todo`` did not converge
-    return conv, proximal
-
-
-def proximal_rows(
-    K: FloatArray, rhs: FloatArray, n_primal: int, settings: SolverSettings
-) -> tuple[FloatArray, BoolArray]:
-    """Stacked ``linalg.proximal_solve``: each singular system regularized
-    (``kkt_round_off``), then refined against itself; a row whose residual
-    does not come down to ``kkt_refined`` of its right side has no step."""
-    n = K.shape[1]
-    scale = np.maximum(1.0, np.max(np.abs(K), axis=(1, 2)))
-    signs = np.r_[np.ones(n_primal), -np.ones(n - n_primal)]
-    regular = K + (settings.kkt_round_off * scale)[:, None, None] * np.diag(signs)[None]
-    target = settings.kkt_refined * np.max(np.abs(rhs), axis=1)
-    step = np.zeros_like(rhs)
-    miss = rhs.copy()
-    for _ in range(settings.batch_newton_steps):
-        step += np.linalg.solve(regular, miss[:, :, None])[:, :, 0]
-        miss = rhs - np.einsum("bij,bj->bi", K, step)
-        if np.all(np.max(np.abs(miss), axis=1) <= target):
-            break
-    ok = np.all(np.isfinite(step), axis=1) & (np.max(np.abs(miss), axis=1) <= target)
-    return np.where(ok[:, None], step, 0.0), ok
+    return conv
 
 
 def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, BoolArray]:

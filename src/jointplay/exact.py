@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import clarabel
 import numpy as np
 
-from . import conic, linalg
+from . import conic
 from .assembly import Assembly
 from .errors import SolverError
 from .finite import (
@@ -51,6 +51,7 @@ from .result import (
     equilibrium_residual,
     points_of,
 )
+from .solver import _csc
 
 if TYPE_CHECKING:
     from .solver import Workspace
@@ -283,7 +284,7 @@ def _step(
     settings.max_iter = ws.settings.exact_ipm_iterations
     A = np.vstack(A_rows) if A_rows else np.zeros((0, n_var))
     sol = clarabel.DefaultSolver(
-        linalg.csc(np.triu(P)), q, linalg.csc(A), np.array(b_rows, dtype=float), cones, settings
+        _csc(np.triu(P)), q, _csc(A), np.array(b_rows, dtype=float), cones, settings
     ).solve()
     if not conic.has_answer(sol):
         raise SolverError(f"--exact: the cone solver stopped with status {conic.status_name(sol)}")

@@ -59,7 +59,6 @@ def least_squares_split(
     g_hat: FloatArray,
     apex_level: float,
     settings: SolverSettings,
-    radii: FloatArray | None = None,
 ) -> Split | None:
     """The least-squares split (module docstring) at positions ``x`` under
     unit loads ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split;
@@ -70,12 +69,11 @@ def least_squares_split(
     caller keeps its own). ``settings``: the
     equilibrium tolerance (how far a force may fall below 0 or outside its
     cone by round-off), the rank cutoff, the KKT regularization and the
-    interior-point tolerance. ``radii``: the plays, when a study varies
-    them (default: the model's)."""
+    interior-point tolerance."""
     stack = asm.stack
     v, rho, level = stack.levels(x)
     hard = stack.spring == 0
-    touching = hard & (stack.gap_used(level, radii) >= settings.touching)
+    touching = hard & (stack.gap_used(level) >= settings.touching)
     apex = touching & ((stack.k == 0) | (rho <= apex_level))
     surface = touching & ~apex
     keep_lam = np.where(hard, 0.0, lam)
@@ -280,14 +278,8 @@ def _cone_program(
     rows depend on each other."""
     m, n_y = G.shape
     n_cone = n_s + int(np.sum(k_faces + 1))
-    if linalg.is_sparse(G):
-        A = sp.vstack([sp.csr_matrix(G), -sp.eye(n_cone, n_y, format="csr")], format="csc")
-        Q = sp.csc_matrix(P.T @ P)
-        Q_upper = sp.triu(Q, format="csc")
-    else:  # built directly: scipy's general constructors cost more than the solve
-        A = linalg.csc(np.vstack([G, -np.eye(n_cone, n_y)]))
-        Q = P.T @ P
-        Q_upper = linalg.csc(np.triu(Q))
+    cone_part = sp.eye(n_cone, n_y, format="csr")
+    A = sp.vstack([sp.csr_matrix(G), -cone_part], format="csc")
     cones: list[Any] = [clarabel.ZeroConeT(m)] if m else []
     if n_s:
         cones.append(clarabel.NonnegativeConeT(n_s))
@@ -301,8 +293,9 @@ def _cone_program(
     options.max_iter = settings.max_iterations
     refine = settings.ipm_refinement
     options.iterative_refinement_reltol = options.iterative_refinement_abstol = refine
+    Q = sp.csc_matrix(P.T @ P)
     sol = clarabel.DefaultSolver(
-        Q_upper,
+        sp.triu(Q, format="csc"),
         Q @ given,
         A,
         np.r_[np.zeros(m), given[:n_cone]],

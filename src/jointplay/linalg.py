@@ -251,12 +251,3 @@ def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
     tol = DEFAULT.lsmr_tolerance
     out = spla.lsmr(A, b, atol=tol, btol=tol, maxiter=20 * max(A.shape))
     return np.asarray(out[0])
-
-
-def csc(a: FloatArray) -> sp.csc_matrix:
-    """A dense matrix in compressed-column form, built directly (scipy's
-    general constructors cost more than the small solves they feed)."""
-    col, row = np.nonzero(a.T)
-    indptr = np.zeros(a.shape[1] + 1, dtype=np.int64)
-    np.cumsum(np.bincount(col, minlength=a.shape[1]), out=indptr[1:])
-    return sp.csc_matrix((a[row, col], row.astype(np.int64), indptr), shape=a.shape)

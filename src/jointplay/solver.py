@@ -450,11 +450,7 @@ class Workspace:
         if linalg.is_sparse(stacked):
             A = sp.csc_matrix(sp.csr_matrix(stacked)[order])
         else:
-            A = (
-                linalg.csc(np.asarray(stacked)[order])
-                if n_all
-                else linalg.csc(np.zeros((0, self.m)))
-            )
+            A = _csc(np.asarray(stacked)[order]) if n_all else _csc(np.zeros((0, self.m)))
         cones: list[Any] = [clarabel.ZeroConeT(n_eq)] if n_eq else []
         cones += [
             clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
@@ -465,7 +461,7 @@ class Workspace:
         elif linalg.is_sparse(P):
             P_upper = sp.csc_matrix(sp.triu(P))
         else:
-            P_upper = linalg.csc(np.triu(P))
+            P_upper = _csc(np.triu(P))
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         tol = self.settings.ipm_tolerance
@@ -984,6 +980,15 @@ class _ConeProgram:
     settings: Any
     soc_first: IntArray  # row of each cone's first entry (its multiplier lam)
     f_rows: IntArray  # rows of the cones' other entries (their force vectors f)
+
+
+def _csc(a: FloatArray) -> sp.csc_matrix:
+    """A dense matrix in compressed-column form, built directly (scipy's
+    general constructors cost more than the small solves they feed)."""
+    col, row = np.nonzero(a.T)
+    indptr = np.zeros(a.shape[1] + 1, dtype=np.int64)
+    np.cumsum(np.bincount(col, minlength=a.shape[1]), out=indptr[1:])
+    return sp.csc_matrix((a[row, col], row.astype(np.int64), indptr), shape=a.shape)
 
 
 def _column_max(a: Matrix, m: int) -> FloatArray:
