@@ -294,10 +294,8 @@ class Workspace:
 
         Statically indeterminate rigid joints share the load in the least-squares way.
         """
-        if not self.E.shape[0]:
-            return np.zeros(0)
         rest = g_hat - self.stack.adjoint(point.f, point.lam)
-        return linalg.lstsq(self.E.T, rest)
+        return np.asarray(self.balance.rigid_multipliers(rest[None])[0])
 
     def solve_batch(self, work: FloatArray, radii: FloatArray | None = None) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of
