@@ -112,6 +112,11 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
     residual = np.zeros(B)
     pending = np.flatnonzero(norms > 0)
     solved_by_set: dict[_FaceKey, list[IntArray]] = {}  # active set -> solved rows
+    # active set -> how often each row failed from it: a row is not tried
+    # again after ``batch_give_up`` failures (else every full solve would
+    # re-run Newton on every pending row: time quadratic in the samples)
+    failures: dict[_FaceKey, IntArray] = {}
+    give_up = ws.settings.batch_give_up
     full = 0
     while pending.size:
         # Newton from the nearest solved sample of each known active set, while it helps.
@@ -119,26 +124,29 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
         while progress and pending.size:
             progress = False
             for active, rows in solved_by_set.items():
-                if not pending.size:
-                    break
+                failed = failures.setdefault(active, np.zeros(B, dtype=np.intp))
+                tried = pending[failed[pending] < give_up]
+                if not tried.size:
+                    continue
                 ref = np.concatenate(rows)
-                nearest = ref[cKDTree(features[ref]).query(features[pending])[1]]
+                nearest = ref[cKDTree(features[ref]).query(features[tried])[1]]
                 ok, xs, lams, fs, checks = _newton_batch(
                     ws,
                     active,
-                    g_hat[pending],
-                    sigma[pending],
+                    g_hat[tried],
+                    sigma[tried],
                     x[nearest],
                     lam[nearest],
-                    r[pending],
+                    r[tried],
                 )
+                failed[tried[~ok]] += 1
                 if np.any(ok):
-                    won = pending[ok]
+                    won = tried[ok]
                     x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
                     assert checks is not None  # rows were accepted: they were checked
                     feas[won], residual[won] = checks.feasibility[ok], checks.balance[ok]
                     rows.append(won)
-                    pending = pending[~ok]
+                    pending = np.setdiff1d(pending, won, assume_unique=True)
                     progress = True
         if not pending.size:
             break
