@@ -72,7 +72,8 @@ class SolverSettings:
     kkt_plain: float = 1e-8
     kkt_refined: float = 1e-10
     #: Newton has stalled when a step gains less than this factor on the best
-    #: of the three before it (round-off, or a slow mode of a long chain).
+    #: of the three before it (round-off, or a slow mode of a long chain); so
+    #: has the refinement of the force split's regularized KKT solve.
     newton_stall: float = 0.5
     #: Newton on a face that pins the position is accepted when its
     #: equations hold to this (relative): well above where it stops, well
