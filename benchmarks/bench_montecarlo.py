@@ -12,7 +12,15 @@ an independent full ``jointplay.solve`` (interior point + polish) and from
 SLSQP on the checked subset.
 
 Target (issue 5): 100,000 samples/s on a 2-core machine, every sample exact
-to 1e-7 mm. Run from the repository root: ``python benchmarks/bench_montecarlo.py``.
+to 1e-7 mm.
+
+Then the studies of examples/studies (issue 18's targets: 300,000 samples/s
+on shaft_fits.yaml, 100,000 on carriage.yaml, with 2 workers): each run with
+1 and ``--workers`` processes, at two sample counts and two chunk sizes
+(time should be linear in the samples and not depend on the chunk), against
+the obvious alternative, one full ``jointplay.solve`` per sample.
+
+Run from the repository root: ``python benchmarks/bench_montecarlo.py``.
 Timing is informative: exits 0.
 """
 
@@ -89,6 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--slsqp", type=int, default=200, help="samples looped through SLSQP")
     parser.add_argument("--check", type=int, default=200, help="samples re-solved in full")
+    parser.add_argument(
+        "--study-samples", type=int, default=200_000, help="samples of each example study"
+    )
     args = parser.parse_args(argv)
     model = jointplay.model_from_dict(model_dict())
     study = MonteCarlo(samples=args.samples, seed=0, chunk=50_000)
@@ -132,7 +143,58 @@ def main(argv: list[str] | None = None) -> int:
         f"({'within' if vs_full <= 1e-7 else 'OUTSIDE'} 1e-7 mm); vs SLSQP "
         f"({args.slsqp} samples): {vs_slsqp:.1e} mm"
     )
+    for name, target in (("shaft_fits", 300_000), ("carriage", 100_000)):
+        print()
+        studies(name, target, args.study_samples, args.workers, args.check)
     return 0
+
+
+def studies(name: str, target: int, samples: int, workers: int, check: int) -> None:
+    """Monte Carlo on examples/studies/NAME.yaml: samples/s by processes,
+    sample count and chunk size, against a full solve per sample."""
+    from jointplay.montecarlo import solve_chunk
+    from jointplay.solver import Workspace
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "studies" / f"{name}.yaml"
+    model = jointplay.load(path)
+    MonteCarlo(samples=2000, seed=1).run(model)  # warm-up
+    print(f"Monte Carlo on examples/studies/{name}.yaml, seed 0")
+    print(f"{'run':46s} {'samples':>10s} {'time (s)':>10s} {'samples/s':>12s} {'ratio':>8s}")
+    # the alternative: one full solve per sample, with that sample's plays
+    chunk = solve_chunk(model, MonteCarlo(samples=check, seed=0), 0, check)
+    ws = Workspace.of(model)
+    from jointplay.variation import play_map
+
+    pmap = play_map(ws.asm, model.name or name)
+    radii = pmap.radii(chunk.plays)
+    start = time.perf_counter()
+    for i in range(check):
+        ws.with_radii(radii[i]).solve()
+    full_rate = check / (time.perf_counter() - start)
+    print(
+        f"{'one full jointplay.solve per sample':46s} {check:10,d} {check / full_rate:10.3f} "
+        f"{full_rate:12,.0f} {1:8.0f}"
+    )
+    best = 0.0
+    for n, size, procs in (
+        (samples // 4, 50_000, 1),
+        (samples, 50_000, 1),
+        (samples, 10_000, 1),
+        (samples, 50_000, workers),
+    ):
+        start = time.perf_counter()
+        result = MonteCarlo(samples=n, seed=0, chunk=size).run(model, workers=procs)
+        spent = time.perf_counter() - start
+        rate = n / spent
+        best = max(best, rate)
+        label = f"MonteCarlo, {procs} process(es), chunk {size:,}"
+        print(f"{label:46s} {n:10,d} {spent:10.3f} {rate:12,.0f} {rate / full_rate:8.0f}")
+    verdict = "meets" if best >= target else "misses"
+    print(
+        f"best: {best:,.0f} samples/s, {verdict} the {target:,} samples/s target; last run: "
+        f"{result.batched:,} by batched Newton, {result.full_solves} full solves, worst "
+        f"feasibility {result.feasibility_mm:.1e} mm, imbalance {result.equilibrium_residual:.1e}"
+    )
 
 
 if __name__ == "__main__":

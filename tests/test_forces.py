@@ -337,3 +337,49 @@ def test_a_split_that_does_not_certify_leaves_the_routes_forces(
         np.testing.assert_allclose(
             got.joints[name].translation, expected.joints[name].translation, atol=MM
         )
+
+
+def test_a_face_whose_force_reaches_its_rim_gets_the_exact_split() -> None:
+    """The carriage's least-squares split would pull on a guide corner and
+    put the nut face's centre of pressure outside its disc. The rule's
+    split then leaves that corner unloaded and the centre of pressure on the
+    rim (``|f| = lam``). Before, that split was the cone program's answer,
+    good to about 1e-7; now Newton on those limits makes it exact. Checked
+    here by the optimality conditions of the rule's convex program, found
+    independently (least squares): the gradient of |P y|^2 / 2 is balanced
+    by multipliers of the balance, of the rim (>= 0) and of the unloaded
+    corner (>= 0), to round-off."""
+    from jointplay import forces
+    from jointplay.solver import Workspace
+
+    model = jointplay.load(Path(__file__).parents[1] / "examples" / "studies" / "carriage.yaml")
+    ws = Workspace.of(model)
+    g = ws.asm.g
+    point = ws._optimum(g / np.linalg.norm(g))
+    x, lam, f = point.x, point.lam, point.f
+    st = ws.settings
+    surface, apex, u = forces._classes(ws.stack, x, ws.stack.r, st.feasibility_tolerance, st)
+    Z, owner = forces._unknowns(ws.stack, surface, apex, u, ws.asm.E.shape[0], False)
+    P, G = forces._wrenches(ws.asm, Z), forces._work(ws.asm, Z)
+    y = np.linalg.lstsq(Z, np.concatenate([f, lam]), rcond=None)[0]
+    np.testing.assert_allclose(Z @ y, np.concatenate([f, lam]), atol=1e-15)
+    b = g / np.linalg.norm(g)
+    np.testing.assert_allclose(G @ y, b, atol=1e-13)
+    unloaded = [j for j in range(len(y)) if owner[j] >= 0 and ws.stack.k[owner[j]] == 1]
+    unloaded = [j for j in unloaded if y[j] == 0.0]
+    assert len(unloaded) == 1  # one guide corner left unloaded
+    nut = next(i for i, ball in enumerate(ws.balls) if ball.contact.name == "face x-")
+    assert model.joints[ws.balls[nut].joint_index].name == "nut"
+    cols = np.flatnonzero(owner == nut)  # lam, then f
+    f_nut = y[cols[1:]]
+    assert np.linalg.norm(f_nut) == pytest.approx(y[cols[0]], rel=1e-13)  # on its rim
+    # KKT: P^T P y + G^T mu + eta (0.., f/|f|, -1 ..) - nu e_unloaded = 0
+    rim = np.zeros(len(y))
+    rim[cols[0]], rim[cols[1:]] = -1.0, f_nut / np.linalg.norm(f_nut)
+    held = np.zeros((len(y), 1))
+    held[unloaded[0]] = -1.0
+    M = np.hstack([G.T, rim[:, None], held])
+    grad = P.T @ (P @ y)
+    mult, *_ = np.linalg.lstsq(M, -grad, rcond=None)
+    np.testing.assert_allclose(M @ mult + grad, 0.0, atol=1e-12 * np.max(np.abs(grad)))
+    assert mult[-2] > 0.0 and mult[-1] > 0.0  # the rim and the corner both bind

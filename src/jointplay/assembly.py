@@ -199,7 +199,7 @@ class BallStack:
         before = np.cumsum(k) - k  # rows of the earlier cones in ``which``
         return np.asarray(np.repeat(self.start[idx] - before, k) + np.arange(int(k.sum())))
 
-    def take(self, which: Sequence[int]) -> BallStack:
+    def take(self, which: Sequence[int] | IntArray) -> BallStack:
         """The sub-stack of cones ``which`` (in that order)."""
         idx = np.asarray(which, dtype=np.intp)
         k = self.k[idx]
@@ -282,12 +282,14 @@ class BallStack:
         safe = np.where(rho > 0.0, rho, 1.0)
         return v * np.repeat(lam / safe, self.k, axis=-1)
 
-    def gap_used(self, level: FloatArray) -> FloatArray:
+    def gap_used(self, level: FloatArray, radii: FloatArray | None = None) -> FloatArray:
         """Fraction of each cone's play used at ``level = |A_i x| + B_i x``, in
-        [0, 1] (a limit with no play counts as used as soon as it is reached)."""
-        r = np.where(self.r > 0, self.r, 1.0)
+        [0, 1] (a limit with no play counts as used as soon as it is reached);
+        ``radii``: other radii than the stack's (a row each, like ``level``)."""
+        radii = self.r if radii is None else radii
+        r = np.where(radii > 0, radii, 1.0)
         reached = level >= -DEFAULT.zero_play_reach
-        return np.clip(np.where(self.r > 0, level / r, reached), 0.0, 1.0)
+        return np.clip(np.where(radii > 0, level / r, reached), 0.0, 1.0)
 
 
 @dataclass(frozen=True)

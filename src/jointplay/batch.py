@@ -15,10 +15,11 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from . import certificate, linalg
+from . import certificate, forces, linalg
 from .assembly import Assembly, BallStack, IntArray
 from .geometry import FloatArray
 from .settings import TINY
@@ -27,10 +28,11 @@ BoolArray = NDArray[np.bool_]
 
 if TYPE_CHECKING:
     from .settings import SolverSettings
-    from .solver import Workspace, _FaceKey
+    from .solver import Workspace, _Face, _FaceKey
 
-#: Samples per batched linear solve (bounds the memory of the (B, n, n) stack).
-CHUNK_ENTRIES = 1 << 22
+#: Entries of the (rows, n, n) stack of one batched Newton (8 MB): fewer
+#: rows cost Python overhead per call, more leave the cache.
+CHUNK_ENTRIES = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -118,6 +120,9 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
     failures: dict[_FaceKey, IntArray] = {}
     give_up = ws.settings.batch_give_up
     full = 0
+    # rows per Newton batch (n at most the unknowns and all multipliers)
+    n_most = ws.m + n_balls + ws.stack.A.shape[0] + ws.Eq.shape[0]
+    chunk = max(1, CHUNK_ENTRIES // n_most**2)
     while pending.size:
         # Newton from the nearest solved sample of each known active set, while it helps.
         progress = True
@@ -130,24 +135,27 @@ def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None
                     continue
                 ref = np.concatenate(rows)
                 nearest = ref[cKDTree(features[ref]).query(features[tried])[1]]
-                ok, xs, lams, fs, checks = _newton_batch(
-                    ws,
-                    active,
-                    g_hat[tried],
-                    sigma[tried],
-                    x[nearest],
-                    lam[nearest],
-                    r[tried],
-                )
-                failed[tried[~ok]] += 1
-                if np.any(ok):
-                    won = tried[ok]
-                    x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
-                    assert checks is not None  # rows were accepted: they were checked
-                    feas[won], residual[won] = checks.feasibility[ok], checks.balance[ok]
-                    rows.append(won)
-                    pending = np.setdiff1d(pending, won, assume_unique=True)
-                    progress = True
+                for part in range(0, len(tried), chunk):
+                    now, near = tried[part : part + chunk], nearest[part : part + chunk]
+                    ok, xs, lams, fs, checks = _newton_batch(
+                        ws,
+                        active,
+                        g_hat[now],
+                        sigma[now],
+                        x[near],
+                        lam[near],
+                        f[near],
+                        r[now],
+                    )
+                    failed[now[~ok]] += 1
+                    if np.any(ok):
+                        won = now[ok]
+                        x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
+                        assert checks is not None  # rows were accepted: they were checked
+                        feas[won], residual[won] = checks.feasibility[ok], checks.balance[ok]
+                        rows.append(won)
+                        pending = np.setdiff1d(pending, won, assume_unique=True)
+                        progress = True
         if not pending.size:
             break
         first, pending = int(pending[0]), pending[1:]
@@ -191,6 +199,7 @@ def _newton_batch(
     sigma: FloatArray,
     x0: FloatArray,
     lam0: FloatArray,
+    f0: FloatArray,
     r: FloatArray,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
@@ -201,7 +210,7 @@ def _newton_batch(
     certificate); a row is accepted only if it converged and passes the
     certificate of a unique optimum.
     """
-    B, m = g_hat.shape
+    B = g_hat.shape[0]
     stack = ws.stack
     x = x0.copy()
     lam = np.zeros((B, len(ws.balls)))
@@ -218,32 +227,48 @@ def _newton_batch(
     e_rows[:, ne0 + face.lam_rows] = r[:, list(linear)]
     r_surface = r[:, list(surface)]
     na, ne = len(surface), Eq.shape[0]
-    n = m + na + ne
-    lam_s = lam0[:, list(surface)].copy()
+    # redundant contacts: Newton on an independent part of the active rows
+    # (the same positions); the forces are split afterwards
+    kept = _independent_rows(ws, face, x0[0])
+    redundant = kept is not None
+    s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
+    sub = face.stack.take(s_keep)
+    lam_s = np.zeros((B, na))
+    lam_k = lam0[:, list(surface)][:, s_keep]
     nu = np.zeros((B, ne))
-    conv = np.zeros(B, dtype=bool)
-    chunk = max(1, CHUNK_ENTRIES // (n * n))
-    for lo in range(0, B, chunk):
-        sl = slice(lo, min(B, lo + chunk))
-        conv[sl] = _newton_rows(
-            face.stack,
-            r_surface[sl],
-            Eq,
-            e_rows[sl],
-            eq_soft[sl],
-            -g_hat[sl],
-            sigma[sl][:, list(surface)],
-            x[sl],
-            lam_s[sl],
-            nu[sl],
-            ws.settings,
-        )
+    nu_k = np.zeros((B, len(e_keep)))
+    soft_s = sigma[:, list(surface)][:, s_keep]
+    conv = _newton_rows(
+        sub,
+        r_surface[:, s_keep],
+        Eq[e_keep],
+        e_rows[:, e_keep],
+        eq_soft[:, e_keep],
+        -g_hat,
+        soft_s,
+        x,
+        lam_k,
+        nu_k,
+        ws.settings,
+    )
+    lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
 
     lam[:, list(surface)] = lam_s
     v, rho = face.stack.norms(x)
     f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
+    st = ws.settings
+    if redundant:
+        # Newton's split is one of many; the documented one (``forces``),
+        # from the neighbour's split, on the cone limits that bind it
+        apex = st.feasibility_tolerance * ws._max_radius
+        split, lam, f, rigid = forces.least_squares_rows(
+            ws.asm, x, lam, f, g_hat, r, (lam0, f0), apex, st
+        )
+        checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, rigid)
+        ok = conv & split & _pinned(ws, key, x, lam, f)
+        return ok & checks.passed(st, ws._max_radius), x, lam, f, checks
     lam_a = lam[:, list(surface) + list(linear)]
     positive = ws.settings.positive_force
     strict = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1) if lam_a.shape[1] else conv
@@ -329,6 +354,82 @@ def _newton_rows(
         nu[todo] += step[:, m + na :]
     # rows still in ``todo`` did not converge
     return conv
+
+
+def _pinned(
+    ws: Workspace, key: _FaceKey, x: FloatArray, lam: FloatArray, f: FloatArray
+) -> BoolArray:
+    """Whether the forces ``lam``, ``f`` (rows) pin each row's position
+    down: any other optimum keeps every loaded contact where it is, so the
+    position is unique if their rows (and the equalities) have full rank.
+    A surface cone with an offset, or a face whose force reaches its rim,
+    keeps only the rows across its tilt (see ``Workspace._determined``); an
+    unloaded contact keeps none. Rows (B, m)."""
+    stack, st = ws.stack, ws.settings
+    B = x.shape[0]
+    loaded = lam > st.positive_force * np.max(lam, axis=1, keepdims=True)
+    v, rho = stack.norms(x)
+    f_norm = np.sqrt(stack.segment_sum(f * f))
+    parts = [np.broadcast_to(linalg.dense(ws.Eq), (B, *ws.Eq.shape))]
+    surface, linear = key
+    for i in (*surface, *linear):
+        k, rows = int(stack.k[i]), stack.rows_of([i])
+        M = np.broadcast_to(linalg.dense(stack.face_rows(i)), (B, k + 1, ws.m))
+        if i in surface:  # tilts along its direction of contact, if it has an offset
+            u = v[:, rows] / np.maximum(rho[:, i : i + 1], TINY)
+            tilt = np.full(B, bool(stack.has_offset[i]))
+            if not stack.has_offset[i]:
+                M = M[:, :k]
+        else:  # a face flat at its apex may tilt about the rim its force reaches
+            u = f[:, rows] / np.maximum(f_norm[:, i : i + 1], TINY)
+            tilt = (k > 0) & (f_norm[:, i] >= (1.0 - st.apex) * lam[:, i])
+        if np.any(tilt):
+            w = np.concatenate([u, -np.ones((B, 1))], axis=1)
+            w /= np.linalg.norm(w, axis=1, keepdims=True)
+            across = M - w[:, :, None] * np.einsum("bk,bkm->bm", w, M)[:, None, :]
+            M = np.where(tilt[:, None, None], across, M)
+        parts.append(np.where(loaded[:, i, None, None], M, 0.0))
+    J = np.concatenate(parts, axis=1)
+    if J.shape[1] < ws.m:
+        return np.zeros(B, dtype=bool)
+    sv = np.linalg.svd(J, compute_uv=False)
+    return np.asarray(sv[:, ws.m - 1] > st.free_motion_rcond * sv[:, 0])
+
+
+def _independent_rows(
+    ws: Workspace, face: _Face, x: FloatArray
+) -> tuple[IntArray, IntArray] | None:
+    """None if the active rows of ``face`` at ``x`` (each surface cone's
+    gradient and the equalities) are independent. Else they are redundant
+    (contacts on the four corners of a guide: the forces are not unique,
+    the positions are) and this returns the surface cones and equality rows
+    of an independent part that spans them all (a pivoted QR): Newton on
+    those finds the same positions. Compliant contacts always stay: their
+    force follows their penetration."""
+    sub, (surface, linear) = face.stack, face.key
+    Eq = linalg.dense(face.Eq)
+    rows = [Eq]
+    if len(sub.k):
+        v, rho = sub.norms(x)
+        u = v / np.repeat(np.where(rho > 0, rho, 1.0), sub.k)
+        rows.insert(0, np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B)
+    J = np.vstack(rows)
+    spring = ws.stack.spring
+    soft = np.zeros(len(J), dtype=bool)
+    soft[: len(surface)] = spring[list(surface)] > 0
+    ne0 = Eq.shape[0] - face.L.shape[0]
+    soft[len(surface) + ne0 + face.lam_rows] = spring[list(linear)] > 0
+    hard = np.flatnonzero(~soft)
+    if not len(hard):
+        return None
+    _, R, piv = scipy.linalg.qr(J[hard].T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    rank = int(np.sum(d > ws.settings.free_motion_rcond * d[0])) if d.size and d[0] > 0 else 0
+    if rank == len(hard):
+        return None
+    keep = np.sort(np.r_[np.flatnonzero(soft), hard[piv[:rank]]])
+    na = len(surface)
+    return keep[keep < na], keep[keep >= na] - na
 
 
 def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, BoolArray]:

@@ -71,16 +71,9 @@ def least_squares_split(
     cone by round-off), the rank cutoff, the KKT regularization and the
     interior-point tolerance."""
     stack = asm.stack
-    v, rho, level = stack.levels(x)
-    hard = stack.spring == 0
-    touching = hard & (stack.gap_used(level) >= settings.touching)
-    apex = touching & ((stack.k == 0) | (rho <= apex_level))
-    surface = touching & ~apex
-    keep_lam = np.where(hard, 0.0, lam)
-    keep_f = np.where(np.repeat(hard, stack.k), 0.0, f)
+    surface, apex, u = _classes(stack, x, stack.r, apex_level, settings)
+    keep_lam, keep_f = _compliant(stack, lam, f)
     b = g_hat - stack.adjoint(keep_f, keep_lam)
-    safe = np.where(rho > 0, rho, 1.0)
-    u = v / np.repeat(safe, stack.k)  # each cone's direction of contact
     Z, owner = _unknowns(stack, surface, apex, u, asm.E.shape[0], asm.sparse)
     if Z.shape[1] == 0:
         return None
@@ -88,38 +81,236 @@ def least_squares_split(
     if not asm.sparse and _determined(G, settings.free_motion_rcond):
         return None  # one split balances the loads: the solver's own
     P = _wrenches(asm, Z)
-    n, n_rows = len(stack.k), stack.A.shape[0]
     centred = apex & ~stack.has_offset
 
     def split_of(y: FloatArray, cols: IntArray | slice = slice(None)) -> Split:
-        z = Z[:, cols] @ y
-        out = Split(keep_lam + z[n_rows : n_rows + n], keep_f + z[:n_rows], z[n_rows + n :])
-        # a ball at its centre (no play): its force is its vector's size
-        out.lam[centred] = np.sqrt(stack.segment_sum(out.f * out.f))[centred]
-        return out
+        return _split_of(stack, Z[:, cols] @ y, keep_lam, keep_f, centred)
 
     given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
     given = given / np.asarray((Z.multiply(Z) if asm.sparse else Z * Z).sum(axis=0)).ravel()
     y = _least_squares(P, G, b, given, settings)
     if y is not None:
         split = split_of(y)
-        if _inside(split, stack, settings.equilibrium_tolerance):
+        if _inside(split.lam, split.f, stack, settings.equilibrium_tolerance):
             return split
     faces = apex & stack.has_offset
     y = _cone_program(P, G, given, int(np.sum(surface)), stack.k[faces], settings)
     if y is None:
         return None
     split = split_of(y)
-    # the cone program's answer is good to its tolerance; the contacts it
-    # leaves unloaded out, the least-squares split of the others is exact
+    # the cone program's answer is good to its tolerance; the limits that
+    # bind it held as equalities, the split is exact
+    if not asm.sparse:
+        rows = least_squares_rows(
+            asm,
+            x[None],
+            lam[None],
+            f[None],
+            g_hat[None],
+            stack.r[None],
+            (split.lam[None], split.f[None]),
+            apex_level,
+            settings,
+        )
+        if rows[0][0]:
+            return Split(rows[1][0], rows[2][0], rows[3][0])
+        return split
     pushing = split.lam > settings.positive_force * float(np.max(np.abs(split.lam)))
     cols = np.flatnonzero((owner < 0) | pushing[np.maximum(owner, 0)])
     y = _least_squares(P[:, cols], G[:, cols], b, y[cols], settings)
     if y is not None:
         exact = split_of(y, cols)
-        if _inside(exact, stack, settings.equilibrium_tolerance):
+        if _inside(exact.lam, exact.f, stack, settings.equilibrium_tolerance):
             return exact
     return split
+
+
+def least_squares_rows(
+    asm: Assembly,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    g_hat: FloatArray,
+    radii: FloatArray,
+    near: tuple[FloatArray, FloatArray],
+    apex_level: float,
+    settings: SolverSettings,
+) -> tuple[NDArray[np.bool_], FloatArray, FloatArray, FloatArray]:
+    """``least_squares_split`` of B answers at once (rows of ``x``, ``lam``,
+    ``f``, ``g_hat``, each with its own cone ``radii``; dense models), on
+    the cone limits that bind a split ``near`` it.
+
+    ``near = (lam, f)``: rows of a split close to each row's, such as the
+    cone program's answer or a neighbouring sample's split. Its touching
+    contacts with no force are left unloaded (the least-squares split of all
+    would pull on them), and its faces whose force reaches their rim
+    (``|f_i| = lam_i``: the centre of pressure on the rim) keep it there.
+    The split is the least-squares one with those limits held as
+    equalities, by Newton from ``near`` (``_split_newton``). It is the
+    rule's only if no other limit is broken and none of these could be let
+    go with profit (their multipliers are >= 0).
+
+    Returns the mask of the rows whose split is the rule's, and every row's
+    ``(lam, f, nu)`` (the rule's where the mask holds)."""
+    stack = asm.stack
+    B, n_e = x.shape[0], asm.E.shape[0]
+    surface, apex, u = _classes(stack, x, radii, apex_level, settings)
+    keep_lam, keep_f = _compliant(stack, lam, f)
+    b = g_hat - stack.adjoint(keep_f, keep_lam)
+    ok = np.zeros(B, dtype=bool)
+    lam, f, nu = lam.copy(), f.copy(), np.zeros((B, n_e))
+    faces = apex & stack.has_offset & (stack.k > 0)
+    lam_n, f_n = near
+    top = np.max(np.abs(lam_n), axis=1, keepdims=True, initial=0.0)
+    pushing = lam_n > settings.positive_force * top
+    on_rim = np.sqrt(stack.segment_sum(f_n * f_n)) >= (1.0 - settings.apex) * lam_n
+    unloaded = ~pushing & (surface | apex) & ~faces  # only one-sign contacts drop
+    rim = pushing & on_rim & faces
+    start = np.concatenate([f_n - keep_f, lam_n - keep_lam, np.zeros((B, n_e))], axis=1)
+    # rows whose contacts touch alike share the shape of their unknowns
+    for rows in _alike(np.hstack([surface, apex, unloaded, rim])):
+        s, a, d, e = surface[rows[0]], apex[rows[0]], unloaded[rows[0]], rim[rows[0]]
+        Z, owner = _unknowns(stack, s, a, u[rows], n_e, False)
+        if Z.shape[-1] == 0:
+            continue
+        P, G = _wrenches(asm, Z), _work(asm, Z)
+        cone = np.maximum(owner, 0)
+        keep = np.flatnonzero((owner < 0) | ~d[cone])
+        # a face's columns: its lam first, then its force vector
+        rims = [np.flatnonzero(owner == i) for i in np.flatnonzero(e)]
+        y0 = np.einsum("brj,br->bj", Z, start[rows]) / np.sum(Z * Z, axis=1)
+        y, optimal = _split_newton(P, G, b[rows], keep, rims, settings, y0)
+        out = _split_of(
+            stack, (Z @ y[:, :, None])[:, :, 0], keep_lam[rows], keep_f[rows], a & ~stack.has_offset
+        )
+        lam[rows], f[rows], nu[rows] = out.lam, out.f, out.nu
+        ok[rows] = optimal & _inside(out.lam, out.f, stack, settings.equilibrium_tolerance)
+    return ok, lam, f, nu
+
+
+def _split_newton(
+    P: FloatArray,
+    G: FloatArray,
+    b: FloatArray,
+    keep: IntArray,
+    rims: list[IntArray],
+    settings: SolverSettings,
+    y0: FloatArray | None = None,
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The ``y`` (rows) of least ``|P y|^2 / 2`` with ``G y = b``, the
+    unknowns outside ``keep`` at 0 and each face of ``rims`` (its columns:
+    ``lam_i``, then ``f_i``) with ``|f_i| = lam_i``: Newton on the KKT
+    equations from ``y0``; with no start, the first step is the
+    least-squares split without the rims (their force has no direction
+    yet), and the rims join from the second. Also the mask of the rows where that is the optimum of
+    the cone program: the equations hold (``newton_accept``), each rim's
+    multiplier is >= 0 and so is the gradient on each unknown held at 0 (to
+    ``equilibrium_tolerance``)."""
+    B, m, n_y = G.shape
+    Pk, Gk = P[:, :, keep], G[:, :, keep]
+    Q = Pk.transpose(0, 2, 1) @ Pk
+    where = {int(c): j for j, c in enumerate(keep)}
+    rims = [np.array([where[int(c)] for c in cols]) for cols in rims]
+    nk, nr = len(keep), len(rims)
+    n = nk + m + nr
+    z = np.zeros((B, n))  # y on keep, mu, eta
+    if y0 is not None:
+        z[:, :nk] = y0[:, keep]
+    ok = np.zeros(B, dtype=bool)
+    scale = np.maximum(np.max(np.abs(b), axis=1, initial=0.0), TINY)
+    polished = False
+    for step in range(settings.batch_newton_steps + 1):
+        yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
+        K = np.zeros((B, n, n))
+        K[:, :nk, :nk] = Q
+        K[:, :nk, nk : nk + m] = Gk.transpose(0, 2, 1)
+        K[:, nk : nk + m, :nk] = Gk
+        grad = (Q @ yk[:, :, None])[:, :, 0] + np.einsum("bmy,bm->by", Gk, mu)
+        c = np.zeros((B, nr))
+        for j, cols in enumerate(rims):
+            if not step and y0 is None:
+                K[:, nk + m + j, nk + m + j] = 1.0
+                continue
+            at, fc = cols[0], cols[1:]
+            size = np.maximum(np.linalg.norm(yk[:, fc], axis=1), TINY)
+            w = yk[:, fc] / size[:, None]
+            c[:, j] = size - yk[:, at]
+            row = np.zeros((B, nk))
+            row[:, fc], row[:, at] = w, -1.0
+            grad += eta[:, j : j + 1] * row
+            curve = (np.eye(len(fc))[None] - w[:, :, None] * w[:, None, :]) / size[:, None, None]
+            K[:, fc[:, None], fc[None, :]] += eta[:, j, None, None] * curve
+            K[:, nk + m + j, :nk] = row
+            K[:, :nk, nk + m + j] = row
+        F = np.concatenate([grad, (Gk @ yk[:, :, None])[:, :, 0] - b, c], axis=1)
+        ok = np.max(np.abs(F), axis=1) <= settings.newton_accept * scale
+        if (step or y0 is not None) and np.all(ok):
+            if polished:
+                break
+            polished = True  # one more step: from there quadratic to round-off
+        z += linalg.solve_stack(K, -F, settings.kkt_plain, settings.lstsq_rcond)
+    yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
+    y = np.zeros((B, n_y))
+    y[:, keep] = yk
+    # multipliers of the limits: each rim's, and the gradient on each unknown at 0
+    size = settings.equilibrium_tolerance * np.maximum(
+        np.max(np.abs(Q @ yk[:, :, None]), axis=(1, 2), initial=0.0), TINY
+    )
+    held = np.setdiff1d(np.arange(n_y), keep)
+    if len(held):
+        grad = (P.transpose(0, 2, 1) @ (P @ y[:, :, None]))[:, :, 0]
+        grad += np.einsum("bmy,bm->by", G, mu)
+        ok &= np.all(grad[:, held] >= -size[:, None], axis=1)
+    ok &= np.all(eta >= -size[:, None], axis=1)
+    return y, ok
+
+
+def _alike(masks: NDArray[np.bool_]) -> list[IntArray]:
+    """The rows of ``masks`` (B, k) grouped by equal rows."""
+    if not len(masks) or np.all(masks == masks[0]):
+        return [np.arange(len(masks))]
+    _, kind = np.unique(masks, axis=0, return_inverse=True)
+    kind = kind.ravel()
+    return [np.flatnonzero(kind == g) for g in range(int(np.max(kind)) + 1)]
+
+
+def _classes(
+    stack: BallStack, x: FloatArray, radii: FloatArray, apex_level: float, settings: SolverSettings
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], FloatArray]:
+    """Which hard contacts touch on their cone's surface, and which rest at
+    its apex (a one-sided limit, a face flat, a ball centred: ``|A_i x|`` at
+    or below ``apex_level``); and each cone's direction of contact ``u``.
+    One answer (m,) or rows (B, m) with their ``radii``."""
+    v, rho, level = stack.levels(x)
+    touching = (stack.spring == 0) & (stack.gap_used(level, radii) >= settings.touching)
+    apex = touching & ((stack.k == 0) | (rho <= apex_level))
+    safe = np.where(rho > 0, rho, 1.0)
+    return touching & ~apex, apex, v / np.repeat(safe, stack.k, axis=-1)
+
+
+def _compliant(stack: BallStack, lam: FloatArray, f: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The forces the split keeps: the compliant contacts' (0 on the others)."""
+    hard = stack.spring == 0
+    return np.where(hard, 0.0, lam), np.where(np.repeat(hard, stack.k), 0.0, f)
+
+
+def _split_of(
+    stack: BallStack,
+    z: FloatArray,
+    keep_lam: FloatArray,
+    keep_f: FloatArray,
+    centred: NDArray[np.bool_],
+) -> Split:
+    """The multipliers ``z`` of the unknowns (``Z @ y``, one row or rows)
+    added to the kept ones, as ``(lam, f, nu)``."""
+    n, n_rows = len(stack.k), stack.A.shape[0]
+    out = Split(
+        keep_lam + z[..., n_rows : n_rows + n], keep_f + z[..., :n_rows], z[..., n_rows + n :]
+    )
+    # a ball at its centre (no play): its force is its vector's size
+    size = np.sqrt(stack.segment_sum(out.f * out.f))
+    out.lam[..., centred] = size[..., centred]
+    return out
 
 
 def _unknowns(
@@ -145,23 +336,24 @@ def _unknowns(
     s_rows = stack.rows_of(s_idx)
     rows = [s_rows, n_rows + s_idx]
     cols = [np.repeat(np.arange(ns), k[s_idx]), np.arange(ns)]
-    vals = [u[s_rows], np.ones(ns)]
+    lead = u.shape[:-1]  # rows of a batch, if any (dense only)
+    vals = [u[..., s_rows], np.ones((*lead, ns))]
     # faces at their apex: lam_i, then f_i
     first = (ns + np.cumsum(1 + ka) - (1 + ka)).astype(np.intp)
     within = np.arange(int(np.sum(ka))) - np.repeat(np.cumsum(ka) - ka, ka)
     rows += [n_rows + a_idx, stack.rows_of(a_idx)]
     cols += [first, np.repeat(first + 1, ka) + within]
-    vals += [np.ones(len(a_idx)), np.ones(int(np.sum(ka)))]
+    vals += [np.ones((*lead, len(a_idx))), np.ones((*lead, int(np.sum(ka))))]
     # balls at their centre: f_i
     col = ns + int(np.sum(1 + ka))
     rows.append(stack.rows_of(c_idx))
     cols.append(col + np.arange(int(np.sum(kc))))
-    vals.append(np.ones(int(np.sum(kc))))
+    vals.append(np.ones((*lead, int(np.sum(kc)))))
     col += int(np.sum(kc))
     # rigid rows
     rows.append(n_rows + n + np.arange(n_e))
     cols.append(col + np.arange(n_e))
-    vals.append(np.ones(n_e))
+    vals.append(np.ones((*lead, n_e)))
     col += n_e
     owner = np.concatenate(
         [s_idx, np.repeat(a_idx, 1 + ka), np.repeat(c_idx, kc), np.full(n_e, -1)]
@@ -169,12 +361,12 @@ def _unknowns(
     shape = (n_rows + n + n_e, col)
     i_all = np.concatenate(rows).astype(np.intp)
     j_all = np.concatenate(cols).astype(np.intp)
-    v_all = np.concatenate(vals)
+    v_all = np.concatenate(vals, axis=-1)
     if sparse:
         Z: Any = sp.csc_matrix((v_all, (i_all, j_all)), shape=shape)
     else:
-        Z = np.zeros(shape)
-        Z[i_all, j_all] = v_all
+        Z = np.zeros((*lead, *shape))
+        Z[..., i_all, j_all] = v_all
     return Z, owner
 
 
@@ -235,20 +427,10 @@ def _least_squares(
     each other, regularized (``kkt_round_off``) and refined to round-off
     (``linalg.proximal_solve``); the certificate judges the answer."""
     n_y = G.shape[1]
-    rcond, round_off, kkt_round_off = (
-        settings.free_motion_rcond,
-        settings.round_off,
-        settings.kkt_round_off,
-    )
+    round_off, kkt_round_off = settings.round_off, settings.kkt_round_off
     if not linalg.is_sparse(G):
-        U, sv, Vt = np.linalg.svd(G, full_matrices=True)
-        rank = int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
-        y0 = Vt[:rank].T @ ((U[:, :rank].T @ b) / sv[:rank])
-        free = Vt[rank:].T  # splits that do no work
-        if not free.shape[1]:
-            return np.asarray(y0)
-        w = np.linalg.lstsq(P @ free, -(P @ y0), rcond=None)[0]
-        return np.asarray(y0 + free @ w)
+        y, ok = _split_newton(P[None], G[None], b[None], np.arange(n_y), [], settings)
+        return y[0] if ok[0] else None
     PtP = sp.csr_matrix(P.T @ P)
     K = sp.bmat([[PtP, G.T], [G, None]], format="csc")
     rhs = np.r_[-(PtP @ given), b - G @ given]
@@ -258,14 +440,16 @@ def _least_squares(
     return None if step is None else np.asarray(given + step[:n_y])
 
 
-def _inside(split: Split, stack: BallStack, tol: float) -> bool:
+def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:
     """Whether every contact pushes (``lam >= 0``) with its force vector
-    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force."""
-    if not len(split.lam):
-        return True
-    size = tol * max(float(np.max(np.abs(split.lam))), TINY)
-    f_norm = np.sqrt(stack.segment_sum(split.f * split.f))
-    return bool(np.all(split.lam >= -size) and np.all(f_norm <= split.lam + size))
+    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force:
+    one bool, or a mask over rows."""
+    if not lam.shape[-1]:
+        return np.ones(lam.shape[:-1], dtype=bool) if lam.ndim > 1 else True
+    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), TINY)
+    f_norm = np.sqrt(stack.segment_sum(f * f))
+    inside = np.all(lam >= -size, axis=-1) & np.all(f_norm <= lam + size, axis=-1)
+    return inside if lam.ndim > 1 else bool(inside)
 
 
 def _cone_program(

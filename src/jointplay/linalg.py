@@ -251,3 +251,22 @@ def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
     tol = DEFAULT.lsmr_tolerance
     out = spla.lsmr(A, b, atol=tol, btol=tol, maxiter=20 * max(A.shape))
     return np.asarray(out[0])
+
+
+def solve_stack(K: FloatArray, rhs: FloatArray, plain: float, rcond: float) -> FloatArray:
+    """``K[b] z[b] = rhs[b]`` for a stack of small square systems: one LU
+    each, together; a row that is singular, or whose residual is above
+    ``plain`` of its right side, gets its least-norm least-squares solution
+    instead (an SVD, singular values below ``rcond`` of the largest dropped)."""
+    try:
+        z = np.linalg.solve(K, rhs[:, :, None])[:, :, 0]
+    except np.linalg.LinAlgError:  # some row is singular: the others by LU
+        z = np.full_like(rhs, np.nan)
+        regular = np.linalg.slogdet(K)[0] != 0
+        if np.any(regular):
+            z[regular] = np.linalg.solve(K[regular], rhs[regular][:, :, None])[:, :, 0]
+    miss = np.max(np.abs(np.einsum("bij,bj->bi", K, z) - rhs), axis=1, initial=0.0)
+    bad = ~(miss <= plain * np.max(np.abs(rhs), axis=1, initial=0.0))  # NaN too
+    if np.any(bad):
+        z[bad] = (np.linalg.pinv(K[bad], rcond=rcond) @ rhs[bad][:, :, None])[:, :, 0]
+    return np.asarray(z)
