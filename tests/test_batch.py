@@ -267,3 +267,34 @@ def test_redundant_contacts_are_batched_and_split_like_single_solves() -> None:
         expected = np.array([c.force_magnitude for j in ref.joints.values() for c in j.contacts])
         np.testing.assert_allclose(batch.forces[i], expected, rtol=0, atol=1e-10 * expected.max())
         assert np.sum(expected == 0.0) >= 1  # a touching corner left unloaded
+
+
+def test_a_large_sparse_mechanism_is_solved_row_by_row() -> None:
+    """The batched Newton stacks dense systems; above 40 bodies the
+    workspace is sparse, and its rows are solved one by one, each
+    warm-started from the one before (before, a Monte Carlo or a batch on
+    such a mechanism stopped with a traceback from the dense code)."""
+    from jointplay.generate import tube_string
+
+    model = tube_string(42)
+    ws = Workspace.of(model)
+    assert ws.asm.sparse
+    scales = np.array([1.0, 1.3, 0.7])
+    batch = ws.solve_batch(scales[:, None] * ws.asm.g[None])
+    assert batch.full_solves == 3 and not np.any(batch.batched)
+    assert np.all(batch.equilibrium_residual <= 1e-8)
+    last = model.bodies[-1].name
+
+    def scaled(v: Any, s: float) -> Any:
+        return None if v is None else tuple(s * np.asarray(v, dtype=float))
+
+    for i, s in enumerate(scales):
+        loads = [
+            Load(body=ld.body, at=ld.at, force=scaled(ld.force, s), torque=scaled(ld.torque, s))
+            for ld in model.loads_of(None)
+        ]
+        ref = Workspace.of(model).solve(loads=loads)
+        ref.check()
+        body = batch.body_displacement(last)[i]
+        np.testing.assert_allclose(body[:3], ref.bodies[last].translation, atol=MM)
+        np.testing.assert_allclose(body[3:], ref.bodies[last].rotation, atol=RAD)

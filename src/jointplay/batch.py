@@ -139,6 +139,9 @@ def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> B
     failures: dict[_FaceKey, IntArray] = {}
     give_up = ws.settings.batch_give_up
     full = 0
+    # the batched Newton works on dense stacks; a large (sparse) mechanism's
+    # rows are solved one by one, each warm-started from the one before
+    dense = not ws.asm.sparse
     # rows per Newton batch (n at most the unknowns and all multipliers)
     n_most = ws.m + n_balls + ws.stack.A.shape[0] + ws.Eq.shape[0]
     chunk = max(1, CHUNK_ENTRIES // n_most**2)
@@ -179,14 +182,15 @@ def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> B
             break
         first, pending = int(pending[0]), pending[1:]
         solver = ws.with_radii(r[first]) if varied else ws
-        solver._last = None
+        if dense:
+            solver._last = None  # a warm start would retry the set the batch gave up on
         point = solver._optimum(g_hat[first], sigma[first])
         full += 1
         x[first], lam[first], f[first] = point.x, point.lam, point.f
         assert point.certificate is not None  # _optimum certifies or raises
         feas[first] = point.certificate.feasibility_mm / ws.asm.s
         residual[first] = point.certificate.equilibrium_residual
-        if point.active is not None:
+        if point.active is not None and dense:
             solved_by_set.setdefault(point.active, []).append(np.array([first]))
 
     return BatchSolution(
