@@ -298,3 +298,24 @@ def test_a_large_sparse_mechanism_is_solved_row_by_row() -> None:
         body = batch.body_displacement(last)[i]
         np.testing.assert_allclose(body[:3], ref.bodies[last].translation, atol=MM)
         np.testing.assert_allclose(body[3:], ref.bodies[last].rotation, atol=RAD)
+
+
+def test_a_singular_row_is_found_when_lu_and_determinant_disagree(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """numpy 1.26's LAPACK gave a nonzero determinant sign for a system its
+    LU then found singular (a force split's KKT system), and the batched
+    solve of the 'regular' rows raised. Simulated here: the rows are then
+    solved one at a time, and only the singular one is dropped."""
+    from jointplay.linalg import solve_rows
+
+    rng = np.random.default_rng(1)
+    K = rng.standard_normal((4, 3, 3))
+    K[1, 2, :] = 0.0
+    rhs = rng.standard_normal((4, 3))
+    monkeypatch.setattr(np.linalg, "slogdet", lambda a: (np.ones(len(a)), np.zeros(len(a))))
+    step, regular = solve_rows(K, rhs)
+    assert regular.tolist() == [True, False, True, True]
+    for b in (0, 2, 3):
+        np.testing.assert_allclose(K[b] @ step[b], rhs[b], rtol=0, atol=1e-12)
+    assert np.all(step[1] == 0.0)

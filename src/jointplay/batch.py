@@ -23,6 +23,7 @@ from scipy.spatial import cKDTree
 from . import certificate, forces, linalg
 from .assembly import Assembly, BallStack, IntArray
 from .geometry import FloatArray
+from .linalg import solve_rows
 from .settings import TINY
 
 BoolArray = NDArray[np.bool_]
@@ -461,18 +462,3 @@ def _independent_rows(
     keep = np.sort(np.r_[np.flatnonzero(soft), hard[piv[:rank]]])
     na = len(surface)
     return keep[keep < na], keep[keep >= na] - na
-
-
-def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, BoolArray]:
-    """``K[b] step[b] = rhs[b]`` for every row b of a stack of square systems,
-    and the mask of the rows that have a solution: an exactly singular row
-    gets a zero step and ``False``, the others are solved together."""
-    try:
-        step = np.asarray(np.linalg.solve(K, rhs[:, :, None])[:, :, 0], dtype=np.float64)
-        return step, np.ones(len(K), dtype=bool)
-    except np.linalg.LinAlgError:  # some row is singular: find which (one LU each)
-        regular: BoolArray = np.linalg.slogdet(K)[0] != 0
-    step = np.zeros_like(rhs)
-    if np.any(regular):
-        step[regular] = np.linalg.solve(K[regular], rhs[regular][:, :, None])[:, :, 0]
-    return step, regular

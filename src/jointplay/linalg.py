@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from . import free_motions
@@ -253,18 +254,39 @@ def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
     return np.asarray(out[0])
 
 
+def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """``K[b] z[b] = rhs[b]`` for every row b of a stack of square systems,
+    and the mask of the rows that have a solution: an exactly singular row
+    gets a zero step and ``False``, the others are solved together by LU."""
+    try:
+        z = np.asarray(np.linalg.solve(K, rhs[:, :, None])[:, :, 0], dtype=np.float64)
+        return z, np.ones(len(K), dtype=bool)
+    except np.linalg.LinAlgError:  # some row is singular: find which
+        regular: NDArray[np.bool_] = np.linalg.slogdet(K)[0] != 0
+    z = np.zeros_like(rhs)
+    try:
+        if np.any(regular):
+            z[regular] = np.linalg.solve(K[regular], rhs[regular][:, :, None])[:, :, 0]
+        return z, regular
+    except np.linalg.LinAlgError:
+        # LU and the determinant disagree on a row at the edge of singular
+        # (numpy 1.26's LAPACK does, on a split's KKT system): one at a time
+        pass
+    for b in np.flatnonzero(regular):
+        try:
+            z[b] = np.linalg.solve(K[b], rhs[b])
+        except np.linalg.LinAlgError:
+            regular[b] = False
+    return z, regular
+
+
 def solve_stack(K: FloatArray, rhs: FloatArray, plain: float, rcond: float) -> FloatArray:
     """``K[b] z[b] = rhs[b]`` for a stack of small square systems: one LU
     each, together; a row that is singular, or whose residual is above
     ``plain`` of its right side, gets its least-norm least-squares solution
     instead (an SVD, singular values below ``rcond`` of the largest dropped)."""
-    try:
-        z = np.linalg.solve(K, rhs[:, :, None])[:, :, 0]
-    except np.linalg.LinAlgError:  # some row is singular: the others by LU
-        z = np.full_like(rhs, np.nan)
-        regular = np.linalg.slogdet(K)[0] != 0
-        if np.any(regular):
-            z[regular] = np.linalg.solve(K[regular], rhs[regular][:, :, None])[:, :, 0]
+    z, regular = solve_rows(K, rhs)
+    z[~regular] = np.nan
     miss = np.max(np.abs(np.einsum("bij,bj->bi", K, z) - rhs), axis=1, initial=0.0)
     bad = ~(miss <= plain * np.max(np.abs(rhs), axis=1, initial=0.0))  # NaN too
     if np.any(bad):
