@@ -319,3 +319,33 @@ def test_a_singular_row_is_found_when_lu_and_determinant_disagree(
     for b in (0, 2, 3):
         np.testing.assert_allclose(K[b] @ step[b], rhs[b], rtol=0, atol=1e-12)
     assert np.all(step[1] == 0.0)
+
+
+def test_rows_that_pose_the_same_split_solve_it_once_and_alike() -> None:
+    """With only the plays varying, the carriage's rows pose the same force
+    split (same loads, contact directions and start): it is solved once
+    (``linalg.distinct_rows``) and given to every row; each row still
+    matches its own full solve."""
+    from pathlib import Path
+
+    from jointplay.linalg import distinct_rows
+    from jointplay.variation import play_map
+
+    a = np.array([[1.0, 2.0], [3.0, 4.0], [1.0, 2.0], [1.0, 2.0 + 1e-15]])
+    first, same = distinct_rows(a)
+    np.testing.assert_array_equal(a[first][same], a)
+    assert len(first) == 3
+
+    model = jointplay.load(Path(__file__).parents[1] / "examples" / "studies" / "carriage.yaml")
+    ws = Workspace.of(model)
+    pmap = play_map(ws.asm, model.name)
+    radii = pmap.radii(pmap.sample(np.random.default_rng(5), 60))
+    batch = ws.solve_batch(np.tile(ws.asm.g, (60, 1)), radii)
+    assert np.sum(batch.batched) >= 55
+    for i in (0, 29, 59):
+        ref = ws.with_radii(radii[i]).solve()
+        body = batch.body_displacement("carriage")[i]
+        np.testing.assert_allclose(body[:3], ref.bodies["carriage"].translation, atol=MM)
+        np.testing.assert_allclose(body[3:], ref.bodies["carriage"].rotation, atol=RAD)
+        expected = np.array([c.force_magnitude for j in ref.joints.values() for c in j.contacts])
+        np.testing.assert_allclose(batch.forces[i], expected, rtol=0, atol=1e-10 * expected.max())

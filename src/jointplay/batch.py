@@ -424,8 +424,9 @@ def _pinned(
     J = np.concatenate(parts, axis=1)
     if J.shape[1] < ws.m:
         return np.zeros(B, dtype=bool)
-    sv = np.linalg.svd(J, compute_uv=False)
-    return np.asarray(sv[:, ws.m - 1] > st.free_motion_rcond * sv[:, 0])
+    first, same = linalg.distinct_rows(J.reshape(B, -1))  # each distinct system once
+    sv = np.linalg.svd(J[first], compute_uv=False)
+    return np.asarray(sv[:, ws.m - 1] > st.free_motion_rcond * sv[:, 0])[same]
 
 
 def _independent_rows(

@@ -170,7 +170,10 @@ def least_squares_rows(
     # rows whose contacts touch alike share the shape of their unknowns
     for rows in _alike(np.hstack([surface, apex, unloaded, rim])):
         s, a, d, e = surface[rows[0]], apex[rows[0]], unloaded[rows[0]], rim[rows[0]]
-        Z, owner = _unknowns(stack, s, a, u[rows], n_e, False)
+        # rows that pose the same problem (a study whose plays vary and whose
+        # loads do not, on contacts whose directions do not move) are solved once
+        first, same = linalg.distinct_rows(np.hstack([b[rows], u[rows], start[rows]]))
+        Z, owner = _unknowns(stack, s, a, u[rows[first]], n_e, False)
         if Z.shape[-1] == 0:
             continue
         P, G = _wrenches(asm, Z), _work(asm, Z)
@@ -178,11 +181,11 @@ def least_squares_rows(
         keep = np.flatnonzero((owner < 0) | ~d[cone])
         # a face's columns: its lam first, then its force vector
         rims = [np.flatnonzero(owner == i) for i in np.flatnonzero(e)]
-        y0 = np.einsum("brj,br->bj", Z, start[rows]) / np.sum(Z * Z, axis=1)
-        y, optimal = _split_newton(P, G, b[rows], keep, rims, settings, y0)
-        out = _split_of(
-            stack, (Z @ y[:, :, None])[:, :, 0], keep_lam[rows], keep_f[rows], a & ~stack.has_offset
-        )
+        y0 = np.einsum("brj,br->bj", Z, start[rows[first]]) / np.sum(Z * Z, axis=1)
+        y, optimal = _split_newton(P, G, b[rows[first]], keep, rims, settings, y0)
+        z = (Z @ y[:, :, None])[same, :, 0]
+        out = _split_of(stack, z, keep_lam[rows], keep_f[rows], a & ~stack.has_offset)
+        optimal = optimal[same]
         lam[rows], f[rows], nu[rows] = out.lam, out.f, out.nu
         ok[rows] = optimal & _inside(out.lam, out.f, stack, settings.equilibrium_tolerance)
     return ok, lam, f, nu

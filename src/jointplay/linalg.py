@@ -292,3 +292,12 @@ def solve_stack(K: FloatArray, rhs: FloatArray, plain: float, rcond: float) -> F
     if np.any(bad):
         z[bad] = (np.linalg.pinv(K[bad], rcond=rcond) @ rhs[bad][:, :, None])[:, :, 0]
     return np.asarray(z)
+
+
+def distinct_rows(a: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The first of each distinct row of ``a`` (B, k), and for every row the
+    index of its distinct one: ``a[first][same] == a``."""
+    if not len(a) or np.all(a == a[0]):
+        return np.zeros(min(len(a), 1), dtype=np.intp), np.zeros(len(a), dtype=np.intp)
+    _, first, same = np.unique(a, axis=0, return_index=True, return_inverse=True)
+    return first.astype(np.intp), same.ravel().astype(np.intp)
