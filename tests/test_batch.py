@@ -349,3 +349,35 @@ def test_rows_that_pose_the_same_split_solve_it_once_and_alike() -> None:
         np.testing.assert_allclose(body[3:], ref.bodies["carriage"].rotation, atol=RAD)
         expected = np.array([c.force_magnitude for j in ref.joints.values() for c in j.contacts])
         np.testing.assert_allclose(batch.forces[i], expected, rtol=0, atol=1e-10 * expected.max())
+
+
+def test_a_touching_contact_outside_the_set_still_gets_the_documented_split() -> None:
+    """Four feet, no play. A load near a corner leaves foot 3 unloaded, so
+    its active set holds feet 1, 2 and 4. The next row (load near the
+    centre) converged on that set with a unique three-foot split that
+    certifies, and the batch kept it, although foot 3 touches and the
+    documented split (equal springs) loads it. Rows with touching contacts
+    outside their set now take the split rule, like redundant ones (found
+    by review)."""
+    feet = [(120.0, 80.0), (-120.0, 80.0), (-120.0, -80.0), (120.0, -80.0)]
+    data = {
+        "bodies": [{"name": "floor", "ground": True}, {"name": "plate"}],
+        "joints": [
+            {
+                "name": f"foot{i + 1}",
+                "type": "point",
+                "between": ["floor", "plate"],
+                "at": [x, y, 0],
+                "axis": [0, 0, 1],
+            }
+            for i, (x, y) in enumerate(feet)
+        ],
+        "loads": [{"body": "plate", "at": [0, 0, 0], "force": [0, 0, -100]}],
+    }
+    ws = Workspace.of(model_from_dict(data))
+    at = [(110.0, 70.0), (50.0, 30.0), (-20.0, 10.0)]
+    down = np.r_[0.0, 0.0, -100.0, 0.0, 0.0, 0.0]
+    batch = ws.solve_batch(np.array([ws.asm.wrench_work("plate", [*p, 0.0]) @ down for p in at]))
+    for i, (x0, y0) in enumerate(at[1:], start=1):
+        springs = [100 / 4 * (1 + x0 * x / 120**2 + y0 * y / 80**2) for x, y in feet]
+        np.testing.assert_allclose(batch.forces[i], springs, rtol=1e-12)

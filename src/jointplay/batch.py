@@ -141,7 +141,8 @@ def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> B
     give_up = ws.settings.batch_give_up
     full = 0
     # the batched Newton works on dense stacks; a large (sparse) mechanism's
-    # rows are solved one by one, each warm-started from the one before
+    # rows are solved one by one (warm-started from the one before when the
+    # plays do not vary)
     dense = not ws.asm.sparse
     # rows per Newton batch (n at most the unknowns and all multipliers)
     n_most = ws.m + n_balls + ws.stack.A.shape[0] + ws.Eq.shape[0]
@@ -283,7 +284,12 @@ def _newton_batch(
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
     st = ws.settings
-    if redundant:
+    # contacts that touch outside the set (unloaded in the neighbour's split)
+    # may share the load: the split rule decides, as when the set is redundant
+    in_set = np.zeros(len(ws.balls), dtype=bool)
+    in_set[[*surface, *linear]] = True
+    touching = (stack.spring == 0) & (stack.gap_used(stack.levels(x)[2], r) >= st.touching)
+    if redundant or np.any(touching & ~in_set):
         # Newton's split is one of many; the documented one (``forces``),
         # from the neighbour's split, on the cone limits that bind it
         apex = st.feasibility_tolerance * ws._max_radius

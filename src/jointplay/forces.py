@@ -162,9 +162,11 @@ def least_squares_rows(
     faces = apex & stack.has_offset & (stack.k > 0)
     lam_n, f_n = near
     top = np.max(np.abs(lam_n), axis=1, keepdims=True, initial=0.0)
-    pushing = lam_n > settings.positive_force * top
+    pushing = lam_n > settings.noise_force * top  # below: the cone program's round-off
     on_rim = np.sqrt(stack.segment_sum(f_n * f_n)) >= (1.0 - settings.apex) * lam_n
-    unloaded = ~pushing & (surface | apex) & ~faces  # only one-sign contacts drop
+    # only one-sign unknowns are held at 0: a surface force, a one-sided
+    # limit's (a ball at its centre has a vector of either sign)
+    unloaded = ~pushing & (surface | (apex & (stack.k == 0)))
     rim = pushing & on_rim & faces
     start = np.concatenate([f_n - keep_f, lam_n - keep_lam, np.zeros((B, n_e))], axis=1)
     # rows whose contacts touch alike share the shape of their unknowns
@@ -251,6 +253,8 @@ def _split_newton(
             if polished:
                 break
             polished = True  # one more step: from there quadratic to round-off
+        if step == settings.batch_newton_steps:
+            break  # ``ok`` is that of the last step's answer
         z += linalg.solve_stack(K, -F, settings.kkt_plain, settings.lstsq_rcond)
     yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
     y = np.zeros((B, n_y))

@@ -83,7 +83,8 @@ class SolverSettings:
     #: positive: its contact may leave the active set.
     positive_force: float = 1e-8
     #: Contact forces (loads of unit size) at this level are the interior-point
-    #: method's round-off when rigid joints carry the loads.
+    #: method's round-off: when rigid joints carry the loads, and when the
+    #: force split's cone program leaves a contact unloaded.
     noise_force: float = 1e-6
     #: A cone rests at its apex (a face flat, a ball centred) when |A_i x| is
     #: below this fraction of its play and its force vector this far inside.
