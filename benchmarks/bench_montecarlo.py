@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--slsqp", type=int, default=200, help="samples looped through SLSQP")
     parser.add_argument("--check", type=int, default=200, help="samples re-solved in full")
     parser.add_argument(
-        "--study-samples", type=int, default=200_000, help="samples of each example study"
+        "--study-samples", type=int, default=1_000_000, help="samples of each example study"
     )
     args = parser.parse_args(argv)
     model = jointplay.model_from_dict(model_dict())
