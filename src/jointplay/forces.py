@@ -170,7 +170,8 @@ def least_squares_rows(
     rim = pushing & on_rim & faces
     start = np.concatenate([f_n - keep_f, lam_n - keep_lam, np.zeros((B, n_e))], axis=1)
     # rows whose contacts touch alike share the shape of their unknowns
-    for rows in _alike(np.hstack([surface, apex, unloaded, rim])):
+    first_kind, kind = linalg.distinct_rows(np.hstack([surface, apex, unloaded, rim]))
+    for rows in (np.flatnonzero(kind == g) for g in range(len(first_kind))):
         s, a, d, e = surface[rows[0]], apex[rows[0]], unloaded[rows[0]], rim[rows[0]]
         # rows that pose the same problem (a study whose plays vary and whose
         # loads do not, on contacts whose directions do not move) are solved once
@@ -205,11 +206,11 @@ def _split_newton(
     """The ``y`` (rows) of least ``|P y|^2 / 2`` with ``G y = b``, the
     unknowns outside ``keep`` at 0 and each face of ``rims`` (its columns:
     ``lam_i``, then ``f_i``) with ``|f_i| = lam_i``: Newton on the KKT
-    equations from ``y0``; with no start, the first step is the
-    least-squares split without the rims (their force has no direction
-    yet), and the rims join from the second. Also the mask of the rows where that is the optimum of
-    the cone program: the equations hold (``newton_accept``), each rim's
-    multiplier is >= 0 and so is the gradient on each unknown held at 0 (to
+    equations from ``y0`` (needed with rims: their force's direction; else
+    the first step is the least-squares split, the problem being linear).
+    Also the mask of the rows where that is the optimum of the cone
+    program: the equations hold (``newton_accept``), each rim's multiplier
+    is >= 0 and so is the gradient on each unknown held at 0 (to
     ``equilibrium_tolerance``)."""
     B, m, n_y = G.shape
     Pk, Gk = P[:, :, keep], G[:, :, keep]
@@ -233,9 +234,6 @@ def _split_newton(
         grad = (Q @ yk[:, :, None])[:, :, 0] + np.einsum("bmy,bm->by", Gk, mu)
         c = np.zeros((B, nr))
         for j, cols in enumerate(rims):
-            if not step and y0 is None:
-                K[:, nk + m + j, nk + m + j] = 1.0
-                continue
             at, fc = cols[0], cols[1:]
             size = np.maximum(np.linalg.norm(yk[:, fc], axis=1), TINY)
             w = yk[:, fc] / size[:, None]
@@ -249,7 +247,7 @@ def _split_newton(
             K[:, :nk, nk + m + j] = row
         F = np.concatenate([grad, (Gk @ yk[:, :, None])[:, :, 0] - b, c], axis=1)
         ok = np.max(np.abs(F), axis=1) <= settings.newton_accept * scale
-        if (step or y0 is not None) and np.all(ok):
+        if np.all(ok):
             if polished:
                 break
             polished = True  # one more step: from there quadratic to round-off
@@ -270,15 +268,6 @@ def _split_newton(
         ok &= np.all(grad[:, held] >= -size[:, None], axis=1)
     ok &= np.all(eta >= -size[:, None], axis=1)
     return y, ok
-
-
-def _alike(masks: NDArray[np.bool_]) -> list[IntArray]:
-    """The rows of ``masks`` (B, k) grouped by equal rows."""
-    if not len(masks) or np.all(masks == masks[0]):
-        return [np.arange(len(masks))]
-    _, kind = np.unique(masks, axis=0, return_inverse=True)
-    kind = kind.ravel()
-    return [np.flatnonzero(kind == g) for g in range(int(np.max(kind)) + 1)]
 
 
 def _classes(

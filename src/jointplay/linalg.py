@@ -294,7 +294,7 @@ def solve_stack(K: FloatArray, rhs: FloatArray, plain: float, rcond: float) -> F
     return np.asarray(z)
 
 
-def distinct_rows(a: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+def distinct_rows(a: NDArray[Any]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     """The first of each distinct row of ``a`` (B, k), and for every row the
     index of its distinct one: ``a[first][same] == a``."""
     if not len(a) or np.all(a == a[0]):
