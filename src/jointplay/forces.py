@@ -78,7 +78,7 @@ def least_squares_split(
     if Z.shape[1] == 0:
         return None
     G = _work(asm, Z)
-    if not asm.sparse and _determined(G, settings.free_motion_rcond):
+    if not asm.sparse and _determined_rows(G[None], settings.free_motion_rcond)[0]:
         return None  # one split balances the loads: the solver's own
     P = _wrenches(asm, Z)
     centred = apex & ~stack.has_offset
@@ -180,6 +180,12 @@ def least_squares_rows(
         if Z.shape[-1] == 0:
             continue
         P, G = _wrenches(asm, Z), _work(asm, Z)
+        # a split that one balance determines is the row's own (as in
+        # ``least_squares_split``): its touching contacts are not redundant
+        determinate = _determined_rows(G, settings.free_motion_rcond)[same]
+        ok[rows[determinate]] = True
+        if np.all(determinate):
+            continue
         cone = np.maximum(owner, 0)
         keep = np.flatnonzero((owner < 0) | ~d[cone])
         # a face's columns: its lam first, then its force vector
@@ -188,9 +194,10 @@ def least_squares_rows(
         y, optimal = _split_newton(P, G, b[rows[first]], keep, rims, settings, y0)
         z = (Z @ y[:, :, None])[same, :, 0]
         out = _split_of(stack, z, keep_lam[rows], keep_f[rows], a & ~stack.has_offset)
-        optimal = optimal[same]
-        lam[rows], f[rows], nu[rows] = out.lam, out.f, out.nu
-        ok[rows] = optimal & _inside(out.lam, out.f, stack, settings.equilibrium_tolerance)
+        split = rows[~determinate]
+        lam[split], f[split], nu[split] = (v[~determinate] for v in (out.lam, out.f, out.nu))
+        inside = _inside(out.lam, out.f, stack, settings.equilibrium_tolerance)
+        ok[split] = (optimal[same] & inside)[~determinate]
     return ok, lam, f, nu
 
 
@@ -224,13 +231,20 @@ def _split_newton(
         z[:, :nk] = y0[:, keep]
     ok = np.zeros(B, dtype=bool)
     scale = np.maximum(np.max(np.abs(b), axis=1, initial=0.0), TINY)
+    # G's rows depend on each other where no contact works (a free spin):
+    # a regularization of mu that small leaves every step exact to round-off
+    # on a consistent system (the steps refine it), and LU never meets a
+    # singular matrix
+    K0 = np.zeros((B, n, n))
+    K0[:, :nk, :nk] = Q
+    K0[:, :nk, nk : nk + m] = Gk.transpose(0, 2, 1)
+    K0[:, nk : nk + m, :nk] = Gk
+    size = np.max(np.abs(K0), axis=(1, 2), initial=1.0)
+    K0[:, nk + np.arange(m), nk + np.arange(m)] = -settings.kkt_round_off * size[:, None]
     polished = False
     for step in range(settings.batch_newton_steps + 1):
         yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
-        K = np.zeros((B, n, n))
-        K[:, :nk, :nk] = Q
-        K[:, :nk, nk : nk + m] = Gk.transpose(0, 2, 1)
-        K[:, nk : nk + m, :nk] = Gk
+        K = K0.copy()
         grad = (Q @ yk[:, :, None])[:, :, 0] + np.einsum("bmy,bm->by", Gk, mu)
         c = np.zeros((B, nr))
         for j, cols in enumerate(rims):
@@ -376,12 +390,13 @@ def _work(asm: Assembly, Z: Any) -> Any:
     return G_full @ Z
 
 
-def _determined(G: FloatArray, rcond: float) -> bool:
-    """Whether G's columns are independent: a single split balances the loads."""
-    if G.shape[1] > G.shape[0]:
-        return False
+def _determined_rows(G: FloatArray, rcond: float) -> NDArray[np.bool_]:
+    """For each row of a stack (B, m, n_y): whether G's columns are
+    independent, so that a single split balances the loads."""
+    if not G.shape[2] or G.shape[2] > G.shape[1]:
+        return np.zeros(len(G), dtype=bool)
     sv = np.linalg.svd(G, compute_uv=False)
-    return bool(sv.size and sv[-1] > rcond * sv[0])
+    return np.asarray(sv[:, -1] > rcond * sv[:, 0])
 
 
 def _wrenches(asm: Assembly, Z: Any) -> Any:
