@@ -179,13 +179,14 @@ def least_squares_rows(
         Z, owner = _unknowns(stack, s, a, u[rows[first]], n_e, False)
         if Z.shape[-1] == 0:
             continue
-        P, G = _wrenches(asm, Z), _work(asm, Z)
+        G = _work(asm, Z)
         # a split that one balance determines is the row's own (as in
         # ``least_squares_split``): its touching contacts are not redundant
         determinate = _determined_rows(G, settings.free_motion_rcond)[same]
         ok[rows[determinate]] = True
         if np.all(determinate):
             continue
+        P = _wrenches(asm, Z)
         cone = np.maximum(owner, 0)
         keep = np.flatnonzero((owner < 0) | ~d[cone])
         # a face's columns: its lam first, then its force vector
