@@ -228,8 +228,9 @@ def _newton_batch(
     r: FloatArray,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
-    each from its own start (rows of ``x0``, ``lam0``) and with its own
-    cone radii (rows of ``r``).
+    each from its own start (rows of ``x0``, ``lam0``, ``f0``: the nearest
+    solved sample's answer and split) and with its own cone radii (rows of
+    ``r``).
 
     Returns (accepted mask, x, full multipliers, force vectors, their
     certificate); a row is accepted only if it converged and passes the
@@ -293,10 +294,12 @@ def _newton_batch(
         # Newton's split is one of many; the documented one (``forces``),
         # from the neighbour's split, on the cone limits that bind it
         apex = st.feasibility_tolerance * ws._max_radius
-        split, lam, f, rigid = forces.least_squares_rows(
+        split, lam, f, _ = forces.least_squares_rows(
             ws.asm, x, lam, f, g_hat, r, (lam0, f0), apex, st
         )
-        checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, rigid)
+        # rigid joints' forces by least squares, for split and own rows alike
+        # (the batch reports contact forces only)
+        checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
         ok = conv & split & _pinned(ws, key, x, lam, f)
         return ok & checks.passed(st, ws._max_radius), x, lam, f, checks
     lam_a = lam[:, list(surface) + list(linear)]
