@@ -59,6 +59,28 @@ def shaft_dict() -> dict[str, object]:
 # two cores. "long": JOINTPLAY_PROFILE=long or pytest --hypothesis-profile=long,
 # fresh random examples on every run. Each property test takes a fraction of
 # max_examples (tests/test_properties.py, ``budget``).
+#: Foot positions (mm) of ``table_on_feet``: four corners of 240 x 160, then two mid-sides.
+FEET = [(120.0, 80.0), (-120.0, 80.0), (-120.0, -80.0), (120.0, -80.0), (0.0, 80.0), (0.0, -80.0)]
+
+
+def table_on_feet(force_at: list[float], feet: int = 4) -> dict[str, object]:
+    """A rigid plate on point feet (no play) at FEET, 100 N down at ``force_at``."""
+    return {
+        "bodies": [{"name": "floor", "ground": True}, {"name": "plate"}],
+        "joints": [
+            {
+                "name": f"foot{i + 1}",
+                "type": "point",
+                "between": ["floor", "plate"],
+                "at": [x, y, 0],
+                "axis": [0, 0, 1],
+            }
+            for i, (x, y) in enumerate(FEET[:feet])
+        ],
+        "loads": [{"body": "plate", "at": force_at, "force": [0, 0, -100]}],
+    }
+
+
 import os  # noqa: E402
 
 from hypothesis import HealthCheck, settings  # noqa: E402

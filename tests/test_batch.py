@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import jointplay
-from conftest import MM, RAD, spherical_shaft
+from conftest import FEET, MM, RAD, spherical_shaft, table_on_feet
 from jointplay import Load, Workspace, model_from_dict
 from jointplay.settings import DEFAULT
 
@@ -359,21 +359,8 @@ def test_a_touching_contact_outside_the_set_still_gets_the_documented_split() ->
     documented split (equal springs) loads it. Rows with touching contacts
     outside their set now take the split rule, like redundant ones (found
     by review)."""
-    feet = [(120.0, 80.0), (-120.0, 80.0), (-120.0, -80.0), (120.0, -80.0)]
-    data = {
-        "bodies": [{"name": "floor", "ground": True}, {"name": "plate"}],
-        "joints": [
-            {
-                "name": f"foot{i + 1}",
-                "type": "point",
-                "between": ["floor", "plate"],
-                "at": [x, y, 0],
-                "axis": [0, 0, 1],
-            }
-            for i, (x, y) in enumerate(feet)
-        ],
-        "loads": [{"body": "plate", "at": [0, 0, 0], "force": [0, 0, -100]}],
-    }
+    feet = FEET[:4]
+    data = table_on_feet([0.0, 0.0, 0.0])
     ws = Workspace.of(model_from_dict(data))
     at = [(110.0, 70.0), (50.0, 30.0), (-20.0, 10.0)]
     down = np.r_[0.0, 0.0, -100.0, 0.0, 0.0, 0.0]

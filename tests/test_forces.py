@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import jointplay
-from conftest import MM, PAPER, RAD, spherical_shaft
+from conftest import FEET, MM, PAPER, RAD, spherical_shaft, table_on_feet
 from jointplay import model_from_dict
 
 EXAMPLES = sorted(Path(PAPER).parent.rglob("*.yaml"))
@@ -177,26 +177,6 @@ def test_the_certificate_refuses_forces_that_leave_a_body_unbalanced() -> None:
     assert 1e-8 < bad.balance[0] < 1e-7
 
 
-FEET = [(120.0, 80.0), (-120.0, 80.0), (-120.0, -80.0), (120.0, -80.0), (0.0, 80.0), (0.0, -80.0)]
-
-
-def _table_on_feet(force_at: list[float], feet: int = 4) -> dict[str, Any]:
-    return {
-        "bodies": [{"name": "floor", "ground": True}, {"name": "plate"}],
-        "joints": [
-            {
-                "name": f"foot{i + 1}",
-                "type": "point",
-                "between": ["floor", "plate"],
-                "at": [x, y, 0],
-                "axis": [0, 0, 1],
-            }
-            for i, (x, y) in enumerate(FEET[:feet])
-        ],
-        "loads": [{"body": "plate", "at": force_at, "force": [0, 0, -100]}],
-    }
-
-
 @pytest.mark.parametrize("at", [[0, 0, 30], [30, -20, 5], [-60, 10, 0]])
 def test_redundant_feet_share_the_load_as_equal_springs_would(at: list[float]) -> None:
     """A rigid plate on four touching feet at (+-a, +-b) under F at (x0, y0)
@@ -205,7 +185,7 @@ def test_redundant_feet_share_the_load_as_equal_springs_would(at: list[float]) -
     is the classic one of four equal springs:
     F_i = F/4 (1 + x0 x_i / a^2 + y0 y_i / b^2)."""
     a, b, F = 120.0, 80.0, 100.0
-    r = solved(_table_on_feet(at))
+    r = solved(table_on_feet(at))
     x0, y0 = at[0], at[1]
     for i, (x, y) in enumerate(FEET[:4]):
         expected = F / 4 * (1 + x0 * x / a**2 + y0 * y / b**2)
@@ -221,7 +201,7 @@ def test_the_split_pulls_on_no_foot() -> None:
     from itertools import combinations
 
     at = [110.0, 75.0]
-    r = solved(_table_on_feet([*at, 0.0], feet=6))
+    r = solved(table_on_feet([*at, 0.0], feet=6))
     forces = np.array([r.joints[f"foot{i}"].contacts[0].force[0] for i in range(1, 7)])
     M = np.array([[1.0] * 6, [y for _, y in FEET], [x for x, _ in FEET]])
     w = np.array([100.0, 100.0 * at[1], 100.0 * at[0]])  # sum F, moments about x and y
@@ -318,7 +298,7 @@ def test_a_split_that_does_not_certify_leaves_the_routes_forces(
     from jointplay import forces
     from jointplay.forces import Split
 
-    data = _table_on_feet([30, -20, 5])
+    data = table_on_feet([30, -20, 5])
     expected = solved(data)
     real = forces.least_squares_split
 
