@@ -41,7 +41,7 @@ from scipy.optimize import minimize
 import jointplay
 from bench_paper import per_solve_times
 from jointplay.assembly import Assembly, assemble
-from jointplay.linalg import dense
+from jointplay.numerics.linalg import dense
 from jointplay.solver import Workspace
 
 try:  # CVXPY is the optional "bench" extra

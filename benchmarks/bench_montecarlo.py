@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_paper
 import jointplay
-from jointplay.montecarlo import MonteCarlo
+from jointplay.studies.montecarlo import MonteCarlo
 
 LOW, HIGH = 0.15, 0.25
 
@@ -152,8 +152,8 @@ def main(argv: list[str] | None = None) -> int:
 def studies(name: str, target: int, samples: int, workers: int, check: int) -> None:
     """Monte Carlo on examples/studies/NAME.yaml: samples/s by processes,
     sample count and chunk size, against a full solve per sample."""
-    from jointplay.montecarlo import solve_chunk
     from jointplay.solver import Workspace
+    from jointplay.studies.montecarlo import solve_chunk
 
     path = Path(__file__).resolve().parents[1] / "examples" / "studies" / f"{name}.yaml"
     model = jointplay.load(path)
@@ -163,7 +163,7 @@ def studies(name: str, target: int, samples: int, workers: int, check: int) -> N
     # the alternative: one full solve per sample, with that sample's plays
     chunk = solve_chunk(model, MonteCarlo(samples=check, seed=0), 0, check)
     ws = Workspace.of(model)
-    from jointplay.variation import play_map
+    from jointplay.studies.variation import play_map
 
     pmap = play_map(ws.asm, model.name or name)
     radii = pmap.radii(chunk.plays)

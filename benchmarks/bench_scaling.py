@@ -1,12 +1,12 @@
 #!/usr/bin/env python
 """Scaling with size: chains and closed loops of 10 to 10,000 bodies.
 
-The mechanisms are ``jointplay.generate.tube_string``: segments coupled by a
+The mechanisms are ``jointplay.io.generate.tube_string``: segments coupled by a
 spigot (revolute) and a dowel pin, with a batch of real plays (seeded).
 ``chain`` is the open string loaded at its free end (axial pull, torque);
 ``loops`` also rests every segment in a bearing of its own and loads each
 one sideways, which closes a loop through the ground at every segment.
-``bearing`` is ``jointplay.generate.bearing_chain``: shafts each in a
+``bearing`` is ``jointplay.io.generate.bearing_chain``: shafts each in a
 cylindrical bearing and coupled to the one before by a revolute joint with
 axial play, one force across the axis on each; every shaft's spin is free
 (as many free motions as bodies) and the axial positions tie.
@@ -48,10 +48,10 @@ def measure(kind: str, n: int, cvxpy: bool) -> dict[str, Any]:
     import scipy.sparse as sp
 
     import jointplay
-    from jointplay import solver as solver_module
     from jointplay.assembly import assemble
-    from jointplay.generate import bearing_chain, tube_string
+    from jointplay.io.generate import bearing_chain, tube_string
     from jointplay.solver import Workspace
+    from jointplay.solver import pipeline as solver_module
 
     model = bearing_chain(n) if kind == "bearing" else tube_string(n, closed=(kind == "loops"))
     base_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

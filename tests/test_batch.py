@@ -118,7 +118,7 @@ def test_a_singular_row_drops_only_itself() -> None:
     """The batched Newton solves its rows' KKT systems together; one exactly
     singular system (a fresh clarabel's answer one ulp off can start a row on
     one) is masked out and the others are still solved, together."""
-    from jointplay.batch import solve_rows
+    from jointplay.solver.batch import solve_rows
 
     rng = np.random.default_rng(0)
     K = rng.standard_normal((5, 4, 4))
@@ -137,7 +137,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
     """The per-row bookkeeping of the batched Newton: rows that a step finds
     singular leave the stack and the others go on; the dropped rows get their
     answer later (from another start, or the full solver), the same answer."""
-    import jointplay.batch as batch_module
+    import jointplay.solver.batch as batch_module
 
     data = spherical_shaft()
     forces = rotated_forces(40)
@@ -169,7 +169,8 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
 def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
     """A start where a contact's relative position is exactly 0 has no
     direction for its force; that row leaves the batch, the others converge."""
-    from jointplay.batch import _newton_rows
+    from jointplay.solver import faces, pipeline
+    from jointplay.solver.batch import _newton_rows
 
     ws = Workspace.of(model_from_dict(spherical_shaft()))
     forces = rotated_forces(3)
@@ -177,8 +178,8 @@ def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
     work = np.hstack([forces, np.zeros_like(forces)]) @ W.T
     solved = ws.solve_batch(work)
     g_hat = work / np.linalg.norm(work, axis=1)[:, None]
-    point = ws._optimum(g_hat[0])
-    face = ws._face(point.active)
+    point = pipeline.optimum(ws, g_hat[0])
+    face = faces.face_of(ws, point.active)
     surface = list(point.active[0])
     assert not point.active[1] and surface  # the shaft's contacts are on their surfaces
     x = solved.x.copy()
@@ -212,8 +213,8 @@ def test_a_row_is_not_retried_without_end(monkeypatch: pytest.MonkeyPatch) -> No
     ``batch_give_up`` failures from it."""
     from pathlib import Path
 
-    import jointplay.batch as batch_module
-    from jointplay.montecarlo import MonteCarlo
+    import jointplay.solver.batch as batch_module
+    from jointplay.studies.montecarlo import MonteCarlo
 
     real = batch_module._newton_batch
     tried: list[tuple[Any, int]] = []
@@ -242,7 +243,7 @@ def test_redundant_contacts_are_batched_and_split_like_single_solves() -> None:
     are batched."""
     from pathlib import Path
 
-    from jointplay.variation import play_map
+    from jointplay.studies.variation import play_map
 
     model = jointplay.load(Path(__file__).parents[1] / "examples" / "studies" / "carriage.yaml")
     ws = Workspace.of(model)
@@ -274,7 +275,7 @@ def test_a_large_sparse_mechanism_is_solved_row_by_row() -> None:
     workspace is sparse, and its rows are solved one by one, each
     warm-started from the one before (before, a Monte Carlo or a batch on
     such a mechanism stopped with a traceback from the dense code)."""
-    from jointplay.generate import tube_string
+    from jointplay.io.generate import tube_string
 
     model = tube_string(42)
     ws = Workspace.of(model)
@@ -307,7 +308,7 @@ def test_a_singular_row_is_found_when_lu_and_determinant_disagree(
     LU then found singular (a force split's KKT system), and the batched
     solve of the 'regular' rows raised. Simulated here: the rows are then
     solved one at a time, and only the singular one is dropped."""
-    from jointplay.linalg import solve_rows
+    from jointplay.numerics.linalg import solve_rows
 
     rng = np.random.default_rng(1)
     K = rng.standard_normal((4, 3, 3))
@@ -328,8 +329,8 @@ def test_rows_that_pose_the_same_split_solve_it_once_and_alike() -> None:
     matches its own full solve."""
     from pathlib import Path
 
-    from jointplay.linalg import distinct_rows
-    from jointplay.variation import play_map
+    from jointplay.numerics.linalg import distinct_rows
+    from jointplay.studies.variation import play_map
 
     a = np.array([[1.0, 2.0], [3.0, 4.0], [1.0, 2.0], [1.0, 2.0 + 1e-15]])
     first, same = distinct_rows(a)

@@ -149,7 +149,7 @@ def test_a_tied_chain_prints_json_and_nothing_else(tmp_path: Path) -> None:
     exactly singular, fails inside BLAS, and OpenBLAS prints on stdout)."""
     import yaml
 
-    from jointplay.generate import bearing_chain_dict
+    from jointplay.io.generate import bearing_chain_dict
 
     model = tmp_path / "chain.yaml"
     model.write_text(yaml.safe_dump(bearing_chain_dict(50)), encoding="utf-8")
@@ -162,10 +162,10 @@ def test_a_tied_chain_prints_json_and_nothing_else(tmp_path: Path) -> None:
 
 
 STUDIES = {
-    "montecarlo": (["-n", "50"], "jointplay.montecarlo.MonteCarlo.run"),
-    "envelope": (["--point", "B"], "jointplay.envelope.Envelope.run"),
-    "sweep": (["--vary", "joints[l2].clearance=0.01:0.03:3"], "jointplay.sweep.Sweep.run"),
-    "contributions": ([], "jointplay.contributions.Contributions.run"),
+    "montecarlo": (["-n", "50"], "jointplay.studies.montecarlo.MonteCarlo.run"),
+    "envelope": (["--point", "B"], "jointplay.studies.envelope.Envelope.run"),
+    "sweep": (["--vary", "joints[l2].clearance=0.01:0.03:3"], "jointplay.studies.sweep.Sweep.run"),
+    "contributions": ([], "jointplay.studies.contributions.Contributions.run"),
 }
 
 
@@ -198,7 +198,7 @@ def test_the_help_examples_run_when_copied(command: str, tmp_path: Path) -> None
     """Help texts are plain text: Rich markup once ate 'joints[l2]' into 'joints'."""
     import re
 
-    from jointplay.sweep import Sweep, Vary
+    from jointplay.studies.sweep import Sweep, Vary
 
     proc = run(command, "--help")
     assert proc.returncode == 0, proc.stderr

@@ -9,7 +9,7 @@ import pytest
 
 import jointplay
 from conftest import PAPER
-from jointplay import conic
+from jointplay.solver import conic
 
 
 def test_every_status_of_the_installed_clarabel_is_mapped() -> None:

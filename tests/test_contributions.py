@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import ROOT, spherical_shaft
 from jointplay.cli import app
-from jointplay.contributions import Contributions
+from jointplay.studies.contributions import Contributions
 
 FITS = ROOT / "examples" / "studies" / "shaft_fits.yaml"
 

@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 
 import jointplay
 from jointplay.cli import app
-from jointplay.envelope import Envelope, sphere_directions
-from jointplay.montecarlo import MonteCarlo
+from jointplay.studies.envelope import Envelope, sphere_directions
+from jointplay.studies.montecarlo import MonteCarlo
 from test_montecarlo import SHAFT
 
 

@@ -13,7 +13,7 @@ import pytest
 
 import jointplay
 from conftest import MM, RAD, solve_file, spherical_shaft
-from jointplay.modelfile import model_from_dict
+from jointplay.io.modelfile import model_from_dict
 
 
 def _scaled_shaft(length: float, play: float, force: float) -> dict[str, Any]:

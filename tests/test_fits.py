@@ -1,4 +1,4 @@
-"""Tests for jointplay.fits against published ISO 286 limit deviations.
+"""Tests for jointplay.model.fits against published ISO 286 limit deviations.
 
 Every expected value below was read off a published table, not computed from the
 module's own data.  Sources (values in micrometres):
@@ -43,7 +43,14 @@ import math
 
 import pytest
 
-from jointplay.fits import Fit, Limits, fit, hole_limits, shaft_limits, tolerance_grade
+from jointplay.model.fits import (
+    Fit,
+    Limits,
+    fit,
+    hole_limits,
+    shaft_limits,
+    tolerance_grade,
+)
 
 # ---------------------------------------------------------------------------------------
 # helpers

@@ -157,23 +157,24 @@ def test_the_certificate_refuses_forces_that_leave_a_body_unbalanced() -> None:
     """The one certificate (``certificate.check``, shared by every route and
     by batches) checks each body's balance in newtons: forces off by 2e-8 of
     the largest force fail it, on the one body they act on."""
-    from jointplay import certificate
-    from jointplay.solver import Workspace
+    from jointplay.solver import Workspace, certificate, pipeline
 
     ws = Workspace.of(model_from_dict(spherical_shaft()))
     g = ws.asm.g / np.linalg.norm(ws.asm.g)
-    point = ws._optimum(g)
-    args = (g[None], point.x[None], point.lam[None], point.f[None], ws.sigma[None])
+    point = pipeline.optimum(ws, g)
+    args = (g[None], point.x[None], point.lam[None], point.f[None], np.zeros((1, len(ws.balls))))
     good = certificate.check(ws, *args)
-    assert good.passed(ws.settings, ws._max_radius)[0]
+    assert good.passed(ws.settings, ws.max_radius)[0]
     assert good.balance[0] < 1e-14
     # the ball l1 pushes 2e-8 (of the largest force) harder, along its direction
     lam, f = point.lam.copy(), point.f.copy()
     grow = 1 + 2e-8 * float(np.max(point.lam)) / lam[0]
     lam[0] *= grow
     f[: ws.stack.k[0]] *= grow
-    bad = certificate.check(ws, g[None], point.x[None], lam[None], f[None], ws.sigma[None])
-    assert not bad.passed(ws.settings, ws._max_radius)[0]
+    bad = certificate.check(
+        ws, g[None], point.x[None], lam[None], f[None], np.zeros((1, len(ws.balls)))
+    )
+    assert not bad.passed(ws.settings, ws.max_radius)[0]
     assert 1e-8 < bad.balance[0] < 1e-7
 
 
@@ -295,8 +296,8 @@ def test_a_split_that_does_not_certify_leaves_the_routes_forces(
     certificate needs. The solver then keeps its route's forces (certified),
     rather than decline: here a split off by 1e-6 is refused, and the answer
     is the one the route found."""
-    from jointplay import forces
-    from jointplay.forces import Split
+    from jointplay.solver import forces
+    from jointplay.solver.forces import Split
 
     data = table_on_feet([30, -20, 5])
     expected = solved(data)
@@ -329,13 +330,12 @@ def test_a_face_whose_force_reaches_its_rim_gets_the_exact_split() -> None:
     independently (least squares): the gradient of |P y|^2 / 2 is balanced
     by multipliers of the balance, of the rim (>= 0) and of the unloaded
     corner (>= 0), to round-off."""
-    from jointplay import forces
-    from jointplay.solver import Workspace
+    from jointplay.solver import Workspace, forces, pipeline
 
     model = jointplay.load(Path(__file__).parents[1] / "examples" / "studies" / "carriage.yaml")
     ws = Workspace.of(model)
     g = ws.asm.g
-    point = ws._optimum(g / np.linalg.norm(g))
+    point = pipeline.optimum(ws, g / np.linalg.norm(g))
     x, lam, f = point.x, point.lam, point.f
     st = ws.settings
     surface, apex, u = forces._classes(ws.stack, x, ws.stack.r, st.feasibility_tolerance, st)

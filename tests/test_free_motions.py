@@ -8,10 +8,10 @@ import scipy.sparse as sp
 
 import jointplay
 from conftest import ROOT
-from jointplay import linalg
 from jointplay.assembly import assemble
-from jointplay.free_motions import column_rank_deficit, null_basis
-from jointplay.generate import bearing_chain, tube_string
+from jointplay.io.generate import bearing_chain, tube_string
+from jointplay.numerics import linalg
+from jointplay.numerics.free_motions import column_rank_deficit, null_basis
 from jointplay.solver import Workspace
 
 

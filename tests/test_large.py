@@ -10,9 +10,9 @@ import pytest
 
 import jointplay
 from conftest import MM, RAD, ROOT
-from jointplay import linalg
-from jointplay.generate import tube_string, tube_string_dict
-from jointplay.modelfile import model_from_dict
+from jointplay.io.generate import tube_string, tube_string_dict
+from jointplay.io.modelfile import model_from_dict
+from jointplay.numerics import linalg
 
 EXAMPLES = sorted((ROOT / "examples").rglob("*.yaml"))
 

@@ -14,8 +14,8 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import MM, spherical_shaft
 from jointplay.cli import app
-from jointplay.contributions import Contributions
-from jointplay.montecarlo import MonteCarlo
+from jointplay.studies.contributions import Contributions
+from jointplay.studies.montecarlo import MonteCarlo
 
 
 def scattered(**over: Any) -> dict[str, Any]:

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import spherical_shaft
 from jointplay.cli import app
-from jointplay.montecarlo import MonteCarlo
+from jointplay.studies.montecarlo import MonteCarlo
 
 
 def _shaft() -> dict[str, Any]:

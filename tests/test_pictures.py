@@ -18,10 +18,7 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import MM, PAPER, ROOT
 from jointplay.cli import app
-from jointplay.contributions import Contributions
-from jointplay.envelope import Envelope
-from jointplay.montecarlo import MonteCarlo
-from jointplay.plot import (
+from jointplay.present.plot import (
     clearance_figure,
     contributions_figure,
     envelope_figure,
@@ -30,14 +27,17 @@ from jointplay.plot import (
     save,
     sweep_figure,
 )
-from jointplay.scene import (
+from jointplay.present.scene import (
     CIRCLE_POINTS,
     auto_magnify,
     joint_view,
     mechanism_scene,
     nice_factor,
 )
-from jointplay.sweep import RotateLoad, Sweep
+from jointplay.studies.contributions import Contributions
+from jointplay.studies.envelope import Envelope
+from jointplay.studies.montecarlo import MonteCarlo
+from jointplay.studies.sweep import RotateLoad, Sweep
 
 STUDIES = ROOT / "examples" / "studies"
 GALLERY = ROOT / "examples" / "gallery"
@@ -285,8 +285,8 @@ def test_plot_option_of_every_study(tmp_path: Path) -> None:
 
 
 def test_a_large_mechanism_shows_its_most_loaded_joints(tmp_path: Path) -> None:
-    from jointplay.generate import tube_string
-    from jointplay.plot import JOINT_VIEWS_SHOWN, most_loaded_joints
+    from jointplay.io.generate import tube_string
+    from jointplay.present.plot import JOINT_VIEWS_SHOWN, most_loaded_joints
 
     model = tube_string(30, closed=True)
     result = jointplay.solve(model)

@@ -23,8 +23,8 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import PAPER, ROOT
 from jointplay.cli import app
-from jointplay.report import Report
-from jointplay.sweep import RotateLoad, Sweep
+from jointplay.present.report import Report
+from jointplay.studies.sweep import RotateLoad, Sweep
 
 STUDIES = ROOT / "examples" / "studies"
 SCREENSHOTS = ROOT / "build" / "screenshots"

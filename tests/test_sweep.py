@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import MM, RAD, ROOT, spherical_shaft
 from jointplay.cli import app
-from jointplay.sweep import RotateLoad, Sweep, Vary, parse_path
+from jointplay.studies.sweep import RotateLoad, Sweep, Vary, parse_path
 
 UNBALANCE = ROOT / "examples" / "studies" / "rotating_unbalance.yaml"
 

@@ -8,43 +8,44 @@
 
 from typing import TYPE_CHECKING
 
-from .batch import BatchSolution
-from .errors import (
+from jointplay.errors import (
     JointplayError,
     ModelError,
     OptionError,
     SolverError,
     UnboundedMechanismError,
 )
-from .joints import JOINT_TYPES, Joint
-from .model import Body, Load, Model
-from .modelfile import load, model_from_dict
-from .result import BodyResult, Certificate, ContactResult, JointResult, Result
-from .settings import SolverSettings
-from .solver import Workspace, solve, solve_cases
+from jointplay.io.modelfile import load, model_from_dict
+from jointplay.model.joints import JOINT_TYPES, Joint
+from jointplay.model.mechanism import Body, Load, Model
+from jointplay.result import BodyResult, Certificate, ContactResult, JointResult, Result
+from jointplay.settings import SolverSettings
+from jointplay.solver.batch import BatchSolution
+from jointplay.solver.pipeline import solve, solve_cases
+from jointplay.solver.workspace import Workspace
 
 if TYPE_CHECKING:
-    from .contributions import Contributions, ContributionsResult
-    from .envelope import Envelope, EnvelopeResult
-    from .montecarlo import MonteCarlo, MonteCarloResult
-    from .report import Report
-    from .sweep import RotateLoad, Sweep, SweepResult, Vary
+    from jointplay.present.report import Report
+    from jointplay.studies.contributions import Contributions, ContributionsResult
+    from jointplay.studies.envelope import Envelope, EnvelopeResult
+    from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
+    from jointplay.studies.sweep import RotateLoad, Sweep, SweepResult, Vary
 
-__version__ = "0.1.0"
+from jointplay.version import __version__
 
 #: The studies, imported on first use (they bring SciPy's statistics and pandas).
 _STUDIES = {
-    "MonteCarlo": "montecarlo",
-    "MonteCarloResult": "montecarlo",
-    "Envelope": "envelope",
-    "EnvelopeResult": "envelope",
-    "Sweep": "sweep",
-    "SweepResult": "sweep",
-    "Vary": "sweep",
-    "RotateLoad": "sweep",
-    "Contributions": "contributions",
-    "ContributionsResult": "contributions",
-    "Report": "report",
+    "MonteCarlo": "studies.montecarlo",
+    "MonteCarloResult": "studies.montecarlo",
+    "Envelope": "studies.envelope",
+    "EnvelopeResult": "studies.envelope",
+    "Sweep": "studies.sweep",
+    "SweepResult": "studies.sweep",
+    "Vary": "studies.sweep",
+    "RotateLoad": "studies.sweep",
+    "Contributions": "studies.contributions",
+    "ContributionsResult": "studies.contributions",
+    "Report": "present.report",
 }
 
 

@@ -30,12 +30,12 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from . import linalg
-from .geometry import FloatArray, cross, skew
-from .joints import Contact, Joint
-from .linalg import Matrix
-from .model import Load, Model
-from .settings import DEFAULT
+from jointplay.geometry import FloatArray, cross, skew
+from jointplay.model.joints import Contact, Joint
+from jointplay.model.mechanism import Load, Model
+from jointplay.numerics import linalg
+from jointplay.numerics.linalg import Matrix
+from jointplay.settings import DEFAULT
 
 IntArray = NDArray[np.intp]
 

@@ -15,8 +15,8 @@ from typing import Annotated, Any, TypeVar
 import typer
 from rich.console import Console
 
-from . import __version__
-from .errors import JointplayError, ModelError, OptionError, UnboundedMechanismError
+from jointplay import __version__
+from jointplay.errors import JointplayError, ModelError, OptionError, UnboundedMechanismError
 
 app = typer.Typer(
     add_completion=False,
@@ -98,7 +98,7 @@ def _sweep_settings(
     source: str,
 ) -> Any:
     """The ``Sweep`` that the sweep options describe (a ``ModelError`` if they are wrong)."""
-    from .sweep import RotateLoad, Sweep, Vary
+    from jointplay.studies.sweep import RotateLoad, Sweep, Vary
 
     try:
         varies = tuple(Vary.parse(v) for v in vary or ())
@@ -148,12 +148,12 @@ def solve(
 
     A model with load cases is solved for each case (or only --case NAME).
     """
-    from .modelfile import load
-    from .solver import Workspace
-    from .textreport import render
+    from jointplay.io.modelfile import load
+    from jointplay.present.textreport import render
+    from jointplay.solver.workspace import Workspace
 
     def run() -> None:
-        from .model import check_case
+        from jointplay.model.mechanism import check_case
 
         model = load(model_path)
         check_case(model, case, str(model_path))
@@ -221,9 +221,9 @@ def montecarlo(
     """Monte Carlo over real parts: draw every toleranced play (limits or ISO
     fits), solve each set of parts exactly, and summarize the functional points
     and the requirements of MODEL."""
-    from .modelfile import load
-    from .montecarlo import MonteCarlo
-    from .textreport import render_montecarlo
+    from jointplay.io.modelfile import load
+    from jointplay.present.textreport import render_montecarlo
+    from jointplay.studies.montecarlo import MonteCarlo
 
     def run() -> None:
         model = load(model_path)
@@ -286,9 +286,9 @@ def envelope(
     """Worst-case envelope of a functional point: every displacement the
     plays allow under any load (its largest size and direction, its extent
     along each axis, and the hull's points)."""
-    from .envelope import Envelope
-    from .modelfile import load
-    from .textreport import render_envelope
+    from jointplay.io.modelfile import load
+    from jointplay.present.textreport import render_envelope
+    from jointplay.studies.envelope import Envelope
 
     def run() -> None:
         if plays not in ("max", "mean"):
@@ -345,8 +345,8 @@ def sweep(
     """Sweep MODEL: solve it as entries vary over a range or a load turns, and
     tabulate per step the points' displacements, the joints' torsors and the
     contacts (state and force)."""
-    from .modelfile import load
-    from .textreport import render_sweep
+    from jointplay.io.modelfile import load
+    from jointplay.present.textreport import render_sweep
 
     def run() -> None:
         source = str(model_path)
@@ -393,9 +393,9 @@ def contributions(
 ) -> None:
     """Which toleranced play drives each functional point: sensitivities at the
     nominal plays and percent contributions, worst case and statistical (RSS)."""
-    from .contributions import Contributions
-    from .modelfile import load
-    from .textreport import render_contributions
+    from jointplay.io.modelfile import load
+    from jointplay.present.textreport import render_contributions
+    from jointplay.studies.contributions import Contributions
 
     def run() -> None:
         source = str(model_path)
@@ -452,13 +452,13 @@ def plot(
     their joints, initial and displaced (magnified), each joint's clearance
     domain, the contacts (red: touching), the contact forces and the loads, in
     3D and in the three views; and each joint seen along its axis."""
-    from .modelfile import load
-    from .solver import Workspace
+    from jointplay.io.modelfile import load
+    from jointplay.solver.workspace import Workspace
 
     def run() -> None:
-        from .model import check_case
-        from .outputs import check_figure_path
-        from .plot import clearance_figure, mechanism_figure, save
+        from jointplay.model.mechanism import check_case
+        from jointplay.present.outputs import check_figure_path
+        from jointplay.present.plot import clearance_figure, mechanism_figure, save
 
         source = str(model_path)
         if kind not in ("mechanism", "joints"):
@@ -519,11 +519,11 @@ def report(
     the model, the solution of each load case with its contact forces, the
     figures, an interactive 3D view, and the studies (add a sweep with --vary or
     --rotate-load)."""
-    from .modelfile import load
-    from .report import Report
+    from jointplay.io.modelfile import load
+    from jointplay.present.report import Report
 
     def run() -> None:
-        from .outputs import check_output_path
+        from jointplay.present.outputs import check_output_path
 
         source = str(model_path)
         fix = "a report is an HTML page; name the file .html"
@@ -578,14 +578,14 @@ def _finish_study(
 
 
 def _plots() -> Any:
-    from . import plot
+    from jointplay.present import plot
 
     return plot
 
 
 def _check_outputs(csv: Path | None, plot: Path | None) -> None:
     """A study's output files, before the work (which may take minutes)."""
-    from .outputs import check_figure_path, check_file_path
+    from jointplay.present.outputs import check_figure_path, check_file_path
 
     if csv is not None:
         check_file_path(csv, "--csv")
@@ -594,7 +594,7 @@ def _check_outputs(csv: Path | None, plot: Path | None) -> None:
 
 
 def _save_plot(fig: Any, path: Path) -> None:
-    from .plot import save
+    from jointplay.present.plot import save
 
     save(fig, path)
     _note(f"wrote {path}")
@@ -603,7 +603,7 @@ def _save_plot(fig: Any, path: Path) -> None:
 def sweep_envelopes(model: Any, source: str) -> dict[str, Any]:
     """Each point's envelope at the nominal plays (those a sweep solves with),
     for the sweep's figure; a point its joints leave free gets none, said."""
-    from .envelope import point_envelopes
+    from jointplay.studies.envelope import point_envelopes
 
     found, missing = point_envelopes(model, "mean", source=source)
     for name in missing:

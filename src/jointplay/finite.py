@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .assembly import Assembly
-from .geometry import FloatArray, skew
+from jointplay.assembly import Assembly
+from jointplay.geometry import FloatArray, rotation_matrix, rotation_vector
 
 #: Warn when the exact contacts go past their play by more than this share of it.
 #: A body turning by more than this (rad, about 3 degrees) is warned about:
@@ -30,47 +30,6 @@ from .geometry import FloatArray, skew
 #: (0.1%) of their lever.
 LARGE_TURN_RAD = 0.05
 WARN_SHARE = 0.01
-
-
-def rotation_matrix(omega: FloatArray) -> FloatArray:
-    """``exp([omega]x)``: the rotation by |omega| rad about omega (Rodrigues)."""
-    theta = float(np.linalg.norm(omega))
-    K = skew(np.asarray(omega, dtype=float))
-    if theta < 1e-8:
-        return np.asarray(np.eye(3) + K + 0.5 * K @ K)
-    return np.asarray(
-        np.eye(3) + np.sin(theta) / theta * K + (1.0 - np.cos(theta)) / theta**2 * K @ K
-    )
-
-
-def rotation_vector(R: FloatArray) -> FloatArray:
-    """The inverse of ``rotation_matrix`` (angles below pi)."""
-    cos = float(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))
-    theta = float(np.arccos(cos))
-    axis_sin = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    if theta < 1e-6:
-        return np.asarray(axis_sin * (1.0 + theta**2 / 6.0))
-    return np.asarray(axis_sin * theta / np.sin(theta))
-
-
-def left_jacobian(phi: FloatArray) -> FloatArray:
-    """``J_l``: exp(phi + d) = exp(J_l d) exp(phi) to first order."""
-    theta = float(np.linalg.norm(phi))
-    K = skew(np.asarray(phi, dtype=float))
-    if theta < 1e-6:
-        return np.asarray(np.eye(3) + 0.5 * K + K @ K / 6.0)
-    a = (1.0 - np.cos(theta)) / theta**2
-    b = (theta - np.sin(theta)) / theta**3
-    return np.asarray(np.eye(3) + a * K + b * K @ K)
-
-
-def left_jacobian_inverse(phi: FloatArray) -> FloatArray:
-    theta = float(np.linalg.norm(phi))
-    K = skew(np.asarray(phi, dtype=float))
-    if theta < 1e-6:
-        return np.asarray(np.eye(3) - 0.5 * K + K @ K / 12.0)
-    c = 1.0 / theta**2 - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
-    return np.asarray(np.eye(3) - 0.5 * K + c * K @ K)
 
 
 @dataclass(frozen=True)

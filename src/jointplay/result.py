@@ -15,15 +15,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import SolverError
-from .finite import IDENTITY, Linearization, Placement, linearization
-from .free_motions import IntArray, column_groups
-from .geometry import FloatArray, cross, describe_motion
-from .settings import DEFAULT, TINY
+from jointplay.errors import SolverError
+from jointplay.finite import IDENTITY, Linearization, Placement, linearization
+from jointplay.geometry import FloatArray, cross, describe_motion
+from jointplay.numerics.free_motions import IntArray, column_groups
+from jointplay.settings import DEFAULT, TINY
 
 if TYPE_CHECKING:
-    from .assembly import Assembly
-    from .model import Load, Model
+    from jointplay.assembly import Assembly
+    from jointplay.model.mechanism import Load, Model
 
 #: Largest relative imbalance of loads and contact forces that ``check`` accepts.
 EQUILIBRIUM_TOLERANCE = DEFAULT.equilibrium_tolerance

@@ -1,0 +1,633 @@
+"""Reading model files (YAML, JSON, TOML: the same keys) into a validated Model.
+
+Every problem becomes one ``ModelError`` that names the file, the entry
+(``joints[1] 'l2': length``) and the fix; nothing here lets a traceback out.
+Hostile files are bounded before they are read in full: see ``MAX_FILE_BYTES``,
+``MAX_NODES`` and ``MAX_DEPTH``.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import ValidationError
+
+from jointplay.errors import ModelError
+from jointplay.model.joints import JOINT_TYPES
+from jointplay.model.mechanism import (
+    Body,
+    EntryError,
+    FunctionalPoint,
+    Load,
+    Model,
+    Requirement,
+    suggest,
+)
+from jointplay.units import shown
+
+#: Largest model file read, in bytes. A hand-written model of a thousand
+#: joints is about 100 kB, and the solver takes minutes long before a model
+#: reaches 1 MB; a larger file is refused before it is parsed.
+MAX_FILE_BYTES = 1_000_000
+#: Most YAML values (numbers, texts, lists, mappings) in a file, counted as
+#: they are parsed and again with aliases expanded: a model of 5000 joints
+#: holds about 70 000, and reading 100 000 takes the YAML reader half a second.
+#: Aliases (*name) reuse a value without copying it, so a few lines of nested
+#: aliases (a "billion laughs" file) can stand for billions of values, which
+#: validation would then walk one by one.
+MAX_NODES = 100_000
+#: Deepest nesting of lists and mappings. A model needs 4 (file, section,
+#: entry, vector); the limit stays far below Python's recursion limit.
+MAX_DEPTH = 64
+#: Most entries in a section (bodies, joints, loads, points, load cases, the
+#: loads of one case), for a model given as a dict (a file meets MAX_NODES
+#: first): each is validated, and a wrong entry may repeat a hundred thousand
+#: times in a generated model before the first one is reported. A mechanism
+#: of 10,000 bodies in closed loops has 20,000 joints.
+MAX_ENTRIES = 100_000
+
+#: The sections that are lists of entries.
+SECTIONS = ("bodies", "joints", "loads", "points", "requirements")
+
+#: Accepted keys per section, for "did you mean" suggestions.
+_SECTION_KEYS = {
+    "top": set(Model.model_fields) - {"schema_version"} | {"schema"},
+    "bodies": set(Body.model_fields),
+    "loads": set(Load.model_fields),
+    "points": set(FunctionalPoint.model_fields),
+    "requirements": set(Requirement.model_fields),
+}
+
+#: libyaml's parser when PyYAML has it (five times faster), else PyYAML's own.
+_YamlBase: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+class _TooManyNodesError(yaml.YAMLError):
+    pass
+
+
+class _StrictLoader(_YamlBase):  # type: ignore[misc]
+    """A YAML loader that refuses duplicate keys instead of keeping the last one,
+    and stops after MAX_NODES values."""
+
+    nodes = 0
+
+    def resolve(self, kind: Any, value: Any, implicit: Any) -> Any:
+        # called once per value as the file is parsed, also by libyaml's parser
+        self.nodes += 1
+        if self.nodes > MAX_NODES:
+            raise _TooManyNodesError
+        return super().resolve(kind, value, implicit)
+
+
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+
+
+def _mapping(loader: Any, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+    # merge keys ('<<: *defaults') give defaults that the mapping's own keys override
+    own = sum(1 for key_node, _ in node.value if key_node.tag != _MERGE_TAG)
+    loader.flatten_mapping(node)
+    merged = len(node.value) - own
+    out: dict[Any, Any] = {}
+    seen: set[Any] = set()
+    for index, (key_node, value_node) in enumerate(node.value):
+        key = loader.construct_object(key_node, deep=deep)
+        mark = key_node.start_mark
+        try:
+            hash(key)
+        except TypeError:
+            raise yaml.constructor.ConstructorError(
+                None, None, "a list or a mapping cannot be a key; keys are names", mark
+            ) from None
+        if index >= merged:
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {shown(key)} (line {mark.line + 1})", mark
+                )
+            seen.add(key)
+        out[key] = loader.construct_object(value_node, deep=deep)
+    return out
+
+
+def _scalar(kind: str) -> Any:
+    """PyYAML's constructor for a scalar ``kind``, failing as a YAML error: an
+    explicit tag on the wrong text ('!!bool at', '!!float x') raises a bare
+    KeyError or ValueError there, and Python refuses to read an integer of
+    thousands of digits."""
+    construct = getattr(yaml.constructor.SafeConstructor, f"construct_yaml_{kind}")
+
+    def guarded(loader: Any, node: yaml.ScalarNode) -> Any:
+        try:
+            return construct(loader, node)
+        except (ArithmeticError, LookupError, TypeError, ValueError):
+            what = "a number far too long" if len(str(node.value)) > 1000 else f"not a {kind}"
+            raise yaml.constructor.ConstructorError(
+                None, None, f"{shown(node.value)} is {what}", node.start_mark
+            ) from None
+
+    return guarded
+
+
+def _text(loader: Any, node: yaml.ScalarNode) -> Any:
+    # a date (2001-12-14) stays text: a model has no dates, and an impossible
+    # date (2001-13-45) would otherwise stop the reading
+    return loader.construct_scalar(node)
+
+
+_StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _mapping)
+for _kind_name in ("bool", "int", "float"):
+    _StrictLoader.add_constructor(f"tag:yaml.org,2002:{_kind_name}", _scalar(_kind_name))
+_StrictLoader.add_constructor("tag:yaml.org,2002:timestamp", _text)
+
+
+def load(path: str | Path) -> Model:
+    """Read and validate a model file (``.yaml``/``.yml``, ``.json`` or ``.toml``)."""
+    path = Path(path)
+    source = str(path)
+    text = _read(path, source)
+    data = parse_text(text, path.suffix.lower(), source)
+    return model_from_dict(data, source=source)
+
+
+def _read(path: Path, source: str) -> str:
+    folder = "this is a folder, not a model file; give the model file"
+    if "\0" in source:
+        raise ModelError("the path holds a NUL character; check the path", source=shown(source))
+    try:
+        if path.is_dir():
+            raise IsADirectoryError
+        with path.open("rb") as stream:
+            raw = stream.read(MAX_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise ModelError("no such file; check the path", source=source) from None
+    except IsADirectoryError:
+        raise ModelError(folder, source=source) from None
+    except OSError as exc:
+        raise ModelError(
+            f"cannot read the file ({exc.strerror}); check the path and its permissions",
+            source=source,
+        ) from None
+    if len(raw) > MAX_FILE_BYTES:
+        raise ModelError(
+            f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB, too large for a model "
+            "file; check that this is the model (a model of a thousand joints is about 100 kB)",
+            source=source,
+        )
+    return _decode(raw, source)
+
+
+def _decode(raw: bytes, source: str) -> str:
+    boms = {
+        b"\x00\x00\xfe\xff": "UTF-32",
+        b"\xff\xfe\x00\x00": "UTF-32",
+        b"\xfe\xff": "UTF-16",
+        b"\xff\xfe": "UTF-16",
+    }
+    for bom, name in boms.items():
+        if raw.startswith(bom):
+            raise ModelError(
+                f"the file is {name} text; save it as UTF-8 (most editors offer the encoding "
+                "in 'Save as')",
+                source=source,
+            )
+    if b"\x00" in raw:
+        raise ModelError(
+            "this is a binary file (it holds NUL bytes), not a model file; give the YAML, "
+            "JSON or TOML model",
+            source=source,
+        )
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        byte = raw[exc.start]
+        raise ModelError(
+            f"not UTF-8 text: byte 0x{byte:02x} at line {line}, column {column} is not "
+            "UTF-8; save the file as UTF-8",
+            source=source,
+        ) from None
+
+
+def parse_text(text: str, suffix: str, source: str) -> Any:
+    """The plain data of a model file's text; ``suffix`` picks the format
+    (``.json``, ``.toml``, anything else is YAML)."""
+    if len(text.encode("utf-8", "surrogatepass")) > MAX_FILE_BYTES:
+        raise ModelError(
+            f"the text is larger than {MAX_FILE_BYTES // 1_000_000} MB, too large for a model",
+            source=source,
+        )
+    try:
+        if suffix == ".json":
+            data = json.loads(text, object_pairs_hook=_json_object)
+        elif suffix == ".toml":
+            data = tomllib.loads(text)
+        else:
+            data = _parse_yaml(text, source)
+    except json.JSONDecodeError as exc:
+        raise ModelError(
+            f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"
+            + _format_hint(text, ".json"),
+            source=source,
+        ) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelError(
+            f"not valid TOML: {exc}" + _format_hint(text, ".toml"), source=source
+        ) from None
+    except _TooManyNodesError:
+        raise ModelError(
+            f"the file holds more than {MAX_NODES:,} values, far more than a model (a model "
+            "of 5000 joints holds about 70 000); check that this is the model",
+            source=source,
+        ) from None
+    except yaml.YAMLError as exc:
+        raise ModelError(
+            _yaml_problem(exc, text) + _format_hint(text, ".yaml"), source=source
+        ) from None
+    except ModelError:
+        raise
+    except RecursionError:
+        raise ModelError(_too_deep(), source=source) from None
+    except _DuplicateKeyError as exc:
+        raise ModelError(
+            f"not valid JSON: duplicate key {shown(exc.args[0])} in an object; give each key once",
+            source=source,
+        ) from None
+    except ValueError as exc:  # JSON or TOML: an integer of thousands of digits
+        problem = (
+            "a number in the file has thousands of digits"
+            if "digits" in str(exc)
+            else f"a value cannot be read ({shown(str(exc))})"
+        )
+        raise ModelError(f"{problem}; write plain numbers such as 0.2", source=source) from None
+    _check_structure(data, source)
+    if data is not None and not isinstance(data, dict):
+        raise ModelError(_not_a_mapping(data) + _format_hint(text, suffix), source=source)
+    return data
+
+
+def _not_a_mapping(data: Any) -> str:
+    kind = "empty" if data is None else _kind(data)
+    return (
+        f"expected a mapping with 'bodies', 'joints' and 'loads', but the file is {kind}; "
+        "see the model file format in the README"
+    )
+
+
+class _DuplicateKeyError(ValueError):
+    pass
+
+
+def _json_object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKeyError(key)
+        out[key] = value
+    return out
+
+
+def _parse_yaml(text: str, source: str) -> Any:
+    loader = _StrictLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _check_nodes(node, source)
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def _check_nodes(root: yaml.Node, source: str) -> None:
+    """Refuse alias bombs, aliases that contain themselves and deep nesting,
+    before anything is built from the nodes (iteratively: no recursion)."""
+    size: dict[int, int] = {}  # values below a finished list or mapping, aliases expanded
+    on_path: set[int] = set()  # the lists and mappings being walked: the current path
+    stack: list[tuple[yaml.Node, int, bool]] = [(root, 1, False)]
+    while stack:
+        node, depth, finished = stack.pop()
+        key = id(node)
+        if finished:
+            on_path.discard(key)
+            total = 1 + sum(size.get(id(child), 1) for child in _children(node))
+            if total > MAX_NODES:
+                raise ModelError(
+                    f"the YAML aliases (*name) expand to more than {MAX_NODES:,} values, far "
+                    "more than a model holds (a 'billion laughs' file?); write the values out, "
+                    "or reuse fewer aliases",
+                    source=source,
+                )
+            size[key] = total
+            continue
+        if key in size:
+            continue
+        if depth > MAX_DEPTH:
+            raise ModelError(_too_deep(), source=source)
+        on_path.add(key)
+        stack.append((node, depth, True))
+        for child in _children(node):
+            if isinstance(child, yaml.ScalarNode) or id(child) in size:
+                continue
+            if id(child) in on_path:
+                mark = child.start_mark
+                raise ModelError(
+                    f"the YAML anchor (&name) at line {mark.line + 1}, column {mark.column + 1} "
+                    "is used (*name) inside its own value, so that value never ends; write the "
+                    "values out",
+                    source=source,
+                )
+            stack.append((child, depth + 1, False))
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    if isinstance(node, yaml.MappingNode):
+        return [part for pair in node.value for part in pair]
+    return []
+
+
+def _too_deep() -> str:
+    return (
+        f"the file nests lists or mappings more than {MAX_DEPTH} deep, which no model does; "
+        "check the brackets"
+    )
+
+
+def _yaml_problem(exc: yaml.YAMLError, text: str) -> str:
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    problem = getattr(exc, "problem", None)
+    if isinstance(exc, yaml.reader.ReaderError):
+        position = int(getattr(exc, "position", 0))
+        line = text.count("\n", 0, position) + 1
+        code = getattr(exc, "character", None)
+        char = f"#x{code:04x}" if isinstance(code, int) else shown(code)
+        return (
+            f"not valid YAML: line {line} holds the control character {char}, which YAML "
+            "does not allow; remove it (is this a text model file?)"
+        )
+    where = ""
+    if mark is not None:
+        where = f" at line {mark.line + 1}, column {mark.column + 1}"
+        lines = text.splitlines()
+        if 0 <= mark.line < len(lines) and lines[mark.line].strip():
+            where += f" ({shown(lines[mark.line].strip())})"
+    if problem is None:
+        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return f"not valid YAML{where}: {problem}"
+
+
+def _format_hint(text: str, suffix: str) -> str:
+    """A hint when the file seems to be in another format than its name says."""
+    fmt = suffix if suffix in (".json", ".toml") else ".yaml"
+    if fmt != ".yaml" and not text.lstrip().startswith(("{", "[")):
+        try:
+            if isinstance(yaml.load(text, Loader=_StrictLoader), dict):
+                return f"; the file looks like YAML: name it .yaml, or fix the {fmt[1:].upper()}"
+        except Exception:  # not YAML either
+            pass
+    if fmt != ".toml":
+        try:
+            if tomllib.loads(text):
+                return f"; the file looks like TOML: name it .toml, or fix the {fmt[1:].upper()}"
+        except Exception:  # not TOML either
+            pass
+    if fmt == ".yaml" and text.lstrip().startswith("{"):
+        return "; if the file is JSON, name it .json to read it as JSON"
+    return ""
+
+
+def _check_structure(data: Any, source: str) -> None:
+    """Keys are text and the nesting is not absurd (JSON and TOML have no
+    alias check); iteratively, so that nothing recurses."""
+    stack: list[tuple[Any, list[Any]]] = [(data, [])]
+    while stack:
+        value, loc = stack.pop()
+        if len(loc) > MAX_DEPTH:
+            raise ModelError(_too_deep(), source=source)
+        if isinstance(value, dict):
+            for key, item in value.items():
+                if not isinstance(key, str):
+                    entry, field_path = _entry(loc, data) if loc else ("", "")
+                    where = ": ".join(p for p in (entry, field_path) if p)
+                    raise ModelError(
+                        f"the key {shown(key)} is not a name; keys are names such as 'clearance'"
+                        + (f" (write it in quotes: '{key}')" if _quotable(key) else ""),
+                        source=source,
+                        entry=where or None,
+                    )
+                stack.append((item, [*loc, key]))
+        elif isinstance(value, list):
+            stack.extend((item, [*loc, i]) for i, item in enumerate(value))
+
+
+def _quotable(key: Any) -> bool:
+    return isinstance(key, bool | int | float) or key is None
+
+
+def model_from_dict(data: Any, *, source: str = "<model>") -> Model:
+    """Validate a plain dict (as read from a model file) into a ``Model``."""
+    if not isinstance(data, dict):
+        raise ModelError(_not_a_mapping(data), source=source)
+    _check_sizes(data, source)
+    try:
+        return Model.model_validate(data)
+    except ValidationError as exc:
+        raise _to_model_error(exc, data, source) from None
+    except RecursionError:
+        raise ModelError(_too_deep(), source=source) from None
+
+
+def _check_sizes(data: dict[str, Any], source: str) -> None:
+    """At most MAX_ENTRIES entries per section, before validation walks them."""
+    sections = [(name, data.get(name)) for name in SECTIONS]
+    cases = data.get("load_cases")
+    if isinstance(cases, dict):
+        sections.append(("load_cases", cases))
+        sections += [(f"load_cases.{_short(name)}", loads) for name, loads in cases.items()]
+    for entry, items in sections:
+        if isinstance(items, list | dict) and len(items) > MAX_ENTRIES:
+            raise ModelError(
+                f"{len(items):,} entries, more than the {MAX_ENTRIES:,} a model may have; "
+                "check that this is the model, or split it",
+                source=source,
+                entry=entry,
+            )
+
+
+def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> ModelError:
+    errors = exc.errors(include_url=False)
+    # Report the first problem only: one clear paragraph beats a wall of text.
+    err = _first(errors)
+    original = (err.get("ctx") or {}).get("error")
+    if isinstance(original, EntryError):
+        problem = original.problem
+        if not problem.endswith((".", "?")):
+            problem += "."
+        return ModelError(problem, source=source, entry=original.entry)
+    loc = list(err["loc"])
+    entry, field_path = _entry(loc, data)
+    problem = _problem(err, loc, data)
+    more = f" ({len(errors) - 1} more problem(s) after this one)" if len(errors) > 1 else ""
+    where = ": ".join(p for p in (entry, field_path) if p)
+    return ModelError(problem + more, source=source, entry=where or None)
+
+
+def _first(errors: list[Any]) -> Any:
+    """The error to report: the first, except that a key missing next to an
+    unknown key is most likely that key misspelt, so the unknown key goes first."""
+    err = errors[0]
+    if err["type"] == "missing":
+        parent = tuple(err["loc"][:-1])
+        for other in errors:
+            if other["type"] == "extra_forbidden" and tuple(other["loc"][:-1]) == parent:
+                return other
+    return err
+
+
+def _entry(loc: list[Any], data: dict[str, Any]) -> tuple[str, str]:
+    """Split a pydantic location into ('joints[1] 'l2'', 'clearance')."""
+    if len(loc) >= 2 and loc[0] == "load_cases" and loc[-1] == "[key]":
+        return "load_cases", ""
+    if len(loc) >= 3 and loc[0] == "load_cases" and isinstance(loc[2], int):
+        return f"load_cases.{_short(loc[1])}[{loc[2]}]", _join_loc(loc[3:])
+    if len(loc) >= 2 and loc[0] in SECTIONS and isinstance(loc[1], int):
+        section, index = loc[0], loc[1]
+        rest = loc[2:]
+        if section == "joints" and rest and isinstance(rest[0], str) and rest[0] in JOINT_TYPES:
+            rest = rest[1:]  # the discriminator tag pydantic inserts
+        name = ""
+        items = data.get(str(section))
+        if isinstance(items, list) and index < len(items) and isinstance(items[index], dict):
+            item_name = items[index].get("name")
+            if isinstance(item_name, str) and item_name.strip():
+                name = f" '{_short(item_name.strip())}'"
+        return f"{section}[{index}]{name}", _join_loc(rest)
+    return "", _join_loc(loc)
+
+
+def _short(text: Any) -> str:
+    """A user's name inside a message: one line, at most 40 characters."""
+    out = str(text)[:200]
+    if not out.isprintable():
+        out = repr(out)[1:-1]
+    return out if len(out) <= 40 and len(str(text)) <= 40 else out[:37] + "..."
+
+
+def _join_loc(parts: list[Any]) -> str:
+    """``['a', 0, 'b']`` -> ``a[0].b``."""
+    out = ""
+    for part in parts:
+        out += (
+            f"[{part}]" if isinstance(part, int) else (f".{_short(part)}" if out else _short(part))
+        )
+    return out
+
+
+def _problem(err: Any, loc: list[Any], data: dict[str, Any]) -> str:
+    kind = err["type"]
+    ctx = err.get("ctx") or {}
+    got = shown(err.get("input"))
+    if kind == "extra_forbidden":
+        key = str(loc[-1])
+        allowed = _allowed_keys(loc, data)
+        hint = suggest(key, allowed) if allowed else ""
+        listing = f" Allowed keys here: {', '.join(sorted(allowed))}." if allowed else ""
+        if not hint:
+            listing += " Remove it, or fix its spelling."
+        return f"unknown key {shown(key)}.{hint}{listing}"
+    if "between" in loc and kind in ("missing", "too_long", "too_short", "tuple_type"):
+        value = _lookup(data, loc[: loc.index("between") + 1])
+        return f"expected the names of two bodies, [a, b], got {shown(value)}"
+    if kind == "missing":
+        return f"the key '{loc[-1]}' is required here; add it"
+    if kind == "union_tag_invalid":
+        tag = str(ctx.get("tag"))
+        return (
+            f"unknown joint type {shown(tag)}.{suggest(tag, JOINT_TYPES)} "
+            f"Known types: {', '.join(sorted(JOINT_TYPES))}"
+        )
+    if kind == "union_tag_not_found":
+        item = _lookup(data, loc)
+        typo = ""
+        if isinstance(item, dict):
+            for key in item:
+                if isinstance(key, str) and suggest(key, ["type"]):
+                    typo = f" (is {shown(key)} meant to be 'type'?)"
+                    break
+        return f"the joint needs a 'type'{typo}; one of: {', '.join(sorted(JOINT_TYPES))}"
+    if kind == "literal_error" and loc == ["schema"]:
+        return f"this is schema version 1; got {got}. Write 'schema: 1' or leave it out"
+    if kind in ("too_short",) and loc and loc[0] in ("bodies", "joints"):
+        return f"expected at least one entry in '{loc[0]}'"
+    if kind in ("tuple_type", "list_type") and len(loc) == 1:
+        return f"expected a list of entries, got {_kind(err.get('input'))}"
+    if kind in ("tuple_type", "list_type") and loc[0] == "load_cases":
+        return f"expected a list of loads (write [] for none), got {_kind(err.get('input'))}"
+    if kind == "model_type" or kind == "model_attributes_type":
+        return f"expected a mapping of keys (name: ..., ...), got {got}"
+    if kind == "dict_type":
+        return f"expected a mapping (NAME: [...], ...), got {type(err.get('input')).__name__}"
+    if kind == "string_type" and loc[-1] == "[key]":
+        return f"the load case name {got} is not text; write it in quotes: '{err.get('input')}'"
+    if kind == "string_type":
+        quote = " (write it in quotes)" if _quotable(err.get("input")) else ""
+        return f"expected a text name, got {got}{quote}"
+    if kind == "string_too_short":
+        return "expected a name, got an empty text; give it a name"
+    if kind == "string_too_long":
+        return f"expected a name of at most {ctx.get('max_length')} characters, got {got}"
+    if kind == "invalid_key":
+        return f"the key {got} is not a name; keys are names such as 'clearance'"
+    if kind == "bool_type":
+        return f"expected true or false, got {got}"
+    message = str(err["msg"])
+    return message.removeprefix("Value error, ").removeprefix("Assertion failed, ")
+
+
+def _kind(value: Any) -> str:
+    """What a value is, in words: 'a list ([1, 2])'."""
+    if value is None:
+        return "nothing (null)"
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, bool):
+        return f"true or false ({shown(value)})"
+    names = {list: "a list", str: "a text", int: "a number", float: "a number"}
+    return f"{names.get(type(value), 'a ' + type(value).__name__)} ({shown(value)})"
+
+
+def _lookup(data: Any, loc: list[Any]) -> Any:
+    """The value at a pydantic location, skipping the joint-type tags it inserts."""
+    value = data
+    for part in loc:
+        found = (isinstance(value, dict) and part in value) or (
+            isinstance(value, list) and isinstance(part, int) and part < len(value)
+        )
+        if found:
+            value = value[part]
+        elif isinstance(part, str) and part in JOINT_TYPES:
+            continue
+        else:
+            return None
+    return value
+
+
+def _allowed_keys(loc: list[Any], data: dict[str, Any]) -> set[str]:
+    if len(loc) == 1:
+        return _SECTION_KEYS["top"]
+    section = loc[0]
+    if section == "joints" and len(loc) >= 3:
+        tag = loc[2] if isinstance(loc[2], str) and loc[2] in JOINT_TYPES else None
+        if tag is not None:
+            return set(JOINT_TYPES[tag].model_fields)
+    if section in _SECTION_KEYS and len(loc) == 3:
+        return _SECTION_KEYS[section]
+    if section == "load_cases" and len(loc) == 4:
+        return _SECTION_KEYS["loads"]
+    return set()

@@ -1,0 +1,182 @@
+"""What every joint type shares: its frame, and the contract to name its contacts.
+
+A joint between bodies ``a`` and ``b`` limits the small displacement of b
+relative to a. That relative torsor is written at the joint centre, in the
+joint frame (x = the joint axis), as a 6-vector ``tau = (t, w)``: ``t`` the
+relative translation of the centre, ``w`` the relative rotation. The point at
+local position ``p`` moves by ``delta(p) = t + w x p``.
+
+Each joint type turns ``tau`` into its *contacts*: named clearance cones
+``|| rows @ tau || + offset @ tau <= radius`` (a ball of the play, in 1, 2
+or 3 directions, when there is no offset; a one-sided limit ``offset @ tau
+<= radius`` when there are no rows; a tilting face in between), or fixed
+rows ``rows @ tau = 0``. Nothing else about the joint reaches the solver, so
+a new joint type is one new module in this package.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, model_validator
+
+from jointplay.geometry import FloatArray, is_parallel, joint_frame, left_jacobian_inverse, skew
+from jointplay.model.fields import Direction, Name, Play, Point, PositiveStiffness
+
+ContactKind = Literal["ball", "fixed"]
+#: A cone's vector part (k,) and scalar part.
+Parts = tuple[FloatArray, float]
+
+#: Registered joint classes by their ``type`` name, filled by subclassing.
+JOINT_TYPES: dict[str, type[Joint]] = {}
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One clearance cone of a joint, in the joint frame.
+
+    ``kind == "ball"``: ``|| rows @ tau || + offset @ tau <= radius`` (mm);
+    the contact touches when the left side reaches the radius. ``kind ==
+    "fixed"``: ``rows @ tau == 0``. ``point`` is where the contact acts, in
+    joint-frame coordinates relative to the joint centre (mm).
+
+    The contact's dual is a force ``lam`` (N) with a vector ``f`` in the row
+    space, ``|f| <= lam``; it acts on b with the wrench ``-(rows.T @ f + lam
+    * offset)`` (force, moment at the centre). For a face that may tilt, the
+    centre of pressure moves with the force: it is ``point + lever @ f / lam``.
+    """
+
+    name: str
+    kind: ContactKind
+    rows: FloatArray
+    radius: float
+    point: FloatArray
+    offset: FloatArray | None = None  # (6,): a face's normal row; None for a plain ball
+    lever: FloatArray | None = None  # (3, k): where the centre of pressure goes
+
+    @property
+    def one_sided(self) -> bool:
+        """A limit with no rows: ``offset @ tau <= radius`` (a point on a plane)."""
+        return self.offset is not None and self.rows.shape[0] == 0
+
+    def exact_parts(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> Parts:
+        """The cone's vector and scalar parts ``(rows @ tau, offset @ tau)``
+        for a *finite* relative placement of b in a's joint frame: the point
+        at p goes to ``R_rel @ p + t_rel``; ``phi`` is ``R_rel``'s rotation vector.
+
+        Rows are those of the displacement of the contact's point,
+        ``rows = [S, -S [point]x]`` (``point_rows``), plus rows of the
+        rotation itself (a rigid joint); the exact parts put the exact
+        displacement ``d = R_rel @ point + t_rel - point`` in ``S`` and
+        ``phi`` in the rotation rows. A contact that is not a point's
+        overrides this (the disc face)."""
+        p = self.point
+        d = t_rel + R_rel @ p - p
+        turn = skew(p)
+
+        def part(row: FloatArray) -> FloatArray:
+            return np.asarray(row[..., :3] @ d + (row[..., 3:] + row[..., :3] @ turn) @ phi)
+
+        scalar = 0.0 if self.offset is None else float(part(self.offset))
+        return part(self.rows), scalar
+
+    def exact_jacobian(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> FloatArray:
+        """(k + 1, 6): derivative of ``exact_parts`` (vector rows, then the
+        scalar) with respect to a virtual twist of b in a's joint frame,
+        ``(dt at the centre, dtheta)``. Its transpose turns the contact's dual
+        into the wrench on b (force, moment about the centre)."""
+        p = self.point
+        q = R_rel @ p + t_rel
+        d_point = np.hstack([np.eye(3), -skew(q)])  # the point's displacement
+        d_phi = np.hstack([np.zeros((3, 3)), left_jacobian_inverse(phi)])
+        turn = skew(p)
+        offset = np.zeros(6) if self.offset is None else self.offset
+        rows = np.vstack([self.rows, offset])
+        return np.asarray(rows[:, :3] @ d_point + (rows[:, 3:] + rows[:, :3] @ turn) @ d_phi)
+
+    def exact_level(self, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> float:
+        """``|a| + b`` of ``exact_parts``: compare with ``radius``."""
+        vector, scalar = self.exact_parts(R_rel, phi, t_rel)
+        return float(np.linalg.norm(vector)) + scalar
+
+    def acting_point(self, f: FloatArray, lam: float) -> FloatArray:
+        """Where the force acts (joint frame, mm), given its dual ``(lam, f)``."""
+        if self.lever is None or lam <= 0.0:
+            return self.point
+        return self.point + self.lever @ (np.asarray(f) / lam)
+
+
+def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:
+    """Rows of ``delta(p) = t + w x p = [I, -[p]x] @ tau`` for the chosen joint axes."""
+    px, py, pz = np.asarray(p, dtype=float).tolist()
+    full = np.array(
+        [
+            [1.0, 0.0, 0.0, 0.0, pz, -py],
+            [0.0, 1.0, 0.0, -pz, 0.0, px],
+            [0.0, 0.0, 1.0, py, -px, 0.0],
+        ]
+    )
+    if directions == "xyz":
+        return full
+    return full[["xyz".index(axis) for axis in directions]]
+
+
+class Joint(BaseModel):
+    """Fields common to all joints. Subclasses set ``type`` and ``contacts``."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    type_name: ClassVar[str] = ""
+
+    name: Name
+    between: tuple[Name, Name]
+    at: Point
+    axis: Direction = (1.0, 0.0, 0.0)
+    up: Direction | None = None
+    clearance: Play
+    #: Contact stiffness (N/mm), per contact point: a contact may go past its
+    #: clearance by p at the cost of an elastic energy k p^2 / 2. None: rigid.
+    stiffness: PositiveStiffness | None = None
+
+    @classmethod
+    def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
+        super().__pydantic_init_subclass__(**kwargs)
+        type_field = cls.model_fields.get("type")
+        if type_field is not None and isinstance(type_field.default, str):
+            cls.type_name = type_field.default
+            JOINT_TYPES[cls.type_name] = cls
+
+    @model_validator(mode="after")
+    def _check_up(self) -> Joint:
+        if self.up is not None and is_parallel(np.array(self.up), np.array(self.axis)):
+            raise ValueError(
+                f"up {list(self.up)} is parallel to axis {list(self.axis)}; "
+                "give an 'up' vector across the axis, or leave it out"
+            )
+        return self
+
+    @cached_property
+    def R_world_joint(self) -> FloatArray:
+        """Joint axes x, y, z as columns, in global axes."""
+        up = None if self.up is None else np.array(self.up)
+        return joint_frame(np.array(self.axis), up)
+
+    @cached_property
+    def centre(self) -> FloatArray:
+        return np.array(self.at, dtype=float)
+
+    def contacts(self) -> tuple[Contact, ...]:
+        raise NotImplementedError
+
+    @cached_property
+    def cones(self) -> tuple[Contact, ...]:
+        """``contacts()``, computed once (the joint is immutable)."""
+        return self.contacts()
+
+    @property
+    def size(self) -> float:
+        """A length of the joint itself (mm), used for the model's length scale."""
+        return 0.0

@@ -1,0 +1,85 @@
+"""Prismatic joint: a slider of rectangular section in a slot.
+
+The slider has ``length`` L along the joint x axis, ``width`` w along y and
+``height`` h along z; the slot leaves a total play ``clearance_y`` (Jy)
+across y and ``clearance_z`` (Jz) across z. Each slider edge stays within
+the play at both ends of the engagement: the y displacement of the four
+points (x = +-L/2, z = +-h/2) and the z displacement of the four points
+(x = +-L/2, y = +-w/2). The axial slide along x is free; the rotation about
+x (roll) is limited by the corners::
+
+        y ^   +-----------------+  <- slot face y = +(w + Jy)/2
+          |   | +-------------+ |
+          |   | |   slider    | |   |delta_y(+-L/2, ., +-h/2)| <= Jy/2
+          |   | +-------------+ |   |delta_z(+-L/2, +-w/2, .)| <= Jz/2
+          |   +-----------------+  <- slot face y = -(w + Jy)/2
+          +-----------------------> x (slide free)
+
+Each of the eight contacts is two-sided (|.| <= J/2 covers both faces); a
+contact's force acts along y (or z) at its edge point, reported on the
+slider's mid-plane (y = 0 for a y contact, z = 0 for a z contact), which
+gives the same moment.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import model_validator
+
+from jointplay.model.fields import Play, PositiveLength
+from jointplay.model.joints.base import Contact, Joint, point_rows
+
+
+def _sign(v: float) -> str:
+    return "+" if v > 0 else "-"
+
+
+class Prismatic(Joint):
+    type: Literal["prismatic"] = "prismatic"
+    length: PositiveLength
+    width: PositiveLength
+    height: PositiveLength
+    #: Play across y and across z; ``clearance`` alone sets both.
+    clearance: Play | None = None  # type: ignore[assignment]
+    clearance_y: Play | None = None
+    clearance_z: Play | None = None
+
+    @model_validator(mode="after")
+    def _check_play(self) -> Prismatic:
+        for axis in "yz":
+            if getattr(self, f"clearance_{axis}") is None and self.clearance is None:
+                raise ValueError(
+                    f"a prismatic joint needs its play across {axis}: give 'clearance_{axis}' "
+                    "(mm), or 'clearance' for both y and z"
+                )
+        return self
+
+    @property
+    def play(self) -> tuple[float, float]:
+        """(Jy, Jz) in mm."""
+        jy = self.clearance_y if self.clearance_y is not None else self.clearance
+        jz = self.clearance_z if self.clearance_z is not None else self.clearance
+        assert jy is not None and jz is not None
+        return jy, jz
+
+    def contacts(self) -> tuple[Contact, ...]:
+        jy, jz = self.play
+        half_l, half_w, half_h = self.length / 2, self.width / 2, self.height / 2
+        out = []
+        for x in (-half_l, half_l):
+            for z in (-half_h, half_h):
+                p = np.array([x, 0.0, z])
+                name = f"y x{_sign(x)} z{_sign(z)}"
+                out.append(Contact(name, "ball", point_rows(p, "y"), jy / 2, p))
+        for x in (-half_l, half_l):
+            for y in (-half_w, half_w):
+                p = np.array([x, y, 0.0])
+                name = f"z x{_sign(x)} y{_sign(y)}"
+                out.append(Contact(name, "ball", point_rows(p, "z"), jz / 2, p))
+        return tuple(out)
+
+    @property
+    def size(self) -> float:
+        return max(self.length, self.width, self.height)

@@ -1,0 +1,43 @@
+"""Revolute joint: a cylindrical joint whose axial slide is also limited.
+
+Clearance domain: the two end discs of the cylindrical joint (radius J/2 at
+x = -L/2 and x = +L/2), plus an axial play: the centre moves along the axis
+by at most Ja/2 either way (``axial_clearance`` = Ja). Only the spin about x
+is free::
+
+      |<-Ja/2->|<-Ja/2->|
+      |  .  |---------|  .  |      |(delta_y, delta_z)(+-L/2 x)| <= J/2
+      | (o) |  shaft  | (o) |      |delta_x(0)| <= Ja/2
+      |  .  |---------|  .  |      spin about x free
+"""
+
+from __future__ import annotations
+
+from typing import Literal, Self
+
+import numpy as np
+from pydantic import model_validator
+
+from jointplay.model.fields import Play, PositiveLength
+from jointplay.model.joints.base import Contact, Joint, point_rows
+from jointplay.model.joints.cylindrical import check_engagement, end_contacts
+
+
+class Revolute(Joint):
+    type: Literal["revolute"] = "revolute"
+    length: PositiveLength
+    axial_clearance: Play
+
+    @model_validator(mode="after")
+    def _check_length(self) -> Self:
+        check_engagement(self.length, self.clearance)
+        return self
+
+    def contacts(self) -> tuple[Contact, ...]:
+        centre = np.zeros(3)
+        axial = Contact("axial", "ball", point_rows(centre, "x"), self.axial_clearance / 2, centre)
+        return (*end_contacts(self.length, self.clearance), axial)
+
+    @property
+    def size(self) -> float:
+        return self.length

@@ -1,0 +1,25 @@
+"""Sphere-in-cylinder (linear annular) joint: a ball in a bore.
+
+Clearance domain: the ball centre stays in a disc of radius J/2 across the
+bore axis; it slides freely along the axis, and all rotations are free::
+
+      ----------------------
+           (o) -->  slide       |(delta_y, delta_z)(0)| <= J/2
+      ----------------------    delta_x and all rotations free
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+from jointplay.model.joints.base import Contact, Joint, point_rows
+
+
+class SphereInCylinder(Joint):
+    type: Literal["sphere_in_cylinder"] = "sphere_in_cylinder"
+
+    def contacts(self) -> tuple[Contact, ...]:
+        centre = np.zeros(3)
+        return (Contact("radial", "ball", point_rows(centre, "yz"), self.clearance / 2, centre),)

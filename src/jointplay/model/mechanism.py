@@ -1,0 +1,331 @@
+"""The mechanism: bodies, joints and loads, frozen and validated.
+
+A ``Model`` is plain data. It never holds solver state or results; the
+solver builds its own workspace from it (see ``assembly.py``).
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections import deque
+from collections.abc import Iterable
+from functools import cached_property
+from typing import TYPE_CHECKING, Annotated, Any, Literal
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, model_validator
+
+from jointplay.model.fields import (
+    AccelerationVector,
+    Direction,
+    ForceVector,
+    Name,
+    NonNegativeMass,
+    Point,
+    PositiveLength,
+    TorqueVector,
+)
+from jointplay.model.joints import JOINT_TYPES, Joint
+from jointplay.units import shown
+
+if TYPE_CHECKING:
+    AnyJoint = Joint
+else:
+    from typing import Union
+
+    AnyJoint = Annotated[
+        Union[tuple(JOINT_TYPES.values())],  # noqa: UP007 - built from the registry
+        Field(discriminator="type"),
+    ]
+
+
+class EntryError(ValueError):
+    """A model-level problem that belongs to one entry (``joints[1] 'l2'``)."""
+
+    def __init__(self, entry: str, problem: str):
+        self.entry = entry
+        self.problem = problem
+        super().__init__(f"{entry}: {problem}")
+
+
+def suggest(word: str, candidates: Iterable[str]) -> str:
+    """' Did you mean 'x'?' for a likely typo, else ''."""
+    if len(word) > 100:  # not a typo, and difflib is slow on long words
+        return ""
+    close = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.5)
+    return f" Did you mean '{close[0]}'?" if close else ""
+
+
+def listing(names: Iterable[str], most: int = 10) -> str:
+    """'a, b, c' for a message, cut after ``most`` names: 'a, b, ... (and 990 more)'."""
+    names = list(names)
+    text = ", ".join(names[:most])
+    return text + (f", ... (and {len(names) - most} more)" if len(names) > most else "")
+
+
+def _schema_one(value: Any) -> Any:
+    if value != 1 or not isinstance(value, int) or isinstance(value, bool):
+        raise ValueError(
+            f"this is schema version 1; got {shown(value)}. Write 'schema: 1' or leave it out"
+        )
+    return value
+
+
+class Body(BaseModel):
+    """A rigid body. Ground bodies do not move; every other body gets a torsor."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    name: Name
+    ground: StrictBool = False
+    mass: NonNegativeMass | None = (
+        None  # kg; with the model's gravity, a weight at the centre of mass
+    )
+    center_of_mass: Point | None = None  # mm, global
+
+    @model_validator(mode="after")
+    def _check_mass(self) -> Body:
+        if self.mass is not None and self.center_of_mass is None:
+            raise ValueError("a body with a 'mass' needs its 'center_of_mass: [x, y, z]' (mm)")
+        if self.center_of_mass is not None and self.mass is None:
+            raise ValueError("'center_of_mass' is given without a 'mass'; add 'mass' (kg)")
+        return self
+
+
+class FunctionalPoint(BaseModel):
+    """A point of a body whose displacement the result reports (a tool tip, say)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    name: Name
+    body: Name
+    at: Point
+
+
+class Requirement(BaseModel):
+    """A functional requirement: the point's displacement stays within
+    ``max_displacement`` (its size, or its component ``along`` a direction)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    point: Name
+    max_displacement: PositiveLength
+    along: Direction | None = None
+
+    def describe(self) -> str:
+        what = "|displacement|" if self.along is None else f"displacement along {list(self.along)}"
+        return f"point '{self.point}': {what} <= {self.max_displacement:g} mm"
+
+
+class Load(BaseModel):
+    """A force at a point of a body, a torque on a body, or both."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    body: Name
+    at: Point | None = None
+    force: ForceVector | None = None
+    torque: TorqueVector | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> Load:
+        if self.force is None and self.torque is None:
+            raise ValueError("a load needs a 'force' (with 'at') or a 'torque', or both")
+        if self.force is not None and self.at is None:
+            raise ValueError("a force needs its point of application: add 'at: [x, y, z]' (mm)")
+        return self
+
+
+class Model(BaseModel):
+    """A mechanism with clearances: schema v1 of the model file."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", populate_by_name=True)
+
+    schema_version: Annotated[Literal[1], BeforeValidator(_schema_one)] = Field(1, alias="schema")
+    name: str | None = None
+    description: str | None = None
+    bodies: tuple[Body, ...] = Field(min_length=1)
+    joints: tuple[AnyJoint, ...] = Field(min_length=1)
+    loads: tuple[Load, ...] = ()
+    load_cases: dict[Name, tuple[Load, ...]] | None = None
+    gravity: AccelerationVector | None = None  # mm/s^2 as plain numbers; "9.81 m/s^2"
+    points: tuple[FunctionalPoint, ...] = ()
+    requirements: tuple[Requirement, ...] = ()
+
+    @model_validator(mode="after")
+    def _check_topology(self) -> Model:
+        names = [b.name for b in self.bodies]
+        _check_unique(names, "bodies", "body")
+        _check_unique([j.name for j in self.joints], "joints", "joint")
+        grounds = {b.name for b in self.bodies if b.ground}
+        if not grounds:
+            raise EntryError(
+                "bodies",
+                "no ground body; mark the fixed body with 'ground: true' "
+                f"(bodies are: {listing(names)})",
+            )
+        for i, joint in enumerate(self.joints):
+            entry = f"joints[{i}] '{joint.name}'"
+            a, b = joint.between
+            for body in (a, b):
+                if body not in names:
+                    raise EntryError(
+                        entry,
+                        f"between: unknown body '{body}'; bodies are: {listing(names)}."
+                        + suggest(body, names),
+                    )
+            if a == b:
+                raise EntryError(
+                    entry, f"between: the joint goes from body '{a}' to itself; name two bodies"
+                )
+            if a in grounds and b in grounds:
+                raise EntryError(
+                    entry,
+                    f"between: both '{a}' and '{b}' are ground bodies, so the joint "
+                    "constrains nothing; connect a moving body",
+                )
+        sections = [(f"loads[{i}]", load) for i, load in enumerate(self.loads)]
+        for case, loads in (self.load_cases or {}).items():
+            sections += [(f"load_cases.{case}[{i}]", load) for i, load in enumerate(loads)]
+        for entry, load in sections:
+            if load.body not in names:
+                raise EntryError(
+                    entry,
+                    f"body: unknown body '{load.body}'; bodies are: {listing(names)}."
+                    + suggest(load.body, names),
+                )
+            if load.body in grounds:
+                raise EntryError(
+                    entry,
+                    f"body: '{load.body}' is a ground body, which does not move, so the load "
+                    "does nothing; put it on a moving body",
+                )
+        if self.load_cases is not None and not self.load_cases:
+            raise EntryError(
+                "load_cases", "no cases given; name at least one case, or leave it out"
+            )
+        _check_unique([p.name for p in self.points], "points", "point")
+        for i, point in enumerate(self.points):
+            if point.body not in names:
+                raise EntryError(
+                    f"points[{i}] '{point.name}'",
+                    f"body: unknown body '{point.body}'; bodies are: {listing(names)}."
+                    + suggest(point.body, names),
+                )
+        point_names = [p.name for p in self.points]
+        for i, req in enumerate(self.requirements):
+            if req.point not in point_names:
+                known = (
+                    f"points are: {listing(point_names)}"
+                    if point_names
+                    else "the model has no 'points' section; add the point there"
+                )
+                raise EntryError(
+                    f"requirements[{i}]",
+                    f"point: unknown point '{req.point}'; {known}."
+                    + suggest(req.point, point_names),
+                )
+        unreached = _unreached_from_ground(names, grounds, [j.between for j in self.joints])
+        if unreached:
+            raise EntryError(
+                "bodies",
+                "no chain of joints connects "
+                + listing(f"'{n}'" for n in unreached)
+                + " to a ground body; add a joint, or mark the body 'ground: true'",
+            )
+        return self
+
+    @cached_property
+    def moving_bodies(self) -> tuple[Body, ...]:
+        return tuple(b for b in self.bodies if not b.ground)
+
+    @property
+    def case_names(self) -> tuple[str, ...]:
+        """The load cases, in file order (empty when the model has none)."""
+        return tuple(self.load_cases or ())
+
+    def weights(self) -> tuple[Load, ...]:
+        """Gravity on each moving body with a mass: m * g at its centre of mass (N)."""
+        if self.gravity is None:
+            return ()
+        out = []
+        for b in self.moving_bodies:
+            if b.mass and b.center_of_mass is not None:
+                # kg * mm/s^2 = 1e-3 N
+                gx, gy, gz = self.gravity
+                force = (1e-3 * b.mass * gx, 1e-3 * b.mass * gy, 1e-3 * b.mass * gz)
+                # built from validated values: no second validation (and its limits)
+                out.append(Load.model_construct(body=b.name, at=b.center_of_mass, force=force))
+        return tuple(out)
+
+    def loads_of(self, case: str | None = None) -> tuple[Load, ...]:
+        """Every load acting in ``case``: the top-level loads (which act in every
+        case), the weights, and the case's own loads."""
+        own: tuple[Load, ...] = ()
+        if case is not None:
+            if case not in (self.load_cases or {}):
+                cases = self.case_names
+                raise KeyError(
+                    f"no load case {shown(case)}; cases are: {listing(cases) or '(none)'}."
+                    + suggest(case, cases)
+                )
+            own = (self.load_cases or {})[case]
+        return self.loads + self.weights() + own
+
+    def body(self, name: str) -> Body:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    def joint(self, name: str) -> Joint:
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(name)
+
+    def replace(self, **changes: Any) -> Model:
+        """A new validated model with some top-level fields changed."""
+        data = self.model_dump(by_alias=True, exclude_none=True)
+        data.update(changes)
+        return Model.model_validate(data)
+
+
+def check_case(model: Model, case: str | None, source: str) -> None:
+    """A ``ModelError`` naming the cases unless ``case`` is None or one of them."""
+    if case is None:
+        return
+    try:
+        model.loads_of(case)
+    except KeyError as exc:
+        from jointplay.errors import ModelError
+
+        raise ModelError(f"--case: {exc.args[0]}", source=source) from None
+
+
+def _check_unique(names: list[str], section: str, what: str) -> None:
+    seen: dict[str, int] = {}
+    for i, n in enumerate(names):
+        if n in seen:
+            raise EntryError(
+                f"{section}[{i}]",
+                f"duplicate {what} name '{n}' (also {section}[{seen[n]}]); give each {what} "
+                "its own name",
+            )
+        seen[n] = i
+
+
+def _unreached_from_ground(
+    names: list[str], grounds: set[str], edges: list[tuple[str, str]]
+) -> list[str]:
+    neighbours: dict[str, set[str]] = {n: set() for n in names}
+    for a, b in edges:
+        neighbours[a].add(b)
+        neighbours[b].add(a)
+    seen = set(grounds)
+    queue = deque(grounds)
+    while queue:
+        for nxt in neighbours[queue.popleft()]:
+            if nxt not in seen:
+                seen.add(nxt)
+                queue.append(nxt)
+    return [n for n in names if n not in seen]

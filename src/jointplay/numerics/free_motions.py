@@ -1,0 +1,339 @@
+"""Free motions of a large mechanism, in time linear in its size.
+
+The free motions are the null space of the stacked constraint rows ``C``
+(every contact's rows, the faces' rows, the rigid joints' rows). Each row
+touches the six unknowns of one or two bodies, so ``C`` is block-sparse by
+bodies. We eliminate the bodies one at a time, as a multifrontal QR does:
+body j's rows (and the rows passed on to it) are rotated so that its own six
+columns are split by their singular values. The directions with a singular
+value above ``rcond`` times C's largest are pivots: their rows express them
+through the bodies not yet eliminated. The other directions are free in the
+rows that are left; the rotated rest of the rows, which no longer touch body
+j, pass on to its neighbours. A free direction of body j becomes a free
+motion of the mechanism by back-substitution through the pivots of the
+bodies eliminated before it that it moves.
+
+Singular values are those of C's blocks, not of ``C^T C``, so none is lost
+to squaring. A block's singular value below the threshold is a motion that C
+moves less than that, so nothing held is called free; but a motion held only
+through many bodies together (a chain whose links each halve a motion holds
+it 2^-n) may be held far less than any one block shows: the dense SVD may
+call it free and this elimination held. Bodies go in a minimum-degree order, so a
+chain or a tree makes no fill; a free motion that one body makes alone (a
+shaft's spin) stays a vector on that body. The basis returned is sparse and
+orthonormal.
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+from scipy.linalg import lapack
+
+from jointplay.geometry import FloatArray
+from jointplay.settings import DEFAULT
+
+IntArray = NDArray[np.intp]
+
+
+@dataclass
+class _Pivot:
+    """Body j's pivot rows: ``s_r * (V_r^T x_j) + P_other @ x_other = 0``."""
+
+    V_r: FloatArray  # (6, rank)
+    s_r: FloatArray  # (rank,)
+    others: tuple[int, ...]
+    P_other: FloatArray  # (rank, 6 * len(others))
+
+
+@dataclass
+class _Elimination:
+    order: list[int] = field(default_factory=list)
+    pivots: dict[int, _Pivot] = field(default_factory=dict)
+    free: list[tuple[int, FloatArray]] = field(default_factory=list)  # (body, (6, q))
+
+
+def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
+    """C's rows grouped by the set of bodies they touch, each group a dense
+    block over those bodies' columns (vectorized: a large mechanism has
+    hundreds of thousands of rows)."""
+    C = sp.csr_matrix(C, copy=True)  # the caller's matrix stays as it is
+    C.sum_duplicates()  # repeated entries add up, as in any sparse product
+    C.eliminate_zeros()
+    row_of = np.repeat(np.arange(C.shape[0]), np.diff(C.indptr))
+    body_of = C.indices // 6
+    # each row's bodies, as (row, body) pairs in order
+    pair = np.unique(row_of.astype(np.int64) * (C.shape[1] // 6 + 1) + body_of)
+    pair_row, pair_body = np.divmod(pair, C.shape[1] // 6 + 1)
+    count = np.bincount(pair_row, minlength=C.shape[0])
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    keys: dict[tuple[int, ...], list[int]] = {}
+    two = count == 2  # the common case, a joint between two bodies
+    one = count == 1
+    for same, touched in ((np.flatnonzero(one), 1), (np.flatnonzero(two), 2)):
+        if not len(same):
+            continue
+        bodies = pair_body[first[same][:, None] + np.arange(touched)]
+        order = np.lexsort(bodies.T[::-1])
+        same, bodies = same[order], bodies[order]
+        cut = np.flatnonzero(np.any(np.diff(bodies, axis=0) != 0, axis=1)) + 1
+        for chunk_rows, chunk_bodies in zip(
+            np.split(same, cut), np.split(bodies, cut), strict=True
+        ):
+            keys[tuple(chunk_bodies[0].tolist())] = chunk_rows.tolist()
+    for row in np.flatnonzero(count > 2):  # rows that touch more bodies (rare)
+        key = tuple(pair_body[first[row] : first[row] + count[row]].tolist())
+        keys.setdefault(key, []).append(int(row))
+    # scatter every entry into one buffer that holds the groups' blocks
+    n_rows = np.array([len(rows) for rows in keys.values()], dtype=np.intp)
+    width = 6 * np.array([len(key) for key in keys], dtype=np.intp)
+    offset = np.concatenate([[0], np.cumsum(n_rows * width)[:-1]]).astype(np.intp)
+    group_of = np.zeros(C.shape[0], dtype=np.intp)
+    local_row = np.zeros(C.shape[0], dtype=np.intp)
+    for index, rows in enumerate(keys.values()):
+        group_of[rows] = index
+        local_row[rows] = np.arange(len(rows))
+    nb1 = C.shape[1] // 6 + 1
+    rank = np.searchsorted(pair, row_of.astype(np.int64) * nb1 + body_of) - first[row_of]
+    group = group_of[row_of]
+    flat = offset[group] + local_row[row_of] * width[group] + 6 * rank + C.indices % 6
+    buffer = np.zeros(int(np.sum(n_rows * width)))
+    buffer[flat] = C.data
+    return [
+        (key, buffer[offset[g] : offset[g] + n_rows[g] * width[g]].reshape(n_rows[g], width[g]))
+        for g, key in enumerate(keys)
+    ]
+
+
+def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimination:
+    n = m // 6
+    blocks = _row_blocks(C)
+    store: dict[int, tuple[tuple[int, ...], FloatArray]] = dict(enumerate(blocks))
+    on: list[set[int]] = [set() for _ in range(n)]  # body -> ids of its row blocks
+    near: list[set[int]] = [set() for _ in range(n)]  # body -> bodies its rows touch
+    for b, (bodies, _rows) in store.items():
+        for body in bodies:
+            on[body].add(b)
+            near[body].update(bodies)
+    for body in range(n):
+        near[body].discard(body)
+    next_id = len(store)
+    heap = [(len(near[j]), j) for j in range(n)]
+    heapq.heapify(heap)
+    done = np.zeros(n, dtype=bool)
+    out = _Elimination()
+    tol = rcond * s_max
+    while heap:
+        d, j = heapq.heappop(heap)
+        if done[j]:
+            continue
+        if d != len(near[j]):  # stale entry: its degree changed since
+            heapq.heappush(heap, (len(near[j]), j))
+            continue
+        done[j] = True
+        out.order.append(j)
+        others = tuple(sorted(near[j]))
+        where = {body: i for i, body in enumerate((j, *others))}
+        mine = [store.pop(b) for b in sorted(on[j])]
+        R = np.zeros((sum(rows.shape[0] for _, rows in mine), 6 * (1 + len(others))))
+        at = 0
+        for bodies, rows in mine:
+            cols = [6 * where[body] + k for body in bodies for k in range(6)]
+            R[at : at + rows.shape[0], cols] = rows
+            at += rows.shape[0]
+        for body in others:
+            on[body] -= on[j]
+            near[body].discard(j)
+            near[body].update(others)
+            near[body].discard(body)
+        on[j].clear()
+        near[j].clear()
+        if not R.shape[0]:  # no rows left on j (LAPACK, given 0 rows, prints on stdout)
+            U, sv, Vt = np.zeros((0, 0)), np.zeros(0), np.eye(6)
+        else:
+            U, sv, Vt, info = lapack.dgesdd(R[:, :6], full_matrices=1)
+            if info:  # pragma: no cover - LAPACK's SVD did not converge
+                U, sv, Vt = np.linalg.svd(R[:, :6], full_matrices=True)
+        rank = int(np.sum(sv > tol))
+        if rank < 6:
+            out.free.append((j, Vt[rank:].T.copy()))
+        if rank:
+            P = U[:, :rank].T @ R
+            out.pivots[j] = _Pivot(Vt[:rank].T.copy(), sv[:rank], others, P[:, 6:])
+        if others:
+            rest = U[:, rank:].T @ R[:, 6:]
+            if rest.shape[0] > rest.shape[1]:  # at most as many rows as columns
+                rest = np.triu(lapack.dgeqrf(rest)[0][: rest.shape[1]])
+            keep = np.max(np.abs(rest), axis=1, initial=0.0) > 0.0
+            if np.any(keep):
+                store[next_id] = (others, rest[keep])
+                for body in others:
+                    on[body].add(next_id)
+                next_id += 1
+            for body in others:
+                heapq.heappush(heap, (len(near[body]), body))
+    return out
+
+
+def _checked(C: sp.spmatrix, m: int) -> sp.csr_matrix:
+    if m % 6 or C.shape[1] != m:
+        raise ValueError(f"expected 6 columns per body and {m} in all, got {C.shape[1]}")
+    return sp.csr_matrix(C)
+
+
+def _largest_singular_value(C: sp.csr_matrix) -> float:
+    """C's largest singular value, by power iteration on C^T C (to a few
+    percent, which is all a relative threshold needs)."""
+    rng = np.random.default_rng(20140101)
+    v = rng.standard_normal(C.shape[1])
+    previous = 0.0
+    for _ in range(60):
+        w = C.T @ (C @ v)
+        norm = float(np.linalg.norm(w))
+        if norm == 0.0:
+            return 0.0
+        v = w / norm
+        if abs(norm - previous) <= DEFAULT.orthonormal_stall * norm:
+            break
+        previous = norm
+    return float(np.linalg.norm(C @ v))
+
+
+def null_basis(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> sp.csc_matrix:
+    """Sparse orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``
+    (a singular value of a body's block below ``rcond`` times C's largest
+    counts as zero)."""
+    C = _checked(C, m)
+    if C.shape[0] == 0 or C.nnz == 0:
+        return sp.identity(m, format="csc")
+    s_max = _largest_singular_value(C)
+    elim = _eliminate(C, m, rcond, s_max)
+    position = {body: i for i, body in enumerate(elim.order)}
+    # bodies eliminated before k whose pivot rows involve k
+    dependents: dict[int, list[int]] = {}
+    for i, pivot in elim.pivots.items():
+        for k in pivot.others:
+            dependents.setdefault(k, []).append(i)
+    vectors: list[dict[int, FloatArray]] = []
+    for j, V in elim.free:
+        for q in range(V.shape[1]):
+            vectors.append(_back_substitute(j, V[:, q], elim, position, dependents))
+    return _orthonormal(vectors, m)
+
+
+def column_rank_deficit(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> int:
+    """How many independent motions ``C`` does not move (0: its rows pin every unknown)."""
+    C = _checked(C, m)
+    if C.shape[0] == 0 or C.nnz == 0:
+        return m
+    elim = _eliminate(C, m, rcond, _largest_singular_value(C))
+    return sum(V.shape[1] for _, V in elim.free)
+
+
+def _back_substitute(
+    j: int,
+    v: FloatArray,
+    elim: _Elimination,
+    position: dict[int, int],
+    dependents: dict[int, list[int]],
+) -> dict[int, FloatArray]:
+    """The free motion that body j's free direction v starts: the bodies
+    eliminated before j follow through their pivot rows (latest first: a
+    pivot row involves only bodies eliminated after its own)."""
+    x = {j: v}
+    heap = [-position[i] for i in dependents.get(j, [])]
+    heapq.heapify(heap)
+    seen = set(heap)
+    # an entry below round-off of the free direction that started it does not
+    # move that body: dropped, so a local free motion stays local
+    floor = DEFAULT.round_off * float(np.linalg.norm(v))
+    while heap:
+        i = elim.order[-heapq.heappop(heap)]
+        pivot = elim.pivots[i]
+        moved = [k for k in pivot.others if k in x]
+        if not moved:
+            continue
+        x_other = np.zeros(6 * len(pivot.others))
+        for k, body in enumerate(pivot.others):
+            if body in x:
+                x_other[6 * k : 6 * k + 6] = x[body]
+        x_i = pivot.V_r @ (-(pivot.P_other @ x_other) / pivot.s_r)
+        if float(np.max(np.abs(x_i))) <= floor:
+            continue
+        x[i] = x_i
+        for dep in dependents.get(i, []):
+            if -position[dep] not in seen:
+                seen.add(-position[dep])
+                heapq.heappush(heap, -position[dep])
+    return x
+
+
+def _orthonormal(vectors: list[dict[int, FloatArray]], m: int) -> sp.csc_matrix:
+    """The vectors (body -> 6 entries) as orthonormal sparse columns: those
+    that share a body are orthonormalized together, the others alone."""
+    clusters = _sharing([list(vec) for vec in vectors])
+    rows: list[IntArray] = []
+    cols: list[IntArray] = []
+    vals: list[FloatArray] = []
+    p = 0
+    for members in clusters:
+        bodies = sorted({body for a in members for body in vectors[a]})
+        where = {body: i for i, body in enumerate(bodies)}
+        X = np.zeros((6 * len(bodies), len(members)))
+        for c, a in enumerate(members):
+            for body, entries in vectors[a].items():
+                X[6 * where[body] : 6 * where[body] + 6, c] = entries
+        Q = X / np.linalg.norm(X) if X.shape[1] == 1 else np.linalg.qr(X)[0]
+        index = (6 * np.asarray(bodies)[:, None] + np.arange(6)).ravel()
+        nz = np.nonzero(Q)
+        rows.append(index[nz[0]])
+        cols.append(p + nz[1])
+        vals.append(Q[nz])
+        p += len(members)
+    if not p:
+        return sp.csc_matrix((m, 0))
+    return sp.csc_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, p)
+    )
+
+
+def column_groups(basis: sp.spmatrix) -> list[tuple[IntArray, IntArray]]:
+    """The columns of a sparse basis in groups that share no body, each with
+    its bodies: ``[(columns, bodies), ...]`` (to describe them one group at a
+    time, in the few bodies each moves)."""
+    N = sp.csc_matrix(basis)
+    bodies_of = [
+        np.unique(N.indices[N.indptr[c] : N.indptr[c + 1]] // 6) for c in range(N.shape[1])
+    ]
+    return [
+        (np.array(cols, dtype=np.intp), np.unique(np.concatenate([bodies_of[c] for c in cols])))
+        for cols in _sharing([b.tolist() for b in bodies_of])
+    ]
+
+
+def _sharing(bodies_of: list[list[int]]) -> list[list[int]]:
+    """Items (each with the bodies it moves) in groups: two items that move a
+    common body, directly or through others, are in one group (union-find)."""
+    parent = list(range(len(bodies_of)))
+
+    def root(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    owner: dict[int, int] = {}
+    for a, bodies in enumerate(bodies_of):
+        for body in bodies:
+            if body in owner:
+                parent[root(a)] = root(owner[body])
+            else:
+                owner[body] = a
+    groups: dict[int, list[int]] = {}
+    for a in range(len(bodies_of)):
+        groups.setdefault(root(a), []).append(a)
+    return list(groups.values())

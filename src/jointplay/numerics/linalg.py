@@ -1,0 +1,307 @@
+"""Linear algebra that works on dense arrays (small mechanisms, fastest) and on
+sparse matrices (large ones, where a dense m x m matrix would not fit).
+
+Every function takes either kind; ``Assembly.sparse`` decides which kind the
+assembly builds (see ``SPARSE_FROM``).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+from scipy.linalg import lapack
+
+from jointplay.geometry import FloatArray
+from jointplay.numerics import free_motions
+from jointplay.settings import DEFAULT
+
+#: Mechanisms with more unknowns than this (6 per moving body) are assembled
+#: into sparse matrices. Below it, dense LAPACK calls are faster.
+SPARSE_FROM = 240
+
+Matrix = Any  # a dense 2-D FloatArray or a scipy sparse matrix
+
+
+def is_sparse(a: Matrix) -> bool:
+    return bool(sp.issparse(a))
+
+
+def times(A: Matrix, x: FloatArray) -> FloatArray:
+    """``x @ A.T`` for one x (m,) or a batch of rows (B, m)."""
+    if sp.issparse(A):
+        return np.asarray((A @ x.T).T)
+    return np.asarray(x @ A.T)
+
+
+def adjoint(A: Matrix, y: FloatArray) -> FloatArray:
+    """``y @ A`` (that is ``A.T @ y``) for one y or a batch of rows."""
+    if sp.issparse(A):
+        return np.asarray((A.T @ y.T).T)
+    return np.asarray(y @ A)
+
+
+def vstack(mats: Sequence[Matrix], m: int) -> Matrix:
+    """Rows on rows; sparse if any part is sparse."""
+    parts = [a for a in mats if a.shape[0]]
+    if not parts:
+        return np.zeros((0, m))
+    if any(sp.issparse(a) for a in parts):
+        return sp.vstack([sp.csr_matrix(a) for a in parts], format="csr")
+    return np.vstack(parts)
+
+
+def hstack(mats: Sequence[Matrix], rows: int) -> Matrix:
+    parts = [a for a in mats if a.shape[1]]
+    if not parts:
+        return np.zeros((rows, 0))
+    if any(sp.issparse(a) for a in parts):
+        return sp.hstack([sp.csr_matrix(a) for a in parts], format="csr")
+    return np.hstack(parts)
+
+
+def dense(a: Matrix) -> FloatArray:
+    return np.asarray(a.toarray()) if sp.issparse(a) else np.asarray(a)
+
+
+def row_norms(A: Matrix) -> FloatArray:
+    if sp.issparse(A):
+        return np.asarray(np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel()), dtype=float)
+    return np.asarray(np.linalg.norm(A, axis=1), dtype=float)
+
+
+def nonzero_rows(A: Matrix) -> FloatArray:
+    """(rows,) bool: the rows that have a non-zero entry."""
+    if sp.issparse(A):
+        A = sp.csr_matrix(A)
+        A.eliminate_zeros()
+        return np.asarray(np.diff(A.indptr) > 0)
+    return np.asarray(np.any(A != 0.0, axis=1))
+
+
+def null_space(C: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> Matrix:
+    """Orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``: singular
+    values below ``rcond`` times the largest count as zero.
+
+    Dense: one SVD. Sparse: a sparse basis from an elimination by bodies
+    (``free_motions.null_basis``), in time linear in the mechanism's size.
+    """
+    if C.shape[0] == 0:
+        return sp.identity(m, format="csc") if sp.issparse(C) else np.eye(m)
+    if sp.issparse(C):
+        return free_motions.null_basis(C, m, rcond)
+    _, sv, Vt = np.linalg.svd(C, full_matrices=True)
+    tol = rcond * (sv[0] if sv.size else 0.0)
+    rank = int(np.sum(sv > tol)) if sv.size and sv[0] > 0 else 0
+    return np.ascontiguousarray(Vt[rank:].T)
+
+
+def full_column_rank(rows: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> bool:
+    """Whether only ``d = 0`` has ``rows @ d = 0`` (the rows pin every unknown)."""
+    if rows.shape[0] < m:
+        return False
+    if not sp.issparse(rows):
+        sv = np.linalg.svd(rows, compute_uv=False)
+        return bool(sv.size and sv[0] > 0 and np.sum(sv > rcond * sv[0]) == m)
+    return free_motions.column_rank_deficit(rows, m, rcond) == 0
+
+
+class SingularSystemError(Exception):
+    """A linear system had no accurate solution."""
+
+
+def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> FloatArray:
+    """A solution of the square system ``K step = rhs`` (a Newton step on KKT
+    equations). A singular but consistent system (statically indeterminate
+    forces) gets a regularized-and-refined solution (dense: least squares if
+    that fails too); raises ``SingularSystemError`` when no step solves it
+    accurately.
+
+    ``prox`` > 0: the system is expected to be singular up to round-off (a
+    tied face); the step is the regularized-and-refined one, which stays
+    nearest the current point in every unknown (a plain solve would take the
+    round-off's huge step along the singular directions)."""
+    size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
+    scale = max(1.0, float(abs(K).max()))
+    if not prox:
+        # plain factors, with a few steps of iterative refinement (long chains need them)
+        step = _refined(K, _factored(K), rhs, DEFAULT.kkt_plain * size, 4)
+        if step is not None:
+            return step
+    # Quasi-definite regularization, refined against K: on a consistent
+    # system, the solution nearest the current point
+    tol = DEFAULT.kkt_refined * size
+    step = proximal_solve(K, rhs, n_primal, max(prox, DEFAULT.kkt_round_off * scale), tol)
+    if step is not None and float(np.max(np.abs(rhs - K @ step))) <= tol:
+        return step
+    if not sp.issparse(K):
+        return np.asarray(np.linalg.lstsq(K, rhs, rcond=DEFAULT.lstsq_rcond)[0])
+    raise SingularSystemError
+
+
+def proximal_solve(
+    K: Matrix,
+    rhs: FloatArray,
+    n_primal: int,
+    eps: float,
+    tol: float = 0.0,
+    stall: float | None = None,
+) -> FloatArray | None:
+    """Quasi-definite regularization (``+eps`` on the first ``n_primal``
+    unknowns, ``-eps`` on the others), then refinement against K itself: a
+    proximal-point iteration that converges on a consistent system to the
+    solution nearest 0, as a least-squares step does. Stops when
+    ``|K step - rhs| <= tol``, or (``stall``) when a round gains less than
+    that factor on the best before it, else returns the best of 40 rounds
+    (None if the regularized matrix cannot be factored): on a system
+    consistent only up to round-off, the caller checks what it needs."""
+    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
+    regular = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
+    solve = _factored(regular)
+    if solve is None:
+        return None
+    step = np.zeros(K.shape[0])
+    best, best_miss = step, float("inf")
+    for _ in range(41):
+        miss = rhs - K @ step
+        size = float(np.max(np.abs(miss), initial=0.0))
+        if size <= tol or (stall is not None and size > stall * best_miss):
+            if size < best_miss:
+                best = step
+            break
+        if size < best_miss:
+            best, best_miss = step, size
+        step = step + np.asarray(solve(miss), dtype=float)
+        if not np.all(np.isfinite(step)):
+            break
+    return np.asarray(best, dtype=np.float64)
+
+
+def _factored(K: Matrix) -> Any:
+    """A solver ``b -> K^-1 b`` from one LU factorization, or None when K is
+    exactly singular."""
+    try:
+        if sp.issparse(K):
+            with _silenced():  # SuperLU on an exactly singular K fails inside BLAS, which prints
+                return spla.splu(sp.csc_matrix(K)).solve
+        # LAPACK directly: scipy's wrappers cost more than a small system's solve
+        lu, piv, info = lapack.dgetrf(K)
+    except (RuntimeError, ValueError, np.linalg.LinAlgError):
+        return None
+    if info != 0 or not np.all(np.diag(lu)):  # a zero pivot
+        return None
+
+    def solve(b: FloatArray) -> FloatArray:
+        return np.asarray(lapack.dgetrs(lu, piv, b)[0])
+
+    return solve
+
+
+@contextmanager
+def _silenced() -> Iterator[None]:
+    """Standard output and error of the process routed to /dev/null (file
+    descriptors 1 and 2, where C libraries write): a KKT system of a tied
+    face or of indeterminate forces is singular by construction, SuperLU then
+    fails, as it should, but OpenBLAS prints its complaint first; we catch
+    the failure and take the regularized step, and nothing but our own words
+    may reach the user. Only around a factorization, which prints nothing else."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, null):
+            os.close(fd)
+
+
+def _refined(K: Matrix, solve: Any, rhs: FloatArray, tol: float, rounds: int) -> FloatArray | None:
+    """``solve(rhs)`` refined against K until ``|K step - rhs| <= tol``
+    (None if it does not get there in ``rounds`` corrections)."""
+    if solve is None:
+        return None
+    step = np.zeros(K.shape[0])
+    for _ in range(rounds + 1):
+        miss = rhs - K @ step
+        if float(np.max(np.abs(miss))) <= tol:
+            return np.asarray(step, dtype=np.float64)
+        step = step + np.asarray(solve(miss), dtype=float)
+        if not np.all(np.isfinite(step)):
+            return None
+    return None
+
+
+def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
+    """Least-squares (least-norm for a dense A) solution of ``A y = b``."""
+    if A.shape[1] == 0:
+        return np.zeros(0)
+    if not sp.issparse(A):
+        return np.asarray(np.linalg.lstsq(A, b, rcond=None)[0])
+    tol = DEFAULT.lsmr_tolerance
+    out = spla.lsmr(A, b, atol=tol, btol=tol, maxiter=20 * max(A.shape))
+    return np.asarray(out[0])
+
+
+def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """``K[b] z[b] = rhs[b]`` for every row b of a stack of square systems,
+    and the mask of the rows that have a solution: an exactly singular row
+    gets a zero step and ``False``, the others are solved together by LU."""
+    try:
+        z = np.asarray(np.linalg.solve(K, rhs[:, :, None])[:, :, 0], dtype=np.float64)
+        return z, np.ones(len(K), dtype=bool)
+    except np.linalg.LinAlgError:  # some row is singular: find which
+        regular: NDArray[np.bool_] = np.linalg.slogdet(K)[0] != 0
+    z = np.zeros_like(rhs)
+    try:
+        if np.any(regular):
+            z[regular] = np.linalg.solve(K[regular], rhs[regular][:, :, None])[:, :, 0]
+        return z, regular
+    except np.linalg.LinAlgError:
+        # LU and the determinant disagree on a row at the edge of singular
+        # (numpy 1.26's LAPACK does, on a split's KKT system): one at a time
+        pass
+    for b in np.flatnonzero(regular):
+        try:
+            z[b] = np.linalg.solve(K[b], rhs[b])
+        except np.linalg.LinAlgError:
+            regular[b] = False
+    return z, regular
+
+
+def solve_stack(K: FloatArray, rhs: FloatArray, plain: float, rcond: float) -> FloatArray:
+    """``K[b] z[b] = rhs[b]`` for a stack of small square systems: one LU
+    each, together; a row that is singular, or whose residual is above
+    ``plain`` of its right side, gets its least-norm least-squares solution
+    instead (an SVD, singular values below ``rcond`` of the largest dropped)."""
+    z, regular = solve_rows(K, rhs)
+    z[~regular] = np.nan
+    miss = np.max(np.abs(np.einsum("bij,bj->bi", K, z) - rhs), axis=1, initial=0.0)
+    bad = ~(miss <= plain * np.max(np.abs(rhs), axis=1, initial=0.0))  # NaN too
+    if np.any(bad):
+        z[bad] = (np.linalg.pinv(K[bad], rcond=rcond) @ rhs[bad][:, :, None])[:, :, 0]
+    return np.asarray(z)
+
+
+def distinct_rows(a: NDArray[Any]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The first of each distinct row of ``a`` (B, k), and for every row the
+    index of its distinct one: ``a[first][same] == a``."""
+    if not len(a) or np.all(a == a[0]):
+        return np.zeros(min(len(a), 1), dtype=np.intp), np.zeros(len(a), dtype=np.intp)
+    # each row's bytes as one item (np.unique with axis=0 costs a millisecond
+    # of Python per call); equal bytes are equal rows (-0.0 and 0.0 differ)
+    rows = np.ascontiguousarray(a).reshape(len(a), -1)
+    items = rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel()
+    _, first, same = np.unique(items, return_index=True, return_inverse=True)
+    return first.astype(np.intp), same.ravel().astype(np.intp)

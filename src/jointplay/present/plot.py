@@ -1,0 +1,591 @@
+"""Figures in the paper's manner, drawn with matplotlib (no screen needed).
+
+``mechanism_figure``: the exaggerated mechanism (3D and the three
+orthographic views) with each joint's clearance domain seen along its axis;
+``clearance_figure``: those joint views alone; ``sweep_figure``,
+``envelope_figure``, ``montecarlo_figure`` and ``contributions_figure`` for
+the studies. Each returns a matplotlib ``Figure``; ``save`` writes it as
+PNG, SVG or PDF. The geometry comes from ``scene.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only: no screen on a server or in CI
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Polygon, Rectangle
+
+from jointplay.errors import OptionError
+from jointplay.geometry import FloatArray
+from jointplay.present.outputs import check_figure_path
+from jointplay.present.scene import JointView, Scene, joint_view, mechanism_scene
+
+if TYPE_CHECKING:
+    from mpl_toolkits.mplot3d.axes3d import Axes3D
+
+    from jointplay.model.mechanism import Model
+    from jointplay.result import Result
+    from jointplay.studies.contributions import ContributionsResult
+    from jointplay.studies.envelope import EnvelopeResult
+    from jointplay.studies.montecarlo import MonteCarloResult
+    from jointplay.studies.sweep import SweepResult
+
+INITIAL = "#9a9a9a"
+DOMAIN = "#2f6db5"
+TOUCHING = "#d62728"
+FREE = "#7f7f7f"
+LOAD = "#2ca02c"
+POINT = "#111111"
+BODY_COLOURS = ("#1f4e79", "#8c564b", "#9467bd", "#17becf", "#bcbd22", "#e377c2")
+
+#: The three orthographic views: (name, horizontal axis, vertical axis).
+VIEWS = (("XY (along Z)", 0, 1), ("XZ (along -Y)", 0, 2), ("YZ (along X)", 1, 2))
+JOINTS_PER_ROW = 4
+#: Joint views under the mechanism figure, and in the joints figure, at most:
+#: a larger mechanism shows its most loaded joints.
+JOINT_VIEWS_SHOWN = 8
+JOINT_PANELS_MOST = 48
+#: Bodies named in the legend, at most.
+LEGEND_BODIES = 6
+ARROW = r"$\rightarrow$"  # a legend marker
+
+
+def save(fig: Figure, path: Path | str) -> Path:
+    """Write ``fig`` as PNG, SVG or PDF, by the file's suffix, and close it."""
+    out = Path(path)
+    kind = check_figure_path(out)
+    try:
+        fig.savefig(out, format=kind, dpi=150, bbox_inches="tight")
+    except OSError as exc:
+        raise OptionError(f"{out}: cannot write it ({exc.strerror})") from None
+    finally:
+        plt.close(fig)
+    return out
+
+
+# -- the mechanism -------------------------------------------------------------
+def mechanism_figure(
+    model: Model,
+    result: Result,
+    *,
+    magnify: float | None = None,
+    case: str | None = None,
+    joints: bool = True,
+) -> Figure:
+    """The paper's figure of a solved mechanism: the bodies as lines between
+    their joints, initial (dashed) and displaced, the clearance domains, the
+    contacts (red: touching), the contact forces (red arrows) and the loads
+    (green), in 3D and in the three orthographic views; then, with
+    ``joints``, each joint seen along its axis at true size."""
+    scene = mechanism_scene(model, result, magnify=magnify, case=case)
+    chosen = most_loaded_joints(model, result, JOINT_VIEWS_SHOWN) if joints else []
+    views = [joint_view(model.joint(name), result.joints[name]) for name in chosen]
+    joint_rows = math.ceil(len(views) / JOINTS_PER_ROW)
+    lo, hi = _padded_bounds(scene)
+    span = hi - lo
+    # the XY and XZ views share a row: as tall as the taller needs at half the width
+    flat = float(np.clip(6.2 * max(span[1], span[2]) / span[0], 1.6, 6.0))
+    heights = [4.6, flat] + [3.2] * joint_rows
+    fig = plt.figure(figsize=(13, sum(heights) + 1.2), layout="constrained")
+    grid = fig.add_gridspec(2 + joint_rows, JOINTS_PER_ROW, height_ratios=heights)
+    ax3d: Axes3D = fig.add_subplot(grid[0, :2], projection="3d")
+    draw_scene_3d(ax3d, scene)
+    slots = (grid[1, :2], grid[1, 2:], grid[0, 2:])
+    for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
+        draw_scene_view(fig.add_subplot(slot), scene, h, v, title)
+    reach = _common_reach(views)
+    for i, view in enumerate(views):
+        ax = fig.add_subplot(grid[2 + i // JOINTS_PER_ROW, i % JOINTS_PER_ROW])
+        draw_joint_view(ax, view, reach)
+    what = model.name or "mechanism"
+    if case is not None:
+        what += f", case '{case}'"
+    if len(chosen) < len(model.joints) and joints:
+        what += f" (the views of the {len(chosen)} most loaded of {len(model.joints)} joints)"
+    fig.suptitle(
+        f"{what}: displacements and plays ×{scene.magnify:g} "
+        f"(largest {scene.largest_displacement:.4g} mm); arrows {1 / scene.force_scale:.3g} N "
+        "per mm"
+        if scene.force_scale > 0
+        else f"{what}: displacements and plays ×{scene.magnify:g}",
+        fontsize=12,
+    )
+    fig.legend(handles=_legend_handles(scene), loc="outside lower center", ncols=7, fontsize=9)
+    return fig
+
+
+def most_loaded_joints(model: Model, result: Result, most: int) -> list[str]:
+    """All the joints' names when there are at most ``most``; else the ``most``
+    that carry the largest reaction forces, in the model's order."""
+    names = [j.name for j in model.joints]
+    if len(names) <= most:
+        return names
+    force = {n: float(np.linalg.norm(result.joints[n].reaction_force)) for n in names}
+    kept = set(sorted(names, key=lambda n: -force[n])[:most])
+    return [n for n in names if n in kept]
+
+
+def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None = None) -> Figure:
+    """Each joint seen along its axis, at true size (the paper's figure 6).
+    ``joints``: their names (default: every joint, or the ``JOINT_PANELS_MOST``
+    most loaded of a larger mechanism, said in the title)."""
+    chosen = (
+        list(joints) if joints is not None else most_loaded_joints(model, result, JOINT_PANELS_MOST)
+    )
+    views = [joint_view(model.joint(name), result.joints[name]) for name in chosen]
+    cols = min(len(views), JOINTS_PER_ROW)
+    rows = math.ceil(len(views) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.6 * rows), squeeze=False)
+    reach = _common_reach(views)
+    for ax, view in zip(axes.flat, views, strict=False):
+        draw_joint_view(ax, view, reach)
+    for ax in axes.flat[len(views) :]:
+        ax.set_axis_off()
+    some = "" if len(chosen) == len(model.joints) else f" ({len(chosen)} of {len(model.joints)})"
+    fig.suptitle(
+        f"{model.name or 'mechanism'}: each joint at true size (mm), b relative to a{some}"
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _body_colours(scene: Scene) -> dict[str, str]:
+    names = sorted({ln.label for ln in scene.lines if ln.role == "displaced"})
+    return {n: BODY_COLOURS[i % len(BODY_COLOURS)] for i, n in enumerate(names)}
+
+
+def _line_groups(scene: Scene) -> list[tuple[list[FloatArray], dict[str, Any]]]:
+    """The scene's lines in a few groups, one style each (drawn as one
+    collection: a mechanism of a thousand bodies draws as fast as one)."""
+    colours = _body_colours(scene)
+    initial = [ln.points for ln in scene.lines if ln.role == "initial"]
+    domain = [ln.points for ln in scene.lines if ln.role == "domain"]
+    moved = [ln for ln in scene.lines if ln.role == "displaced"]
+    return [
+        (initial, {"colors": INITIAL, "linestyles": "--", "linewidths": 1.0}),
+        (domain, {"colors": DOMAIN, "linewidths": 0.9}),
+        (
+            [ln.points for ln in moved],
+            {"colors": [colours[ln.label] for ln in moved], "linewidths": 2.4},
+        ),
+    ]
+
+
+def _arrow_groups(scene: Scene) -> list[tuple[FloatArray, FloatArray, str]]:
+    out = []
+    for role, colour in (("contact force", TOUCHING), ("load", LOAD)):
+        arrows = [a for a in scene.arrows if a.role == role]
+        if arrows:
+            out.append(
+                (np.array([a.start for a in arrows]), np.array([a.vector for a in arrows]), colour)
+            )
+    return out
+
+
+def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
+    """The scene in 3D, with equal scales on the three axes."""
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
+    for lines, style in _line_groups(scene):
+        if lines:
+            ax.add_collection3d(Line3DCollection(lines, **style))
+    for role in ("touching", "free", "point"):
+        marks = [m for m in scene.markers if m.role == role]
+        if marks:
+            P = np.array([m.at for m in marks])
+            ax.scatter(P[:, 0], P[:, 1], P[:, 2], **_marker_style(role))
+    for mk in scene.markers:
+        if mk.role == "point":
+            ax.text(*mk.at, f" {mk.label}", fontsize=8)
+    for start, vector, colour in _arrow_groups(scene):
+        ax.quiver(
+            start[:, 0],
+            start[:, 1],
+            start[:, 2],
+            vector[:, 0],
+            vector[:, 1],
+            vector[:, 2],
+            color=colour,
+            linewidth=1.4,
+            arrow_length_ratio=0.2,
+        )
+    lo, hi = _padded_bounds(scene)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(tuple(hi - lo))
+    ax.set_xlabel("X (mm)")
+    ax.set_ylabel("Y (mm)")
+    ax.set_zlabel("Z (mm)")
+    ax.tick_params(labelsize=7)
+    ax.set_title("3D")
+
+
+def draw_scene_view(ax: Axes, scene: Scene, h: int, v: int, title: str) -> None:
+    """The scene projected on the plane of global axes ``h`` (across) and ``v`` (up)."""
+    from matplotlib.collections import LineCollection
+
+    for lines, style in _line_groups(scene):
+        if lines:
+            ax.add_collection(LineCollection([P[:, [h, v]] for P in lines], **style))
+    for role in ("touching", "free", "point"):
+        marks = [m for m in scene.markers if m.role == role]
+        if marks:
+            P = np.array([m.at for m in marks])
+            ax.scatter(P[:, h], P[:, v], **_marker_style(role))
+    for mk in scene.markers:
+        if mk.role == "point":
+            ax.annotate(mk.label, (mk.at[h], mk.at[v]), xytext=(4, 4), **_small)
+    for start, vector, colour in _arrow_groups(scene):
+        ax.quiver(
+            start[:, h],
+            start[:, v],
+            vector[:, h],
+            vector[:, v],
+            color=colour,
+            angles="xy",
+            scale_units="xy",
+            scale=1.0,
+            width=0.004,
+            zorder=6,
+        )
+    lo, hi = _padded_bounds(scene)
+    ax.set_xlim(lo[h], hi[h])
+    ax.set_ylim(lo[v], hi[v])
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel(f"{'XYZ'[h]} (mm)")
+    ax.set_ylabel(f"{'XYZ'[v]} (mm)")
+    ax.set_title(title)
+    ax.grid(True, linewidth=0.3)
+
+
+_small: dict[str, Any] = {"textcoords": "offset points", "fontsize": 8}
+
+
+def _padded_bounds(scene: Scene) -> tuple[FloatArray, FloatArray]:
+    lo, hi = scene.bounds()
+    least = 0.06 * scene.size  # a flat mechanism still gets some depth
+    mid = (lo + hi) / 2
+    half = np.maximum((hi - lo) / 2, least) * 1.08
+    return mid - half, mid + half
+
+
+def _marker_style(role: str) -> dict[str, Any]:
+    if role == "touching":
+        return {"color": TOUCHING, "s": 22, "zorder": 5}
+    if role == "free":
+        return {"facecolors": "white", "edgecolors": FREE, "s": 18, "zorder": 5}
+    if role == "point":
+        return {"color": POINT, "marker": "x", "s": 30, "zorder": 6}
+    return {}
+
+
+def _legend_handles(scene: Scene) -> list[Line2D]:
+    out = [Line2D([], [], color=INITIAL, linestyle="--", label="initial position")]
+    for body, colour in list(_body_colours(scene).items())[:LEGEND_BODIES]:
+        out.append(Line2D([], [], color=colour, lw=2.4, label=body))
+    out += [
+        Line2D([], [], color=DOMAIN, lw=0.9, label="clearance domain"),
+        Line2D([], [], color=TOUCHING, marker="o", ls="", label="touching contact"),
+        Line2D([], [], color=FREE, marker="o", mfc="white", ls="", label="free contact"),
+        Line2D([], [], color=TOUCHING, marker=ARROW, ls="", ms=12, label="contact force"),
+        Line2D([], [], color=LOAD, marker=ARROW, ls="", ms=12, label="load"),
+    ]
+    return out
+
+
+def _common_reach(views: Sequence[JointView]) -> float:
+    """The size of a view with nothing of size in it: the largest of the others."""
+    return max((v.reach for v in views), default=0.0) or 1.0
+
+
+def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> None:
+    """One joint at true size: seen along its axis (y, z of the joint frame),
+    or across it for a face or a plane (x the normal)."""
+    ax.set_title(f"{view.joint} ({view.type})", fontsize=10)
+    if view.plane == "none":
+        ax.text(0.5, 0.5, view.note, ha="center", va="center", transform=ax.transAxes)
+        ax.set_axis_off()
+        return
+    reach = (view.reach or fallback_reach) * 1.35
+    if view.plane == "yz":
+        for radius, sphere in view.circles:
+            ax.add_patch(
+                Circle(
+                    (0, 0),
+                    radius,
+                    fill=False,
+                    color=DOMAIN,
+                    linestyle="--" if sphere else "-",
+                    label="sphere section" if sphere else None,
+                )
+            )
+        if view.rectangle is not None:
+            hy, hz = view.rectangle
+            ax.add_patch(Rectangle((-hy, -hz), 2 * hy, 2 * hz, fill=False, color=DOMAIN))
+        if len(view.points) > 1 and not view.rectangle:  # the axis seen end on
+            P = np.array([p.at for p in view.points])
+            ax.plot(P[:, 0], P[:, 1], color=INITIAL, linewidth=0.8)
+        ax.set_xlim(-reach, reach)
+        ax.set_ylim(-reach, reach)
+        ax.set_aspect("equal")
+        ax.set_xlabel("y (mm, joint frame)")
+        ax.set_ylabel("z (mm)")
+    else:
+        for wall in view.walls:  # the side beyond a wall is solid
+            ax.axvline(wall, color=DOMAIN, linewidth=1.2)
+            outward = 1.0 if wall > 0 else -1.0
+            ax.axvspan(wall, outward * 2 * reach, color="#dbe7f5", zorder=0)
+        if view.outline:
+            P = np.array(view.outline)
+            ax.plot(P[:, 0], P[:, 1], color=BODY_COLOURS[0], linewidth=2)
+        ax.set_xlim(-reach, reach)
+        ax.set_xlabel("x, the normal (mm)")
+        ax.set_ylabel("across the face (mm)")
+    ax.axhline(0, color=INITIAL, linewidth=0.4)
+    ax.axvline(0, color=INITIAL, linewidth=0.4)
+    for p in view.points:
+        style = _marker_style("touching" if p.touching else "free")
+        ax.scatter(*p.at, **style)
+        ax.annotate(p.label, p.at, xytext=(4, 4), **_small)
+    ax.tick_params(labelsize=7)
+    if view.note:
+        ax.text(0.02, 0.02, view.note, transform=ax.transAxes, fontsize=7, va="bottom")
+
+
+# -- the studies ---------------------------------------------------------------------
+def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | None = None) -> Figure:
+    """Each functional point's trajectory over the sweep in the three views,
+    inside the projection of its worst-case envelope when given; then the
+    contact forces along the sweep."""
+    envelopes = envelopes or {}
+    rows = len(result.point_names) + 1
+    fig, axes = plt.subplots(rows, 3, figsize=(13, 4.2 * rows), squeeze=False, layout="constrained")
+    steps = np.arange(result.steps)
+    x, xlabel = (result.values[:, -1], result.labels[-1]) if result.labels else (steps, "step")
+    for r, name in enumerate(result.point_names):
+        d = result.point(name)
+        env = envelopes.get(name)
+        for ax, (title, h, v) in zip(axes[r], VIEWS, strict=True):
+            if env is not None:
+                _hull_patch(ax, env.hull[:, [h, v]], "worst-case envelope")
+            ax.plot(d[:, h], d[:, v], color=BODY_COLOURS[0], linewidth=1.0)
+            dots = ax.scatter(d[:, h], d[:, v], c=x, cmap="viridis", s=14, zorder=4)
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_title(f"{name}: {title}", fontsize=10)
+            ax.set_xlabel(f"d{'xyz'[h]} (mm)")
+            ax.set_ylabel(f"d{'xyz'[v]} (mm)")
+            ax.grid(True, linewidth=0.3)
+        fig.colorbar(dots, ax=list(axes[r]), label=xlabel, shrink=0.85)
+        if env is not None:
+            axes[r][0].legend(fontsize=8, loc="upper left")
+    ax = axes[-1][0]
+    for c, (joint, contact) in enumerate(result.contact_names):
+        if np.any(result.force[:, c] > 0):
+            ax.plot(x, result.force[:, c], label=f"{joint} {contact}")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("contact force (N)")
+    ax.set_title("contact forces", fontsize=10)
+    ax.grid(True, linewidth=0.3)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
+    ax = axes[-1][1]
+    for p, name in enumerate(result.point_names):
+        ax.plot(x, np.linalg.norm(result.points[:, p], axis=1), label=name)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("|d| (mm)")
+    ax.set_title("points' displacement", fontsize=10)
+    ax.grid(True, linewidth=0.3)
+    if result.point_names:
+        ax.legend(fontsize=8)
+    ax = axes[-1][2]
+    ax.plot(x, result.potential_energy, color=POINT)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("potential energy (N·mm)")
+    ax.set_title("potential energy", fontsize=10)
+    ax.grid(True, linewidth=0.3)
+    fig.suptitle(f"{result.model_name or 'mechanism'}: sweep of {', '.join(result.labels)}")
+    return fig
+
+
+def _hull_patch(ax: Axes, points: FloatArray, label: str) -> None:
+    """The convex hull of 2D ``points`` as a shaded patch (the projection of a
+    convex set is the hull of its points' projections)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        hull = ConvexHull(points)
+    except (QhullError, ValueError):  # a flat or empty envelope: its points alone
+        ax.plot(points[:, 0], points[:, 1], color=DOMAIN, linewidth=0.8, label=label)
+        return
+    ax.add_patch(
+        Polygon(
+            points[hull.vertices], closed=True, facecolor="#dbe7f5", edgecolor=DOMAIN, label=label
+        )
+    )
+    ax.update_datalim(points)
+    ax.autoscale_view()
+
+
+def envelope_figure(result: EnvelopeResult) -> Figure:
+    """The worst-case envelope of a point: its hull in 3D, its three
+    projections with the extent along each axis, and the largest displacement."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from scipy.spatial import ConvexHull, QhullError
+
+    fig = plt.figure(figsize=(13, 10), layout="constrained")
+    grid = fig.add_gridspec(2, 2)
+    ax3d: Axes3D = fig.add_subplot(grid[0, 0], projection="3d")
+    H = result.hull
+    try:
+        hull = ConvexHull(H)
+        faces = [H[s] for s in hull.simplices]
+        ax3d.add_collection3d(
+            Poly3DCollection(faces, facecolor="#9fc0e8", edgecolor=DOMAIN, linewidth=0.2, alpha=0.5)
+        )
+    except (QhullError, ValueError):  # a flat envelope (a point that moves in a plane)
+        pass
+    ax3d.scatter(H[:, 0], H[:, 1], H[:, 2], color=DOMAIN, s=4)
+    L = result.largest_vector
+    ax3d.quiver(0, 0, 0, *L, color=TOUCHING, arrow_length_ratio=0.1)
+    reach = max(float(np.max(np.abs(H))), 1e-12) * 1.1
+    for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
+        setter(-reach, reach)
+    ax3d.set_box_aspect((1, 1, 1))
+    ax3d.set_xlabel("dx (mm)")
+    ax3d.set_ylabel("dy (mm)")
+    ax3d.set_zlabel("dz (mm)")
+    ax3d.set_title("envelope (3D)")
+    slots = (grid[0, 1], grid[1, 0], grid[1, 1])
+    ext = result.extent
+    for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
+        ax = fig.add_subplot(slot)
+        _hull_patch(ax, H[:, [h, v]], "envelope")
+        ax.annotate(
+            "",
+            xy=(L[h], L[v]),
+            xytext=(0, 0),
+            arrowprops={"arrowstyle": "-|>", "color": TOUCHING},
+        )
+        ax.axvline(ext[h, 0], color=INITIAL, linestyle=":", linewidth=0.8)
+        ax.axvline(ext[h, 1], color=INITIAL, linestyle=":", linewidth=0.8)
+        ax.axhline(ext[v, 0], color=INITIAL, linestyle=":", linewidth=0.8)
+        ax.axhline(ext[v, 1], color=INITIAL, linestyle=":", linewidth=0.8)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(f"d{'xyz'[h]} (mm)")
+        ax.set_ylabel(f"d{'xyz'[v]} (mm)")
+        ax.set_title(title)
+        ax.grid(True, linewidth=0.3)
+    fig.suptitle(
+        f"worst-case envelope of point '{result.settings.point}' (plays at their "
+        f"{result.settings.plays}): largest {result.largest:.5g} mm along "
+        f"[{', '.join(f'{c:.3g}' for c in L / max(result.largest, 1e-300))}]"
+    )
+    return fig
+
+
+def montecarlo_figure(result: MonteCarloResult) -> Figure:
+    """Histograms of each point's |displacement| over the samples, and of each
+    requirement's measure with its limit and the fraction of parts beyond."""
+    panels: list[tuple[str, FloatArray, float | None, str]] = []
+    limited = {s.requirement.point for s in result.requirements if s.requirement.along is None}
+    for p, name in enumerate(result.point_names):
+        if name in limited:  # its requirement's panel shows the same |d|
+            continue
+        size = np.linalg.norm(result.displacement[:, p], axis=1)
+        panels.append((f"point '{name}': |d|", size, None, "|d| (mm)"))
+    for stats in result.requirements:
+        req = stats.requirement
+        d = result.displacement[:, result.point_names.index(req.point)]
+        if req.along is None:
+            measure, unit = np.linalg.norm(d, axis=1), "|d| (mm)"
+        else:
+            u = np.asarray(req.along, dtype=float) / np.linalg.norm(req.along)
+            measure, unit = d @ u, f"d along {list(req.along)} (mm)"
+        title = (
+            f"{req.describe()}\n{stats.outside} of {result.samples} parts outside "
+            f"({100 * stats.fraction:.3g} %)"
+        )
+        panels.append((title, measure, req.max_displacement, unit))
+    cols = min(len(panels), 3) or 1
+    rows = max(math.ceil(len(panels) / cols), 1)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
+    for ax, (title, values, limit, unit) in zip(axes.flat, panels, strict=False):
+        ax.hist(values, bins=_bins(values), color="#6f9fd8", edgecolor="white", linewidth=0.3)
+        if limit is not None:
+            ax.axvline(limit, color=TOUCHING, linewidth=1.5, label=f"limit {limit:g} mm")
+            if np.min(values) < 0:
+                ax.axvline(-limit, color=TOUCHING, linewidth=1.5)
+            ax.legend(fontsize=8)
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel(unit)
+        ax.set_ylabel("parts")
+        ax.grid(True, linewidth=0.3)
+    for ax in axes.flat[len(panels) :]:
+        ax.set_axis_off()
+    if not panels:
+        axes.flat[0].text(0.5, 0.5, "no functional points", ha="center", va="center")
+    fig.suptitle(
+        f"{result.model_name or 'mechanism'}: Monte Carlo, {result.samples} sets of parts "
+        f"(seed {result.settings.seed})"
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _bins(values: FloatArray) -> int:
+    return int(min(80, max(10, math.sqrt(len(values)))))
+
+
+def contributions_figure(result: ContributionsResult) -> Figure:
+    """Per measure, each play's share of the worst-case and of the
+    statistical (RSS) stack; a hatched bar is a kink (the contacts change
+    at the nominal: the slope is one of two)."""
+    M = len(result.measures)
+    fig, axes = plt.subplots(
+        M,
+        1,
+        figsize=(9, 1.6 + 0.45 * len(result.plays) * M + 0.8 * M),
+        squeeze=False,
+        layout="constrained",
+    )
+    y = np.arange(len(result.plays))
+    wc, rss = result.worst_case, result.rss
+    for k, (ax, measure) in enumerate(zip(axes[:, 0], result.measures, strict=True)):
+        for i in range(len(result.plays)):
+            hatch = "//" if result.kink[k, i] else None
+            ax.barh(y[i] - 0.2, wc[k, i], height=0.38, color="#2f6db5", hatch=hatch)
+            ax.barh(y[i] + 0.2, rss[k, i], height=0.38, color="#f28e2b", hatch=hatch)
+        ax.set_yticks(y, labels=_plain_labels(result.plays))
+        ax.invert_yaxis()
+        ax.set_xlim(0, 105)
+        ax.set_xlabel("contribution (%)")
+        ax.set_title(
+            f"{measure}: worst-case spread {result.worst_case_range[k]:.4g} mm, "
+            f"RSS σ {result.rss_sigma[k]:.4g} mm",
+            fontsize=10,
+        )
+        ax.grid(True, axis="x", linewidth=0.3)
+    handles = [
+        Rectangle((0, 0), 1, 1, color="#2f6db5", label="worst case"),
+        Rectangle((0, 0), 1, 1, color="#f28e2b", label="RSS"),
+        Rectangle((0, 0), 1, 1, facecolor="white", edgecolor="black", hatch="//", label="kink"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=8)
+    fig.suptitle(f"{result.model_name or 'mechanism'}: contributions")
+    return fig
+
+
+def _plain_labels(labels: Sequence[str]) -> list[str]:
+    return [label if len(label) <= 40 else label[:37] + "..." for label in labels]

@@ -1,0 +1,715 @@
+"""One HTML file with a whole analysis, for a colleague's browser.
+
+``Report(...).render(model, source)`` solves the model (each load case),
+runs the studies asked for, and returns a self-contained page: the model's
+summary, the results and contact-force tables, the figures (matplotlib, as
+SVG), an interactive 3D view of the exaggerated mechanism (Plotly, its
+library inlined: nothing is fetched when the page opens), and the studies.
+
+The page marks itself for tests and for anyone checking it: ``<body
+data-rendered="true">`` once every interactive view is drawn, and
+``data-errors`` with the messages of any script error.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import io
+import json
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from jointplay.geometry import FloatArray
+from jointplay.present.scene import Scene, mechanism_scene
+from jointplay.version import __version__
+
+if TYPE_CHECKING:
+    import plotly.graph_objects as go
+    from matplotlib.figure import Figure
+
+    from jointplay.model.mechanism import Model
+    from jointplay.result import Result
+    from jointplay.studies.contributions import ContributionsResult
+    from jointplay.studies.envelope import EnvelopeResult
+    from jointplay.studies.montecarlo import MonteCarloResult
+    from jointplay.studies.sweep import Sweep, SweepResult
+
+
+#: Above this many moving bodies the 3D view draws them as one trace.
+MANY_BODIES = 12
+#: Up to this many lines the mechanism figure is SVG (sharp at any zoom); above, PNG.
+VECTOR_LINES = 600
+
+
+@dataclass(frozen=True)
+class Report:
+    """Settings of a report; ``render`` returns the page (HTML text).
+
+    ``case``: only this load case (default: every case, or the loads of a
+    model without cases). ``magnify``: the pictures' factor (None: a round
+    one). ``studies``: run the studies that the model calls for: each
+    functional point's worst-case envelope, and, when plays or loads vary
+    from part to part, a Monte Carlo study of ``samples`` sets of parts
+    (``seed``) and the contributions. ``sweep``: a sweep to run and show.
+    """
+
+    case: str | None = None
+    magnify: float | None = None
+    studies: bool = True
+    samples: int = 10_000
+    seed: int = 0
+    sweep: Sweep | None = None
+    exact: bool = False
+
+    def __post_init__(self) -> None:
+        if self.magnify is not None and not 0.0 < self.magnify < float("inf"):
+            raise ValueError("magnify: a factor above 0 (1 draws true size)")
+        if self.samples < 1:
+            raise ValueError("samples: at least 1")
+
+    def render(
+        self,
+        model: Model,
+        source: str,
+        *,
+        note: Callable[[str], None] | None = None,
+    ) -> str:
+        """Solve, study and write the page. ``source``: the model file's name.
+        ``note(text)`` hears what is being done (for a progress line)."""
+        from jointplay.model.mechanism import check_case
+        from jointplay.solver.workspace import Workspace
+
+        say = note or (lambda _text: None)
+        check_case(model, self.case, source)
+        ws = Workspace.of(model)
+        cases: list[str | None] = (
+            [self.case] if self.case is not None else list(model.case_names) or [None]
+        )
+        say("solving")
+        results = {
+            case: ws.solve(loads=None if case is None else model.loads_of(case), exact=self.exact)
+            for case in cases
+        }
+        page = _Page(model.name or source)
+        page.header(model, source)
+        page.model_tables(model)
+        for case, result in results.items():
+            say(f"drawing {'the solution' if case is None else repr(case)}")
+            page.solution(model, result, case, self.magnify)
+        if self.studies or self.sweep is not None:
+            page.section("Studies")
+        if self.studies:
+            self._studies(model, source, page, say)
+        if self.sweep is not None:
+            say("sweeping")
+            sweep = self.sweep.run(model, source=source)
+            page.sweep(model, sweep, source)
+        return page.html()
+
+    def _studies(self, model: Model, source: str, page: _Page, say: Callable[[str], None]) -> None:
+        from jointplay.studies.contributions import Contributions
+        from jointplay.studies.envelope import point_envelopes
+        from jointplay.studies.montecarlo import MonteCarlo
+
+        if not model.points:
+            page.paragraph(
+                "The model has no functional points, so there is nothing to study: add "
+                "'points' (and 'requirements') to see envelopes, Monte Carlo and contributions."
+            )
+            return
+        say("envelopes")
+        envelopes, missing = point_envelopes(model, source=source)
+        for point in model.points:
+            if point.name in envelopes:
+                page.envelope(envelopes[point.name])
+            else:
+                page.paragraph(
+                    f"Point '{point.name}': no worst-case envelope: {missing[point.name]}"
+                )
+        if not _varies(model, self.case, source):
+            page.paragraph(
+                "No play or load varies from part to part, so there is no Monte Carlo study "
+                "and no contributions: give clearances as limits or ISO fits to see them."
+            )
+            return
+        say(f"Monte Carlo, {self.samples} sets of parts")
+        mc = MonteCarlo(samples=self.samples, seed=self.seed, case=self.case).run(
+            model, source=source
+        )
+        page.montecarlo(mc)
+        say("contributions")
+        page.contributions(Contributions(case=self.case).run(model, source=source))
+
+
+def _varies(model: Model, case: str | None, source: str) -> bool:
+    from jointplay.assembly import assemble
+    from jointplay.studies.variation import load_map, play_map
+
+    asm = assemble(model)
+    return bool(play_map(asm, source).variables or load_map(asm, case).variables)
+
+
+# -- the interactive view --------------------------------------------------------
+def scene_figure(scene: Scene, title: str = "") -> go.Figure:
+    """The exaggerated mechanism as a Plotly 3D figure (rotate, zoom, hover)."""
+    import plotly.graph_objects as go
+
+    from jointplay.present.plot import BODY_COLOURS, DOMAIN, FREE, INITIAL, LOAD, POINT, TOUCHING
+
+    traces: list[Any] = []
+    bodies = sorted({ln.label for ln in scene.lines if ln.role == "displaced"})
+
+    def joined(points: Iterable[FloatArray]) -> tuple[list[float | None], ...]:
+        xs: list[float | None] = []
+        ys: list[float | None] = []
+        zs: list[float | None] = []
+        for P in points:
+            xs += [*P[:, 0].tolist(), None]
+            ys += [*P[:, 1].tolist(), None]
+            zs += [*P[:, 2].tolist(), None]
+        return xs, ys, zs
+
+    def lines(pts: Sequence[FloatArray], name: str, colour: str, width: float, dash: str) -> None:
+        if not pts:
+            return
+        x, y, z = joined(pts)
+        traces.append(
+            go.Scatter3d(
+                x=x,
+                y=y,
+                z=z,
+                mode="lines",
+                name=name,
+                line={"color": colour, "width": width, "dash": dash},
+                hoverinfo="name",
+            )
+        )
+
+    lines(
+        [ln.points for ln in scene.lines if ln.role == "initial"],
+        "initial position",
+        INITIAL,
+        2,
+        "dash",
+    )
+    if len(bodies) > MANY_BODIES:  # one trace: a legend of a thousand bodies helps no one
+        pts = [ln.points for ln in scene.lines if ln.role == "displaced"]
+        lines(pts, f"{len(bodies)} bodies, displaced", BODY_COLOURS[0], 6, "solid")
+    for i, body in enumerate(bodies if len(bodies) <= MANY_BODIES else []):
+        pts = [ln.points for ln in scene.lines if ln.role == "displaced" and ln.label == body]
+        lines(pts, body, BODY_COLOURS[i % len(BODY_COLOURS)], 6, "solid")
+    lines(
+        [ln.points for ln in scene.lines if ln.role == "domain"],
+        "clearance domains",
+        DOMAIN,
+        2,
+        "solid",
+    )
+    for role, name, style in (
+        ("touching", "touching contacts", {"color": TOUCHING, "size": 5}),
+        ("free", "free contacts", {"color": FREE, "size": 3}),
+        ("point", "functional points", {"color": POINT, "size": 4, "symbol": "diamond"}),
+    ):
+        marks = [m for m in scene.markers if m.role == role]
+        if not marks:
+            continue
+        P = np.array([m.at for m in marks])
+        traces.append(
+            go.Scatter3d(
+                x=P[:, 0],
+                y=P[:, 1],
+                z=P[:, 2],
+                mode="markers+text" if role == "point" else "markers",
+                text=[m.label for m in marks],
+                name=name,
+                marker=style,
+                hoverinfo="text",
+            )
+        )
+    for role, name, colour in (
+        ("contact force", "contact forces", TOUCHING),
+        ("load", "loads", LOAD),
+    ):
+        arrows = [a for a in scene.arrows if a.role == role]
+        if not arrows:
+            continue
+        lines(
+            [_arrow_lines(a.start, a.vector, scene.size) for a in arrows], name, colour, 4, "solid"
+        )
+    fig = go.Figure(traces)
+    fig.update_layout(
+        title={"text": title, "font": {"size": 14}},
+        scene={
+            "aspectmode": "data",
+            "xaxis": {"title": {"text": "X (mm)"}},
+            "yaxis": {"title": {"text": "Y (mm)"}},
+            "zaxis": {"title": {"text": "Z (mm)"}},
+            "camera": {"eye": {"x": 1.7, "y": -1.9, "z": 1.2}},
+        },
+        margin={"l": 0, "r": 0, "t": 40, "b": 0},
+        height=620,
+        legend={"itemsizing": "constant"},
+    )
+    return fig
+
+
+def _arrow_lines(start: FloatArray, vector: FloatArray, size: float) -> FloatArray:
+    """An arrow as one polyline: the shaft, then four barbs at the tip (seen
+    from any side, where a 3D cone would need a size of its own)."""
+    tip = start + vector
+    length = float(np.linalg.norm(vector))
+    if length == 0.0:
+        return np.vstack([start, tip])
+    u = vector / length
+    side = np.cross(u, np.eye(3)[int(np.argmin(np.abs(u)))])
+    side /= np.linalg.norm(side)
+    other = np.cross(u, side)
+    head = min(0.3 * length, 0.04 * size)
+    out = [start, tip]
+    for s in (side, -side, other, -other):
+        out += [tip - head * u + 0.4 * head * s, tip]
+    return np.vstack(out)
+
+
+# -- the page ------------------------------------------------------------------------
+def _svg(fig: Figure, vector: bool = True) -> str:
+    """A matplotlib figure as an <img> holding its SVG (each figure kept apart),
+    or a PNG when ``vector`` is False (a large mechanism: SVG grows with every line)."""
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    kind, mime = ("svg", "image/svg+xml") if vector else ("png", "image/png")
+    try:
+        fig.savefig(buf, format=kind, bbox_inches="tight", dpi=110)
+    finally:
+        plt.close(fig)
+    data = base64.b64encode(buf.getvalue()).decode("ascii")
+    return f'<img class="figure" alt="figure" src="data:{mime};base64,{data}">'
+
+
+def _num(v: float, digits: int = 6) -> str:
+    v = float(v)
+    if v == 0.0:
+        return "0"
+    return f"{v:.{digits}g}"
+
+
+def _vec(v: Iterable[float], digits: int = 6) -> str:
+    return "(" + ", ".join(_num(c, digits) for c in v) + ")"
+
+
+def _table(head: Sequence[str], rows: Iterable[Sequence[Any]], caption: str = "") -> str:
+    cap = f"<caption>{html.escape(caption)}</caption>" if caption else ""
+    th = "".join(f"<th>{html.escape(h)}</th>" for h in head)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in rows
+    )
+    return f'<table class="jp-table">{cap}<thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>'
+
+
+class _Page:
+    """The page as it is written, section by section."""
+
+    def __init__(self, title: str):
+        self.title = title
+        self.parts: list[str] = []
+        self.views: list[dict[str, Any]] = []
+
+    def section(self, title: str) -> None:
+        self.parts.append(f"<h2>{html.escape(title)}</h2>")
+
+    def subsection(self, title: str) -> None:
+        self.parts.append(f"<h3>{html.escape(title)}</h3>")
+
+    def paragraph(self, text: str) -> None:
+        self.parts.append(f"<p>{html.escape(text)}</p>")
+
+    def header(self, model: Model, source: str) -> None:
+        when = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
+        self.parts.append(f"<h1>{html.escape(self.title)}</h1>")
+        desc = f"<p>{html.escape(model.description)}</p>" if model.description else ""
+        self.parts.append(
+            f'<p class="meta">Model file <code>{html.escape(source)}</code>; jointplay '
+            f"{html.escape(__version__)}; {html.escape(when)}. Units: mm, N, N·mm, rad. "
+            "Contact forces are those of body a on body b for each joint "
+            "<code>between: [a, b]</code>, in the joint frame.</p>" + desc
+        )
+
+    def model_tables(self, model: Model) -> None:
+        self.section("Model")
+        self.parts.append(
+            _table(
+                ["body", "ground", "mass (kg)", "centre of mass (mm)"],
+                [
+                    (
+                        b.name,
+                        "yes" if b.ground else "",
+                        "" if b.mass is None else _num(b.mass),
+                        "" if b.center_of_mass is None else _vec(b.center_of_mass),
+                    )
+                    for b in model.bodies
+                ],
+                "Bodies",
+            )
+        )
+        self.parts.append(
+            _table(
+                ["joint", "type", "between (a, b)", "at (mm)", "axis", "play and size"],
+                [
+                    (
+                        j.name,
+                        j.type_name,
+                        f"{j.between[0]}, {j.between[1]}",
+                        _vec(j.at),
+                        _vec(j.axis, 4),
+                        _joint_sizes(j),
+                    )
+                    for j in model.joints
+                ],
+                "Joints",
+            )
+        )
+        loads = [("(every case)", ld) for ld in model.loads] + [
+            (case, ld) for case in model.case_names for ld in (model.load_cases or {})[case]
+        ]
+        loads += [("(weight)", ld) for ld in model.weights()]
+        if loads:
+            self.parts.append(
+                _table(
+                    ["case", "body", "at (mm)", "force (N)", "torque (N·mm)"],
+                    [
+                        (
+                            case,
+                            ld.body,
+                            "" if ld.at is None else _vec(ld.at),
+                            "" if ld.force is None else _vec(ld.force),
+                            "" if ld.torque is None else _vec(ld.torque),
+                        )
+                        for case, ld in loads
+                    ],
+                    "Loads",
+                )
+            )
+        if model.points:
+            self.parts.append(
+                _table(
+                    ["point", "body", "at (mm)"],
+                    [(p.name, p.body, _vec(p.at)) for p in model.points],
+                    "Functional points",
+                )
+            )
+        if model.requirements:
+            self.parts.append(
+                _table(
+                    ["requirement"], [(r.describe(),) for r in model.requirements], "Requirements"
+                )
+            )
+
+    def solution(
+        self, model: Model, result: Result, case: str | None, magnify: float | None
+    ) -> None:
+        from jointplay.present.plot import clearance_figure, mechanism_figure
+
+        self.section("Solution" if case is None else f"Solution, load case '{case}'")
+        cert = result.certificate
+        self.parts.append(
+            f'<p class="certificate">Status <b>{html.escape(result.status)}</b>; certificate '
+            f"{'holds' if cert.certified else 'FAILS'} ({html.escape(cert.method)}): past "
+            f"clearance {cert.feasibility_mm:.2g} mm, imbalance "
+            f"{result.equilibrium_residual:.2g} of the largest force; potential energy "
+            f"{_num(result.potential_energy, 9)} N·mm.</p>"
+        )
+        for text in result.free_motions:
+            self.paragraph(f"Free motion (no load drives it; reported as 0): {text}")
+        for text in result.warnings:
+            self.paragraph(f"Warning: {text}")
+        self.parts.append(
+            _table(
+                ["joint", "b relative to a", "translation (mm, joint frame)", "rotation (rad)"],
+                [
+                    (
+                        name,
+                        f"{jr.between[1]} / {jr.between[0]}",
+                        _vec(jr.translation),
+                        _vec(jr.rotation),
+                    )
+                    for name, jr in result.joints.items()
+                ],
+                "Joints: relative torsor at the joint centre",
+            )
+        )
+        self.parts.append(
+            _table(
+                [
+                    "joint",
+                    "contact",
+                    "play used",
+                    "state",
+                    "force (N)",
+                    "F (joint frame, N)",
+                    "at (mm)",
+                ],
+                [
+                    (
+                        name,
+                        c.name,
+                        f"{100 * c.gap_used:.2f} %",
+                        "touching" if c.in_contact else "free",
+                        _num(c.force_magnitude),
+                        _vec(c.force),
+                        _vec(c.point),
+                    )
+                    for name, jr in result.joints.items()
+                    for c in jr.contacts
+                ],
+                "Contacts and forces",
+            )
+        )
+        self.parts.append(
+            _table(
+                ["body", "translation at the origin (mm)", "rotation (rad)"],
+                [(n, _vec(b.translation), _vec(b.rotation)) for n, b in result.bodies.items()],
+                "Bodies (global axes)",
+            )
+        )
+        if result.points:
+            self.parts.append(
+                _table(
+                    ["point", "body", "displacement (mm)", "|d| (mm)"],
+                    [
+                        (
+                            n,
+                            p.body,
+                            _vec(p.displacement),
+                            _num(float(np.linalg.norm(p.displacement))),
+                        )
+                        for n, p in result.points.items()
+                    ],
+                    "Functional points",
+                )
+            )
+        scene = mechanism_scene(model, result, magnify=magnify, case=case)
+        self.subsection(f"Interactive view (displacements and plays ×{scene.magnify:g})")
+        self.view(scene_figure(scene, "drag to turn, scroll to zoom, hover for names"))
+        self.subsection("Figures")
+        vector = len(scene.lines) <= VECTOR_LINES
+        figure = mechanism_figure(model, result, magnify=magnify, case=case)
+        self.parts.append(_svg(figure, vector))
+        self.parts.append(_svg(clearance_figure(model, result)))
+
+    def view(self, fig: go.Figure) -> None:
+        import plotly.io as pio
+
+        ident = f"jp-view-{len(self.views)}"
+        self.views.append({"id": ident, "figure": json.loads(pio.to_json(fig, validate=False))})
+        self.parts.append(f'<div class="jp-view" id="{ident}"></div>')
+
+    def envelope(self, env: EnvelopeResult) -> None:
+        from jointplay.present.plot import envelope_figure
+
+        self.subsection(f"Worst-case envelope of point '{env.settings.point}'")
+        ext = env.extent
+        self.parts.append(
+            _table(
+                ["largest |d| (mm)", "along", "X extent (mm)", "Y extent (mm)", "Z extent (mm)"],
+                [
+                    (
+                        _num(env.largest),
+                        _vec(env.largest_vector / max(env.largest, 1e-300), 4),
+                        f"{_num(ext[0, 0])} .. {_num(ext[0, 1])}",
+                        f"{_num(ext[1, 0])} .. {_num(ext[1, 1])}",
+                        f"{_num(ext[2, 0])} .. {_num(ext[2, 1])}",
+                    )
+                ],
+                f"plays at their {env.settings.plays}, under any load",
+            )
+        )
+        self.parts.append(_svg(envelope_figure(env)))
+
+    def montecarlo(self, mc: MonteCarloResult) -> None:
+        from jointplay.present.plot import montecarlo_figure
+
+        self.subsection(f"Monte Carlo: {mc.samples} sets of parts (seed {mc.settings.seed})")
+        self.parts.append(
+            _table(
+                ["play or load", "distribution"],
+                [*mc.plays_described.items(), *mc.loads_described.items()],
+                "What varies",
+            )
+        )
+        self.parts.append(
+            _table(
+                ["point", "mean |d| (mm)", "σ |d| (mm)", "99.865 % (+3σ) (mm)", "largest (mm)"],
+                [
+                    (
+                        n,
+                        _num(s.size_mean),
+                        _num(s.size_std),
+                        _num(s.size_percentiles[99.865]),
+                        _num(s.size_max),
+                    )
+                    for n, s in mc.points.items()
+                ],
+                "Functional points",
+            )
+        )
+        if mc.requirements:
+            self.parts.append(
+                _table(
+                    ["requirement", "parts outside", "fraction", "interval"],
+                    [
+                        (
+                            r.requirement.describe(),
+                            r.outside,
+                            f"{100 * r.fraction:.4g} %",
+                            f"{100 * r.interval[0]:.3g} .. {100 * r.interval[1]:.3g} %",
+                        )
+                        for r in mc.requirements
+                    ],
+                    f"Requirements ({100 * mc.settings.confidence:g} % interval)",
+                )
+            )
+        self.parts.append(_svg(montecarlo_figure(mc)))
+
+    def contributions(self, co: ContributionsResult) -> None:
+        from jointplay.present.plot import contributions_figure
+
+        self.subsection("Contributions")
+        wc, rss = co.worst_case, co.rss
+        self.parts.append(
+            _table(
+                ["measure", "play", "sensitivity", "worst case", "RSS", "note"],
+                [
+                    (
+                        m,
+                        p,
+                        _num(co.sensitivity[k, i], 5),
+                        f"{wc[k, i]:.1f} %",
+                        f"{rss[k, i]:.1f} %",
+                        "kink: the contacts change here" if co.kink[k, i] else "",
+                    )
+                    for k, m in enumerate(co.measures)
+                    for i, p in enumerate(co.plays)
+                ],
+                "Sensitivities at the nominal plays, and shares of the stacks",
+            )
+        )
+        self.parts.append(_svg(contributions_figure(co)))
+
+    def sweep(self, model: Model, sw: SweepResult, source: str) -> None:
+        from jointplay.present.plot import sweep_figure
+        from jointplay.studies.envelope import point_envelopes
+
+        self.subsection(f"Sweep of {', '.join(sw.labels)}: {sw.steps} steps")
+        envelopes, _ = point_envelopes(model, "mean", source=source)
+        table = sw.to_dataframe()
+        shown = [c for c in table.columns if c == "step" or c in sw.labels or c.endswith(".size")]
+        rows = table[shown].head(400).itertuples(index=False)
+        self.parts.append(
+            _table(
+                shown,
+                [[_num(v) if isinstance(v, float) else v for v in row] for row in rows],
+                "Steps (the first 400); the whole table: jointplay sweep ... --csv FILE",
+            )
+        )
+        self.parts.append(_svg(sweep_figure(sw, envelopes)))
+
+    def html(self) -> str:
+        from plotly.offline import get_plotlyjs
+
+        views = json.dumps(self.views, separators=(",", ":")).replace("</", "<\\/")
+        return _TEMPLATE.format(
+            title=html.escape(self.title),
+            style=_STYLE,
+            watch=_WATCH,
+            plotly=get_plotlyjs().replace("</script", "<\\/script"),
+            body="\n".join(self.parts),
+            views=views,
+            draw=_DRAW,
+        )
+
+
+def _joint_sizes(joint: Any) -> str:
+    parts = []
+    for field in (
+        "clearance",
+        "clearance_y",
+        "clearance_z",
+        "axial_clearance",
+        "gap",
+        "length",
+        "width",
+        "height",
+        "diameter",
+        "stiffness",
+    ):
+        value = getattr(joint, field, None)
+        if value is None or (field == "clearance" and joint.type_name in ("rigid", "point")):
+            continue
+        describe = getattr(value, "describe", None)
+        text = describe() if callable(describe) else _num(value)
+        parts.append(f"{field} {text}")
+    return ", ".join(parts)
+
+
+_STYLE = """
+body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 2em auto;
+       max-width: 1200px; padding: 0 1em; color: #1b1b1b; }
+h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
+.meta { color: #555; }
+table.jp-table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
+table.jp-table caption { text-align: left; font-weight: bold; padding: 0.3em 0; }
+table.jp-table th, table.jp-table td { border: 1px solid #d0d0d0; padding: 0.25em 0.6em;
+       text-align: left; font-variant-numeric: tabular-nums; }
+table.jp-table th { background: #f1f4f8; }
+img.figure { max-width: 100%; display: block; margin: 1em 0; }
+.jp-view { width: 100%; height: 620px; border: 1px solid #ddd; }
+"""
+
+# first in the page: whatever goes wrong in a script is recorded on <body>
+_WATCH = """
+window.jpErrors = [];
+function jpRecord(text) {
+  window.jpErrors.push(String(text));
+  if (document.body) { document.body.dataset.errors = window.jpErrors.join("\\n"); }
+}
+window.addEventListener("error", function (e) { jpRecord(e.message || e); });
+window.addEventListener("unhandledrejection", function (e) { jpRecord(e.reason); });
+"""
+
+_DRAW = """
+(function () {
+  var views = JSON.parse(document.getElementById("jp-views").textContent);
+  var drawn = views.map(function (v) {
+    return Plotly.newPlot(v.id, v.figure.data, v.figure.layout,
+                          {responsive: true, displaylogo: false});
+  });
+  Promise.all(drawn).then(function () {
+    document.body.dataset.rendered = "true";
+  }, function (e) { jpRecord(e); });
+  if (window.jpErrors.length) { document.body.dataset.errors = window.jpErrors.join("\\n"); }
+})();
+"""
+
+_TEMPLATE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{title}: jointplay report</title>
+<style>{style}</style>
+<script>{watch}</script>
+<script>{plotly}</script>
+</head>
+<body>
+{body}
+<script type="application/json" id="jp-views">{views}</script>
+<script>{draw}</script>
+</body>
+</html>
+"""

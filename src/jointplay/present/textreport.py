@@ -1,0 +1,341 @@
+"""The human-readable report of ``jointplay solve``: the paper's kinematic
+vectorial sets per joint, and which contacts touch."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from rich.console import Console, Group
+from rich.table import Table
+from rich.text import Text
+
+from jointplay.geometry import FloatArray, fmt_point
+from jointplay.model.mechanism import Model
+from jointplay.result import Result
+from jointplay.studies.contributions import ContributionsResult
+from jointplay.studies.envelope import EnvelopeResult
+from jointplay.studies.montecarlo import MonteCarloResult
+from jointplay.studies.sweep import SweepResult
+
+
+def _num(v: float, digits: int = 8) -> str:
+    return f"{0.0 if abs(v) < 1e-300 else v: .{digits}e}"
+
+
+def _vec(v: FloatArray, digits: int = 4) -> str:
+    return "[" + ", ".join(f"{float(c) + 0.0:.{digits}g}" for c in v) + "]"
+
+
+def _xyz_table(title: str, leading: list[str]) -> Table:
+    """A table of global X, Y, Z components after the ``leading`` columns."""
+    table = Table(title=title, title_justify="left", show_edge=False)
+    for name in leading:
+        table.add_column(name)
+    for axis in "XYZ":
+        table.add_column(axis, justify="right")
+    return table
+
+
+def render(
+    model: Model, result: Result, source: str, console: Console, case: str | None = None
+) -> None:
+    cert = result.certificate
+    title = model.name or source
+    header = Text()
+    header.append(f"{title}" + (f" - load case '{case}'" if case else "") + "\n", style="bold")
+    header.append(f"status: {result.status}\n")
+    header.append(
+        f"certificate: {'holds' if cert.certified else 'FAILED'} ({cert.method}): "
+        f"past clearance {cert.feasibility_mm:.1e} mm, "
+        f"imbalance {cert.equilibrium_residual:.1e}\n"
+    )
+    header.append(
+        f"equilibrium of every body (loads + contact forces): residual "
+        f"{result.equilibrium_residual:.1e} of the largest force\n"
+    )
+    header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm\n")
+    header.append(
+        f"linearization error (contacts placed with exact rotations, past their play): "
+        f"{result.linearization_error:.2e} mm"
+    )
+    for warning in result.warnings:
+        header.append(f"\nwarning: {warning}", style="bold yellow")
+    parts: list[Table | Text] = [header]
+    header.append(f"\ncontact forces are those of {'a on b'} for each joint 'between: [a, b]'")
+
+    for joint in model.joints:
+        jr = result.joints[joint.name]
+        a, b = jr.between
+        table = Table(
+            title=(f"joint {jr.name} ({jr.type}) at {fmt_point(jr.centre)}: {b} relative to {a}"),
+            title_justify="left",
+            show_edge=False,
+        )
+        table.add_column("axis")
+        table.add_column("direction (global)")
+        table.add_column("translation (mm)", justify="right")
+        table.add_column("rotation (rad)", justify="right")
+        for i, axis in enumerate("xyz"):
+            direction = "[" + ", ".join(f"{c:.4g}" for c in jr.R_world_joint[:, i] + 0.0) + "]"
+            table.add_row(axis, direction, _num(jr.translation[i]), _num(jr.rotation[i]))
+        contacts = ", ".join(
+            f"{c.name}: {'TOUCHING' if c.in_contact else 'free'} ({100 * c.gap_used:.2f}% of play"
+            + (f", {c.penetration:.6g} mm past it)" if c.penetration > 0 else ")")
+            for c in jr.contacts
+        )
+        parts.append(table)
+        parts.append(Text(f"  contacts: {contacts}"))
+        forces = Table(show_edge=False, box=None, padding=(0, 1))
+        forces.add_column("  force (N)")
+        forces.add_column("|F|", justify="right")
+        forces.add_column("F (joint frame)")
+        forces.add_column("at (global) or moment")
+        for c in jr.contacts:
+            if c.in_contact:
+                forces.add_row(
+                    f"  {c.name}", f"{c.force_magnitude:.6g}", _vec(c.force, 6), fmt_point(c.point)
+                )
+        forces.add_row(
+            "  reaction",
+            f"{float(np.linalg.norm(jr.reaction_force)):.6g}",
+            _vec(jr.reaction_force, 6),
+            f"{_vec(jr.reaction_moment, 6)} N*mm",
+        )
+        parts.append(forces)
+
+    exact = any(br.R is not None for br in result.bodies.values())
+    body_table = _xyz_table(
+        "bodies: "
+        + ("exact placement (rotation vector)" if exact else "small displacement")
+        + " at the global origin, in global axes",
+        ["body", ""],
+    )
+    for name, br in result.bodies.items():
+        if model.body(name).ground:
+            continue
+        body_table.add_row(name, "translation (mm)", *(_num(v, 6) for v in br.translation))
+        body_table.add_row("", "rotation (rad)", *(_num(v, 6) for v in br.rotation))
+    parts.append(body_table)
+    if result.points:
+        point_table = _xyz_table(
+            "functional points: displacement in global axes (mm)", ["point", "body"]
+        )
+        point_table.add_column("|u|", justify="right")
+        for pr in result.points.values():
+            d = pr.displacement
+            point_table.add_row(
+                pr.name, pr.body, *(_num(v, 6) for v in d), _num(float(np.linalg.norm(d)), 6)
+            )
+        parts.append(point_table)
+    if result.free_motions:
+        parts.append(
+            Text(
+                "free motions that no joint holds and no load drives (reported as 0):\n"
+                + "\n".join(f"  {m}" for m in result.free_motions)
+            )
+        )
+    console.print(Group(*parts))
+
+
+def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -> None:
+    """The report of ``jointplay montecarlo``: plays, points, requirements."""
+    mc = result.settings
+    head = Text()
+    head.append(f"{result.model_name or source}: Monte Carlo\n", style="bold")
+    head.append(
+        f"{result.samples:,} sets of parts, seed {mc.seed}"
+        + (f", load case '{mc.case}'" if mc.case else "")
+        + f"; every sample certified: past clearance {result.feasibility_mm:.1e} mm, "
+        f"imbalance {result.equilibrium_residual:.1e} "
+        f"({result.batched:,} by batched Newton, {result.full_solves} full solves)\n"
+    )
+    plays = Table(title="plays and loads drawn", title_justify="left", show_edge=False)
+    plays.add_column("variable")
+    plays.add_column("limits and law")
+    for label, words in (result.plays_described | result.loads_described).items():
+        plays.add_row(label, words)
+    points = Table(
+        title="functional points: size of the displacement (mm)",
+        title_justify="left",
+        show_edge=False,
+    )
+    for name in ("point", "mean", "std", "0.135 %", "median", "99.865 %", "max"):
+        points.add_column(name, justify="left" if name == "point" else "right")
+    for name, ps in result.points.items():
+        pct = ps.size_percentiles
+        points.add_row(
+            name,
+            *(
+                f"{v:.6g}"
+                for v in (
+                    ps.size_mean,
+                    ps.size_std,
+                    pct[0.135],
+                    pct[50.0],
+                    pct[99.865],
+                    ps.size_max,
+                )
+            ),
+        )
+    parts: list[Table | Text] = [head, plays, points]
+    if result.requirements:
+        reqs = Table(
+            title=f"requirements: parts outside ({mc.confidence:.0%} interval)",
+            title_justify="left",
+            show_edge=False,
+        )
+        for name in ("requirement", "outside", "fraction", "ppm", "interval"):
+            reqs.add_column(name, justify="left" if name == "requirement" else "right")
+        for rs in result.requirements:
+            lo, hi = rs.interval
+            reqs.add_row(
+                rs.requirement.describe(),
+                f"{rs.outside:,}",
+                f"{rs.fraction:.4%}",
+                f"{rs.fraction * 1e6:.0f}",
+                f"{lo:.3%} to {hi:.3%}",
+            )
+        parts.append(reqs)
+    if mc.target_rel_error is not None:
+        worst = float(np.max(result.relative_error, initial=0.0))
+        met = "reached" if worst <= mc.target_rel_error else "NOT reached (raise --samples)"
+        parts.append(
+            Text(
+                f"target relative error {mc.target_rel_error:g} at {mc.confidence:.0%}: {met}; "
+                f"worst estimate's relative error {worst:.3g}"
+            )
+        )
+    console.print(Group(*parts))
+
+
+def render_envelope(
+    result: EnvelopeResult, source: str, title: str | None, console: Console
+) -> None:
+    """The report of ``jointplay envelope``."""
+    st = result.settings
+    head = Text()
+    head.append(f"{title or source}: worst-case envelope of point '{st.point}'\n", style="bold")
+    head.append(
+        f"every displacement the plays allow under any load ({len(result.h)} directions, "
+        f"plays at their {'upper limits' if st.plays == 'max' else 'means'}, stiffness "
+        "left out)\n"
+    )
+    size = result.largest
+    direction = result.largest_vector / size if size > 0 else np.zeros(3)
+    head.append(f"largest displacement: {size:.6g} mm along {_vec(direction)}\n")
+    table = Table(title="extent along each axis (mm)", title_justify="left", show_edge=False)
+    for name in ("axis", "least", "greatest"):
+        table.add_column(name, justify="left" if name == "axis" else "right")
+    for i, axis in enumerate("XYZ"):
+        lo, hi = result.extent[i]
+        table.add_row(axis, f"{lo + 0.0:.6g}", f"{hi + 0.0:.6g}")
+    console.print(Group(head, table))
+
+
+#: Rows of a sweep printed to the terminal; the rest go to --csv.
+SWEEP_ROWS = 40
+
+
+def render_sweep(
+    result: SweepResult, source: str, console: Console, csv: Path | None = None
+) -> None:
+    """The report of ``jointplay sweep``: a row per step, then each point's worst step."""
+    head = Text()
+    head.append(f"{result.model_name or source}: sweep of {result.steps} steps\n", style="bold")
+    head.append("parameters: " + ", ".join(result.labels) + "\n")
+    head.append(
+        f"every step certified: past clearance at most {result.feasibility_mm:.1e} mm, "
+        f"imbalance at most {result.equilibrium_residual:.1e}"
+    )
+    table = Table(show_edge=False)
+    table.add_column("step", justify="right")
+    for label in result.labels:
+        table.add_column(label, justify="right")
+    for name in result.point_names:
+        table.add_column(f"|d {name}| (mm)", justify="right")
+    table.add_column("touching")
+    sizes = np.linalg.norm(result.points, axis=2)  # (S, P)
+    shown_rows = range(result.steps)
+    if result.steps > SWEEP_ROWS:
+        shown_rows = range(0, result.steps, -(-result.steps // SWEEP_ROWS))
+    for s in shown_rows:
+        touching = [
+            f"{j}.{c}" for k, (j, c) in enumerate(result.contact_names) if result.in_contact[s, k]
+        ]
+        table.add_row(
+            str(s),
+            *(f"{v:.6g}" for v in result.values[s]),
+            *(f"{d:.6g}" for d in sizes[s]),
+            ", ".join(touching) or "-",
+        )
+    parts: list[Table | Text] = [head, table]
+    tail = Text()
+    if len(shown_rows) < result.steps:
+        where = f"written to {csv}" if csv else "--csv FILE writes them"
+        tail.append(f"(every {shown_rows.step}th of {result.steps} steps shown; all {where})\n")
+    for p, name in enumerate(result.point_names):
+        top = float(np.max(sizes[:, p]))
+        s = int(np.flatnonzero(sizes[:, p] >= top * (1 - 1e-12))[0])  # ties: the first
+        at = ", ".join(
+            f"{label} = {v:.6g}" for label, v in zip(result.labels, result.values[s], strict=True)
+        )
+        tail.append(
+            f"point {name}: largest displacement {sizes[s, p]:.6g} mm at step {s} ({at}), "
+            f"along {_vec(result.points[s, p] / max(sizes[s, p], 1e-300))}\n"
+        )
+    if tail:
+        parts.append(tail)
+    console.print(Group(*parts))
+
+
+def _bar(percent: float, width: int = 10) -> str:
+    full = round(width * percent / 100.0)
+    return "#" * full + "." * (width - full)
+
+
+def render_contributions(result: ContributionsResult, source: str, console: Console) -> None:
+    """The report of ``jointplay contributions``: per measure, a row per play."""
+    head = Text()
+    head.append(f"{result.model_name or source}: contributions\n", style="bold")
+    for play, words in result.plays_described.items():
+        head.append(f"  {play}: {words}\n")
+    head.append(
+        "sensitivity s: mm of the measure per mm of play (per N or N*mm of a load), at "
+        "the nominal (mean) values; worst case: |s| T of the stack sum |s| T, T the "
+        "tolerance; RSS: (s sigma)^2 of sum (s sigma)^2"
+    )
+    parts: list[Table | Text] = [head]
+    wc, rss = result.worst_case, result.rss
+    for k, measure in enumerate(result.measures):
+        table = Table(
+            title=(
+                f"{measure}: {result.nominal[k]:.6g} mm at the nominal; worst-case spread "
+                f"{result.worst_case_range[k]:.6g} mm, RSS sigma {result.rss_sigma[k]:.6g} mm"
+            ),
+            title_justify="left",
+            show_edge=False,
+        )
+        for name in ("variable", "tolerance T", "sensitivity s", "worst case", "RSS", ""):
+            table.add_column(name, justify="left" if name in ("variable", "") else "right")
+        order = np.argsort(-rss[k], kind="stable")
+        notes = Text()
+        for i in order:
+            table.add_row(
+                result.plays[i],
+                f"{result.width[i]:.6g}",
+                f"{result.sensitivity[k, i]:.6g}",
+                f"{wc[k, i]:5.1f} %",
+                f"{rss[k, i]:5.1f} %",
+                _bar(rss[k, i]),
+            )
+            if result.kink[k, i]:
+                notes.append(
+                    f"  {result.plays[i]}: the contacts change at the nominal play; the slope is "
+                    f"{result.slope_down[k, i]:.6g} below it and {result.slope_up[k, i]:.6g} "
+                    "above (the mean of the two is used)\n"
+                )
+        parts.append(table)
+        if notes:
+            parts.append(notes)
+    console.print(Group(*parts))

@@ -1,0 +1,474 @@
+"""Many equilibria of one mechanism at once: the same joints, other loads.
+
+Most samples of a study share their active contact set. For one set, the
+optimality (KKT) equations of all samples are solved together by Newton's
+method with batched linear algebra. A sample is kept only if its own
+certificate holds: feasible, every active force strictly positive, forces
+balancing its loads, on a face that pins the position down (so the optimum
+is unique). The first sample left over goes through the full solver; its
+active set is then tried on the others, until none is left.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from jointplay.assembly import Assembly, BallStack, IntArray
+from jointplay.geometry import FloatArray
+from jointplay.numerics import linalg
+from jointplay.numerics.linalg import solve_rows
+from jointplay.settings import TINY
+from jointplay.solver import certificate, faces, forces, held, pipeline
+
+BoolArray = NDArray[np.bool_]
+
+if TYPE_CHECKING:
+    from jointplay.settings import SolverSettings
+    from jointplay.solver.faces import Face, FaceKey
+    from jointplay.solver.workspace import Workspace
+
+#: Entries of the (rows, n, n) stack of one batched Newton (8 MB): fewer
+#: rows cost Python overhead per call, more leave the cache.
+CHUNK_ENTRIES = 1 << 20
+
+
+@dataclass(frozen=True)
+class BatchSolution:
+    """Equilibria of B samples; every row passed its certificate.
+
+    ``x``: scaled unknowns (B, m). ``forces``: ball-contact forces (B, n) in N,
+    in the order of ``Assembly.balls``. ``batched[i]`` says whether sample i
+    was solved by the batched Newton path (else by the full solver).
+    """
+
+    asm: Assembly
+    x: FloatArray
+    forces: FloatArray
+    potential_energy: FloatArray  # (B,) N*mm
+    feasibility_mm: FloatArray  # (B,) largest overshoot of a clearance (0: feasible)
+    equilibrium_residual: FloatArray  # (B,) relative
+    batched: BoolArray  # (B,)
+    full_solves: int
+
+    def __len__(self) -> int:
+        return int(self.x.shape[0])
+
+    def joint_torsor(self, name: str) -> FloatArray:
+        """(B, 6): joint ``name``'s relative torsor (t mm, w rad), joint frame."""
+        jdx = [j.name for j in self.asm.model.joints].index(name)
+        G = self.asm.G[jdx]
+        return self.x[:, G.cols] @ G.block.T
+
+    def body_displacement(self, name: str) -> FloatArray:
+        """(B, 6): body ``name``'s translation at the global origin (mm) and rotation (rad)."""
+        out = np.zeros((len(self), 6))
+        if name not in self.asm.body_index:
+            return out  # a ground body
+        i = self.asm.body_index[name]
+        omega, v_origin = self.asm.body_motion(self.x, i)
+        out[:, 3:] = omega
+        out[:, :3] = v_origin
+        return out
+
+    def gap_used(self) -> FloatArray:
+        """(B, n): fraction of each ball contact's play used."""
+        stack = self.asm.stack
+        return stack.gap_used(stack.levels(self.x)[2])
+
+
+def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None) -> BatchSolution:
+    """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
+    cone radii (``Assembly.balls`` order; default: the model's).
+
+    In one BLAS thread: the work is many small matrices, which more threads
+    only slow down, and a study's processes would compete for the cores
+    (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
+    samples/s against 145,000)."""
+    with _blas().limit(limits=1, user_api="blas"):
+        return _solve_batch(ws, work, radii)
+
+
+@functools.cache
+def _blas() -> Any:
+    """The BLAS libraries loaded (numpy's and scipy's), to limit their threads."""
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> BatchSolution:
+    work = np.atleast_2d(np.asarray(work, dtype=float))
+    if work.ndim != 2 or work.shape[1] != ws.m:
+        raise ValueError(f"work must have shape (B, {ws.m}), not {work.shape}")
+    B = work.shape[0]
+    norms = np.linalg.norm(work, axis=1)
+    if not np.all(np.isfinite(work)):
+        raise ValueError("work has non-finite entries")
+    _check_driven(ws, work, norms)
+    g_hat = np.divide(work, norms[:, None], out=np.zeros_like(work), where=norms[:, None] > 0)
+    sigma = ws.softness(norms)  # (B, n): compliance makes the answer depend on |g|
+    n_balls = len(ws.balls)
+    if radii is None:
+        r = np.broadcast_to(ws.stack.r, (B, n_balls))
+        varied = False
+    else:
+        r = np.asarray(radii, dtype=float)
+        if r.shape != (B, n_balls):
+            raise ValueError(f"radii must have shape ({B}, {n_balls}), not {r.shape}")
+        if not np.all(np.isfinite(r)) or np.any(r < 0):
+            raise ValueError("radii must be finite and >= 0")
+        varied = True
+    # the nearest solved sample (loads, and plays when they vary) starts Newton
+    features = np.hstack([g_hat, r / max(ws.max_radius, TINY)]) if varied else g_hat
+
+    x = np.zeros((B, ws.m))
+    lam = np.zeros((B, n_balls))
+    f = np.zeros((B, ws.stack.A.shape[0]))
+    batched = np.zeros(B, dtype=bool)
+    feas = np.zeros(B)  # each row's certificate, where it was certified
+    residual = np.zeros(B)
+    pending = np.flatnonzero(norms > 0)
+    solved_by_set: dict[FaceKey, list[IntArray]] = {}  # active set -> solved rows
+    # active set -> how often each row failed from it: a row is not tried
+    # again after ``batch_give_up`` failures (else every full solve would
+    # re-run Newton on every pending row: time quadratic in the samples)
+    failures: dict[FaceKey, IntArray] = {}
+    give_up = ws.settings.batch_give_up
+    full = 0
+    # the batched Newton works on dense stacks; a large (sparse) mechanism's
+    # rows are solved one by one (warm-started from the one before when the
+    # plays do not vary)
+    dense = not ws.asm.sparse
+    # rows per Newton batch (n at most the unknowns and all multipliers)
+    n_most = ws.m + n_balls + ws.stack.A.shape[0] + ws.Eq.shape[0]
+    chunk = max(1, CHUNK_ENTRIES // n_most**2)
+    while pending.size:
+        # Newton from the nearest solved sample of each known active set, while it helps.
+        progress = True
+        while progress and pending.size:
+            progress = False
+            for active, rows in solved_by_set.items():
+                failed = failures.setdefault(active, np.zeros(B, dtype=np.intp))
+                tried = pending[failed[pending] < give_up]
+                if not tried.size:
+                    continue
+                ref = np.concatenate(rows)
+                nearest = ref[cKDTree(features[ref]).query(features[tried])[1]]
+                for part in range(0, len(tried), chunk):
+                    now, near = tried[part : part + chunk], nearest[part : part + chunk]
+                    ok, xs, lams, fs, checks = _newton_batch(
+                        ws,
+                        active,
+                        g_hat[now],
+                        sigma[now],
+                        x[near],
+                        lam[near],
+                        f[near],
+                        r[now],
+                    )
+                    failed[now[~ok]] += 1
+                    if np.any(ok):
+                        won = now[ok]
+                        x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
+                        assert checks is not None  # rows were accepted: they were checked
+                        feas[won], residual[won] = checks.feasibility[ok], checks.balance[ok]
+                        rows.append(won)
+                        pending = np.setdiff1d(pending, won, assume_unique=True)
+                        progress = True
+        if not pending.size:
+            break
+        first, pending = int(pending[0]), pending[1:]
+        solver = ws.with_radii(r[first]) if varied else ws
+        if dense:
+            solver.last = None  # a warm start would retry the set the batch gave up on
+        point = pipeline.optimum(solver, g_hat[first], sigma[first])
+        full += 1
+        x[first], lam[first], f[first] = point.x, point.lam, point.f
+        assert point.certificate is not None  # optimum certifies or raises
+        feas[first] = point.certificate.feasibility_mm / ws.asm.s
+        residual[first] = point.certificate.equilibrium_residual
+        if point.active is not None and dense:
+            solved_by_set.setdefault(point.active, []).append(np.array([first]))
+
+    return BatchSolution(
+        asm=ws.asm,
+        x=x,
+        forces=lam * norms[:, None] / ws.asm.s,
+        potential_energy=-np.einsum("bm,bm->b", work, x),
+        feasibility_mm=np.maximum(feas, 0.0) * ws.asm.s,
+        equilibrium_residual=residual,
+        batched=batched,
+        full_solves=full,
+    )
+
+
+def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
+    if ws.N.shape[1] == 0:
+        return
+    drive = linalg.times(ws.N.T, work)  # work @ N
+    bad = np.linalg.norm(drive, axis=1) > ws.settings.drive_tolerance * norms
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        held.check_driven(ws, work[i])  # raises, naming the body and the motion
+
+
+def _newton_batch(
+    ws: Workspace,
+    key: FaceKey,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    x0: FloatArray,
+    lam0: FloatArray,
+    f0: FloatArray,
+    r: FloatArray,
+) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None]:
+    """KKT equations of the active set ``key`` for every row of ``g_hat``,
+    each from its own start (rows of ``x0``, ``lam0``, ``f0``: the nearest
+    solved sample's answer and split) and with its own cone radii (rows of
+    ``r``).
+
+    Returns (accepted mask, x, full multipliers, force vectors, their
+    certificate); a row is accepted only if it converged and passes the
+    certificate of a unique optimum.
+    """
+    B = g_hat.shape[0]
+    stack = ws.stack
+    x = x0.copy()
+    lam = np.zeros((B, len(ws.balls)))
+    f = np.zeros((B, stack.A.shape[0]))
+    face = faces.face_of(ws, key)
+    if not face.determined:  # a tie, or a tilting face (uniqueness depends on x)
+        return np.zeros(B, dtype=bool), x, lam, f, None
+    surface, linear = key
+    ne0 = ws.Eq.shape[0]
+    Eq, e = face.Eq, face.e
+    eq_soft = np.zeros((B, len(Eq)))
+    eq_soft[:, ne0 + face.lam_rows] = sigma[:, list(linear)]
+    e_rows = np.repeat(e[None, :], B, axis=0)
+    e_rows[:, ne0 + face.lam_rows] = r[:, list(linear)]
+    r_surface = r[:, list(surface)]
+    na, ne = len(surface), Eq.shape[0]
+    # redundant contacts: Newton on an independent part of the active rows
+    # (the same positions); the forces are split afterwards
+    kept = _independent_rows(ws, face, x0[0])
+    redundant = kept is not None
+    s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
+    sub = face.stack.take(s_keep)
+    lam_s = np.zeros((B, na))
+    lam_k = lam0[:, list(surface)][:, s_keep]
+    nu = np.zeros((B, ne))
+    nu_k = np.zeros((B, len(e_keep)))
+    soft_s = sigma[:, list(surface)][:, s_keep]
+    conv = _newton_rows(
+        sub,
+        r_surface[:, s_keep],
+        Eq[e_keep],
+        e_rows[:, e_keep],
+        eq_soft[:, e_keep],
+        -g_hat,
+        soft_s,
+        x,
+        lam_k,
+        nu_k,
+        ws.settings,
+    )
+    lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
+
+    lam[:, list(surface)] = lam_s
+    v, rho = face.stack.norms(x)
+    f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
+    lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
+    f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
+    st = ws.settings
+    # contacts that touch outside the set (unloaded in the neighbour's split)
+    # may share the load: the split rule decides, as when the set is redundant
+    in_set = np.zeros(len(ws.balls), dtype=bool)
+    in_set[[*surface, *linear]] = True
+    touching = (stack.spring == 0) & (stack.gap_used(stack.levels(x)[2], r) >= st.touching)
+    if redundant or np.any(touching & ~in_set):
+        # Newton's split is one of many; the documented one (``forces``),
+        # from the neighbour's split, on the cone limits that bind it
+        apex = st.feasibility_tolerance * ws.max_radius
+        split, lam, f, _ = forces.least_squares_rows(
+            ws.asm, x, lam, f, g_hat, r, (lam0, f0), apex, st
+        )
+        # rigid joints' forces by least squares, for split and own rows alike
+        # (the batch reports contact forces only)
+        checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
+        ok = conv & split & _pinned(ws, key, x, lam, f)
+        return ok & checks.passed(st, ws.max_radius), x, lam, f, checks
+    lam_a = lam[:, list(surface) + list(linear)]
+    positive = ws.settings.positive_force
+    strict = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1) if lam_a.shape[1] else conv
+    if linear:
+        lin = stack.take(linear)
+        f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
+        inside = (f_norm < (1.0 - positive) * lam[:, list(linear)]) | (lin.k == 0)
+        strict &= np.all(inside, axis=1)
+    checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
+    return conv & strict & checks.passed(ws.settings, ws.max_radius), x, lam, f, checks
+
+
+def _newton_rows(
+    sub: BallStack,
+    r: FloatArray,
+    Eq: FloatArray,
+    e: FloatArray,
+    eq_soft: FloatArray,
+    q: FloatArray,
+    soft: FloatArray,
+    x: FloatArray,
+    lam: FloatArray,
+    nu: FloatArray,
+    settings: SolverSettings,
+) -> BoolArray:
+    """Newton on the KKT equations (see ``newton.newton``), rows in place,
+    each row with its own radii ``r`` (B, na) and right sides ``e`` (B, ne);
+    returns the converged mask."""
+    B, m = q.shape
+    A, start, k, Bo = sub.A, sub.start, sub.k, sub.B
+    na, ne = len(k), Eq.shape[0]
+    n = m + na + ne
+    # each cone's rows as one matrix, so that per-row sums over a cone's rows
+    # are one product: ``u @ T`` is every cone's ``u_i^T A_i`` (B, na * m),
+    # and ``c @ AA`` every ``sum_i c_i A_i^T A_i`` (B, m * m)
+    cone_of = np.repeat(np.arange(na), k)
+    T = np.zeros((A.shape[0], na, m))
+    T[np.arange(A.shape[0]), cone_of] = A
+    T = T.reshape(A.shape[0], na * m)
+    AA = (A[:, :, None] * A[:, None, :]).reshape(A.shape[0], m * m)
+    K0 = np.zeros((n, n))
+    K0[:m, m + na :] = Eq.T
+    K0[m + na :, :m] = Eq
+    todo = np.arange(B)
+    conv = np.zeros(B, dtype=bool)
+    for it in range(settings.batch_newton_steps + 1):
+        xs = x[todo]
+        v = xs @ A.T
+        rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
+        directed = np.all(rho > 0, axis=1)
+        if not np.all(directed):  # a contact at its centre has no direction: full solver
+            todo, xs, v, rho = todo[directed], xs[directed], v[directed], rho[directed]
+        ls = lam[todo]
+        u = v / np.repeat(rho, k, axis=1) if na else v
+        Ju = (u @ T).reshape(-1, na, m) if na else None
+        grad = q[todo] + nu[todo] @ Eq
+        if Ju is not None:
+            grad += np.einsum("bi,bim->bm", ls, Ju) + ls @ Bo
+        F = np.concatenate(
+            [
+                grad,
+                rho + xs @ Bo.T - r[todo] - soft[todo] * ls,
+                xs @ Eq.T - e[todo] - eq_soft[todo] * nu[todo],
+            ],
+            axis=1,
+        )
+        err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
+        done = err <= settings.round_off
+        conv[todo[done]] = True
+        keep = ~done
+        if it >= settings.batch_give_up:  # far from quadratic convergence: a wrong start or set
+            keep &= err <= settings.batch_continue
+        if not np.any(keep):
+            break
+        todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
+        Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
+        Kb[:, m + np.arange(na), m + np.arange(na)] = -soft[todo]
+        Kb[:, m + na + np.arange(ne), m + na + np.arange(ne)] = -eq_soft[todo]
+        if Ju is not None:
+            Ju = Ju[keep]
+            c = ls / rho
+            AtCA = (np.repeat(c, k, axis=1) @ AA).reshape(-1, m, m)
+            Kb[:, :m, :m] = AtCA - (Ju * c[:, :, None]).transpose(0, 2, 1) @ Ju
+            J = Ju + Bo
+            Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
+            Kb[:, m : m + na, :m] = J
+        step, regular = solve_rows(Kb, -F)
+        todo, step = todo[regular], step[regular]  # a singular row is left to the full solver
+        x[todo] += step[:, :m]
+        lam[todo] += step[:, m : m + na]
+        nu[todo] += step[:, m + na :]
+    # rows still in ``todo`` did not converge
+    return conv
+
+
+def _pinned(
+    ws: Workspace, key: FaceKey, x: FloatArray, lam: FloatArray, f: FloatArray
+) -> BoolArray:
+    """Whether the forces ``lam``, ``f`` (rows) pin each row's position
+    down: any other optimum keeps every loaded contact where it is, so the
+    position is unique if their rows (and the equalities) have full rank.
+    A surface cone with an offset, or a face whose force reaches its rim,
+    keeps only the rows across its tilt (see ``Workspace._determined``); an
+    unloaded contact keeps none. Rows (B, m)."""
+    stack, st = ws.stack, ws.settings
+    B = x.shape[0]
+    loaded = lam > st.positive_force * np.max(lam, axis=1, keepdims=True)
+    v, rho = stack.norms(x)
+    f_norm = np.sqrt(stack.segment_sum(f * f))
+    parts = [np.broadcast_to(linalg.dense(ws.Eq), (B, *ws.Eq.shape))]
+    surface, linear = key
+    for i in (*surface, *linear):
+        k, rows = int(stack.k[i]), stack.rows_of([i])
+        M = np.broadcast_to(linalg.dense(stack.face_rows(i)), (B, k + 1, ws.m))
+        if i in surface:  # tilts along its direction of contact, if it has an offset
+            u = v[:, rows] / np.maximum(rho[:, i : i + 1], TINY)
+            tilt = np.full(B, bool(stack.has_offset[i]))
+            if not stack.has_offset[i]:
+                M = M[:, :k]
+        else:  # a face flat at its apex may tilt about the rim its force reaches
+            u = f[:, rows] / np.maximum(f_norm[:, i : i + 1], TINY)
+            tilt = (k > 0) & (f_norm[:, i] >= (1.0 - st.apex) * lam[:, i])
+        if np.any(tilt):
+            w = np.concatenate([u, -np.ones((B, 1))], axis=1)
+            w /= np.linalg.norm(w, axis=1, keepdims=True)
+            across = M - w[:, :, None] * np.einsum("bk,bkm->bm", w, M)[:, None, :]
+            M = np.where(tilt[:, None, None], across, M)
+        parts.append(np.where(loaded[:, i, None, None], M, 0.0))
+    J = np.concatenate(parts, axis=1)
+    if J.shape[1] < ws.m:
+        return np.zeros(B, dtype=bool)
+    first, same = linalg.distinct_rows(J.reshape(B, -1))  # each distinct system once
+    sv = np.linalg.svd(J[first], compute_uv=False)
+    return np.asarray(sv[:, ws.m - 1] > st.free_motion_rcond * sv[:, 0])[same]
+
+
+def _independent_rows(ws: Workspace, face: Face, x: FloatArray) -> tuple[IntArray, IntArray] | None:
+    """None if the active rows of ``face`` at ``x`` (each surface cone's
+    gradient and the equalities) are independent. Else they are redundant
+    (contacts on the four corners of a guide: the forces are not unique,
+    the positions are) and this returns the surface cones and equality rows
+    of an independent part that spans them all (a pivoted QR): Newton on
+    those finds the same positions. Compliant contacts always stay: their
+    force follows their penetration."""
+    sub, (surface, linear) = face.stack, face.key
+    Eq = linalg.dense(face.Eq)
+    rows = [Eq]
+    if len(sub.k):
+        v, rho = sub.norms(x)
+        u = v / np.repeat(np.where(rho > 0, rho, 1.0), sub.k)
+        rows.insert(0, np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B)
+    J = np.vstack(rows)
+    spring = ws.stack.spring
+    soft = np.zeros(len(J), dtype=bool)
+    soft[: len(surface)] = spring[list(surface)] > 0
+    ne0 = Eq.shape[0] - face.L.shape[0]
+    soft[len(surface) + ne0 + face.lam_rows] = spring[list(linear)] > 0
+    hard = np.flatnonzero(~soft)
+    if not len(hard):
+        return None
+    _, R, piv = scipy.linalg.qr(J[hard].T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    rank = int(np.sum(d > ws.settings.free_motion_rcond * d[0])) if d.size and d[0] > 0 else 0
+    if rank == len(hard):
+        return None
+    keep = np.sort(np.r_[np.flatnonzero(soft), hard[piv[:rank]]])
+    na = len(surface)
+    return keep[keep < na], keep[keep >= na] - na

@@ -1,0 +1,213 @@
+"""One certificate for every answer: single solves, batches and each route inside them.
+
+An answer is positions ``x`` and multipliers (``lam``, ``f`` per contact cone,
+``nu`` per rigid row) of the scaled problem with unit loads ``g_hat``. It is
+an optimum of the convex program exactly when these hold (its KKT
+conditions), each checked from the problem data and the answer alone:
+
+- *feasibility*: no contact past its reach (its play, plus a compliant
+  contact's penetration ``sigma_i lam_i``), rigid rows held;
+- *balance*: on every moving body, loads and contact forces balance, in
+  newtons: the worst body's imbalance (force, and moment over the length
+  ``ell``) relative to the largest force in the balance (a body's load
+  resultant, or a joint's reaction);
+- *forces*: every contact pushes (``lam_i >= 0``) with its force vector in
+  its cone (``|f_i| <= lam_i``);
+- *complementarity*: a contact that does not touch pushes with nothing, and
+  one that touches pushes along its direction of contact.
+
+Rows are checked together (a single answer is a batch of one).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from jointplay.assembly import IntArray
+from jointplay.geometry import FloatArray
+from jointplay.numerics import linalg
+from jointplay.result import Certificate
+
+if TYPE_CHECKING:
+    from jointplay.settings import SolverSettings
+    from jointplay.solver.faces import Point
+    from jointplay.solver.workspace import Workspace
+
+
+@dataclass(frozen=True)
+class Checks:
+    """The certificate's quantities, one entry per row (see module doc)."""
+
+    feasibility: FloatArray  # scaled length: the worst overshoot of a reach, or |E x|
+    balance: FloatArray  # relative to the largest force in the balance
+    min_force: FloatArray  # scaled force: the smallest lam
+    outside: FloatArray  # scaled force: the largest |f_i| - lam_i
+    complementarity: FloatArray  # scaled force times length, over the largest radius
+    force_scale: FloatArray  # max(1, largest |lam|): what the force checks are relative to
+    nu: FloatArray  # the rigid rows' multipliers used (given, or least squares)
+
+    def passed(self, settings: SolverSettings, max_radius: float) -> NDArray[np.bool_]:
+        tol = settings.equilibrium_tolerance
+        return np.asarray(
+            (self.feasibility <= settings.feasibility_tolerance * max_radius)
+            & (self.balance <= tol)
+            & (self.min_force >= -tol * self.force_scale)
+            & (self.outside <= tol * self.force_scale)
+            & (self.complementarity <= tol * self.force_scale)
+        )
+
+
+class Balance:
+    """What the balance check needs of a mechanism, built once per workspace."""
+
+    def __init__(self, ws: Workspace):
+        asm = ws.asm
+        self.asm = asm
+        self.E = ws.E
+        n = len(asm.body_names)
+        # per body: force rows as they are, moment rows to N*mm over ell (units of |g|/s)
+        self.weight = np.column_stack(
+            [np.ones((n, 3)), np.repeat((asm.s / (asm.turn * asm.ell))[:, None], 3, 1)]
+        ).ravel()
+        self.per_contact = np.r_[np.ones(3), np.full(3, 1.0 / asm.ell)]
+
+    @cached_property
+    def reaction_maps(self) -> tuple[linalg.Matrix, linalg.Matrix, linalg.Matrix]:
+        """Each joint's reaction (6 per joint: force, moment over ell) from
+        the force vectors ``f``, the forces ``lam`` and the rigid rows' ``nu``:
+        the sum of its contacts' wrenches, one map each, built once."""
+        T = self.asm.tables
+        n_joints = int(T.centre.shape[0])
+        ball_joint = T.joint_of[T.is_ball]
+        fixed_joint = T.joint_of[~T.is_ball]
+        w = np.tile(self.per_contact, n_joints)
+
+        def gather(joint_of: IntArray) -> linalg.Matrix:  # contacts' 6-rows -> joints' 6-rows
+            rows = (6 * joint_of[:, None] + np.arange(6)).ravel()
+            cols = np.arange(6 * len(joint_of))
+            if self.asm.sparse:
+                return sp.csr_matrix(
+                    (w[rows], (rows, cols)), shape=(6 * n_joints, 6 * len(joint_of))
+                )
+            out = np.zeros((6 * n_joints, 6 * len(joint_of)))
+            out[rows, cols] = w[rows]
+            return out
+
+        n = len(ball_joint)
+        offsets = T.offset_ball.ravel()
+        rows, cols = np.arange(6 * n), np.repeat(np.arange(n), 6)
+        if self.asm.sparse:
+            offset_map: linalg.Matrix = sp.csr_matrix((-offsets, (rows, cols)), shape=(6 * n, n))
+        else:
+            offset_map = np.zeros((6 * n, n))
+            offset_map[rows, cols] = -offsets
+        to_ball, to_fixed = gather(ball_joint), gather(fixed_joint)
+        return to_ball @ T.wrench_ball, to_ball @ offset_map, to_fixed @ T.wrench_fixed
+
+    def rigid_multipliers(self, rest: FloatArray) -> FloatArray:
+        """(B, rigid rows): what the rigid rows carry of the generalized
+        forces ``rest``, by least squares (redundant rigid joints share)."""
+        E = self.E
+        if not E.shape[0]:
+            return np.zeros((rest.shape[0], 0))
+        if not linalg.is_sparse(E):
+            return np.asarray(np.linalg.lstsq(np.asarray(E).T, rest.T, rcond=None)[0].T)
+        return np.array([linalg.lstsq(E.T, row) for row in rest])
+
+    def largest_reaction(self, lam: FloatArray, f: FloatArray, nu: FloatArray) -> FloatArray:
+        """(B,): the largest joint reaction, force or moment over ell."""
+        B = lam.shape[0]
+        if not self.asm.tables.centre.shape[0]:
+            return np.zeros(B)
+        of_f, of_lam, of_nu = self.reaction_maps
+        joints = linalg.times(of_f, f) + linalg.times(of_lam, lam)
+        if nu.shape[1]:
+            joints = joints + linalg.times(of_nu, nu)
+        sizes = np.linalg.norm(joints.reshape(B, -1, 3), axis=-1)
+        return np.asarray(np.max(sizes, axis=1, initial=0.0))
+
+    def residual(
+        self, g_hat: FloatArray, lam: FloatArray, f: FloatArray, nu: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """(B,) worst per-body imbalance relative to the largest force in the
+        balance, and the rigid multipliers used."""
+        stack = self.asm.stack
+        rest = g_hat - stack.adjoint(f, lam) if len(stack.k) else g_hat.copy()
+        if nu is None:
+            nu = self.rigid_multipliers(rest)
+        if nu.shape[1]:
+            rest = rest - linalg.adjoint(self.E, nu)
+        B = g_hat.shape[0]
+        body = np.linalg.norm((rest * self.weight).reshape(B, -1, 2, 3), axis=-1)
+        applied = np.linalg.norm((g_hat * self.weight).reshape(B, -1, 2, 3), axis=-1)
+        scale = np.maximum(
+            np.max(applied, axis=(1, 2), initial=0.0), self.largest_reaction(lam, f, nu)
+        )
+        worst = np.max(body, axis=(1, 2), initial=0.0)
+        out = np.where(scale > 0, worst / np.where(scale > 0, scale, 1.0), 0.0)
+        out[~np.any(g_hat, axis=1)] = 0.0
+        return np.asarray(out), np.asarray(nu)
+
+
+def check(
+    ws: Workspace,
+    g_hat: FloatArray,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    sigma: FloatArray,
+    r: FloatArray | None = None,
+    nu: FloatArray | None = None,
+) -> Checks:
+    """The certificate of B answers (rows of ``x``, ``lam``, ``f``; ``nu``:
+    rigid multipliers, else least squares) under unit loads ``g_hat`` (rows),
+    with contact softness ``sigma`` and, if given, each row's own radii ``r``."""
+    stack = ws.stack
+    B = x.shape[0]
+    radii = np.broadcast_to(stack.r if r is None else r, lam.shape)
+    if len(stack.k):
+        v, rho, level = stack.levels(x)
+        reach = radii + sigma * np.maximum(lam, 0.0)
+        feas = np.max(level - reach, axis=1)
+        gap = np.abs(lam) * np.abs(reach - level) + np.abs(lam * rho - stack.segment_sum(f * v))
+        comp = np.max(gap, axis=1) / ws.max_radius
+        min_force = np.min(lam, axis=1)
+        outside = np.max(np.sqrt(stack.segment_sum(f * f)) - lam, axis=1)
+        force_scale = np.maximum(1.0, np.max(np.abs(lam), axis=1))
+    else:
+        feas = comp = min_force = outside = np.zeros(B)
+        force_scale = np.ones(B)
+    if ws.E.shape[0]:
+        feas = np.maximum(feas, np.max(np.abs(linalg.times(ws.E, x)), axis=1))
+    balance, nu_used = ws.balance.residual(g_hat, lam, f, nu)
+    return Checks(feas, balance, min_force, outside, comp, force_scale, nu_used)
+
+
+def certify(
+    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: Point, nu: FloatArray | None = None
+) -> Certificate:
+    """The certificate (``certificate.check``) of one answer."""
+    c = check(
+        ws,
+        g_hat[None],
+        point.x[None],
+        point.lam[None],
+        point.f[None],
+        sigma[None],
+        nu=None if nu is None else nu[None],
+    )
+    return Certificate(
+        certified=bool(c.passed(ws.settings, ws.max_radius)[0]),
+        method=point.method,
+        feasibility_mm=max(float(c.feasibility[0]), 0.0) * ws.asm.s,
+        equilibrium_residual=float(c.balance[0]),
+        complementarity=float(c.complementarity[0]),
+        min_force=float(c.min_force[0]),
+        iterations=point.iterations,
+    )

@@ -1,0 +1,139 @@
+"""Clarabel's answers in our words: one explicit map of its statuses.
+
+A status is never read by its suffix: ``AlmostSolved`` is an inaccurate
+answer (kept only if our own certificate holds), not an optimum, and a
+status that a new Clarabel release adds stops the solve with its name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+import clarabel
+import numpy as np
+import scipy.sparse as sp
+
+from jointplay.assembly import BallStack, IntArray
+from jointplay.errors import SolverError
+from jointplay.geometry import FloatArray
+from jointplay.numerics import linalg
+from jointplay.numerics.linalg import Matrix
+from jointplay.solver import held
+
+if TYPE_CHECKING:
+    from jointplay.solver.workspace import Workspace
+
+Outcome = Literal["optimal", "inaccurate", "infeasible", "unbounded", "stopped"]
+
+STATUS: dict[str, Outcome] = {
+    "Solved": "optimal",
+    "AlmostSolved": "inaccurate",
+    "PrimalInfeasible": "infeasible",
+    "AlmostPrimalInfeasible": "infeasible",
+    "DualInfeasible": "unbounded",  # the loads' work grows without end along a ray
+    "AlmostDualInfeasible": "unbounded",
+    "MaxIterations": "stopped",
+    "MaxTime": "stopped",
+    "NumericalError": "stopped",
+    "InsufficientProgress": "stopped",
+    "CallbackTerminated": "stopped",
+    "Unsolved": "stopped",
+}
+
+
+def status_name(solution: Any) -> str:
+    """The status's name, as Clarabel spells it (``SolverStatus.Solved`` -> ``Solved``)."""
+    return str(solution.status).rsplit(".", 1)[-1]
+
+
+def outcome(solution: Any) -> Outcome:
+    """What a Clarabel solution means for us; a status we do not know is ``stopped``."""
+    return STATUS.get(status_name(solution), "stopped")
+
+
+def has_answer(solution: Any) -> bool:
+    """Whether the solution holds a point worth certifying."""
+    return outcome(solution) in ("optimal", "inaccurate")
+
+
+# -- the cone program and its solve
+
+
+def cone_program(
+    ws: Workspace, P: Matrix | None, Eq: Matrix, e: FloatArray, stack: BallStack
+) -> ConeProgram:
+    """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, -A_i x)``
+    per contact (a one-sided limit, with no rows, is a non-negative slack).
+    Its dual is ``(lam_i, f_i)``."""
+    n_eq, n_cones, n_rows = Eq.shape[0], len(stack.k), stack.A.shape[0]
+    n_all = n_eq + n_rows + n_cones
+    b = np.zeros(n_all)
+    b[:n_eq] = e
+    soc_first = n_eq + stack.start + np.arange(n_cones)
+    ball_rows = n_eq + np.arange(n_rows) + np.repeat(np.arange(1, n_cones + 1), stack.k)
+    b[soc_first] = stack.r
+    order = np.empty(n_all, dtype=np.intp)  # row of the program -> row of (Eq; A; B)
+    order[:n_eq] = np.arange(n_eq)
+    order[ball_rows] = n_eq + np.arange(n_rows)
+    order[soc_first] = n_eq + n_rows + np.arange(n_cones)
+    stacked = linalg.vstack([Eq, stack.A, stack.B], ws.m)
+    if linalg.is_sparse(stacked):
+        A = sp.csc_matrix(sp.csr_matrix(stacked)[order])
+    else:
+        A = csc(np.asarray(stacked)[order]) if n_all else csc(np.zeros((0, ws.m)))
+    cones: list[Any] = [clarabel.ZeroConeT(n_eq)] if n_eq else []
+    cones += [
+        clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
+        for k in stack.k
+    ]
+    if P is None:
+        P_upper = sp.csc_matrix((ws.m, ws.m))
+    elif linalg.is_sparse(P):
+        P_upper = sp.csc_matrix(sp.triu(P))
+    else:
+        P_upper = csc(np.triu(P))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    tol = ws.settings.ipm_tolerance
+    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
+    settings.max_iter = ws.settings.max_iterations
+    # refine each step's linear solve further than the default: with
+    # stiff springs pressed far past their play, the default leaves some
+    # programs "AlmostSolved" at a 1e-7 gap
+    refine = ws.settings.ipm_refinement
+    settings.iterative_refinement_reltol = settings.iterative_refinement_abstol = refine
+    return ConeProgram(P_upper, A, b, cones, settings, soc_first, ball_rows)
+
+
+def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
+    sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
+    if outcome(sol) == "unbounded":  # a one-sided motion (_check_driven took the rest)
+        motion = held.driven_motion(ws, -q[: ws.m], np.asarray(sol.x))
+        raise held.unbounded(ws.asm, motion, one_way=True)
+    if not has_answer(sol):  # our programs are feasible (x = 0): numerical trouble
+        raise SolverError(
+            f"the cone solver stopped with status {status_name(sol)} on this model. "
+            + held.weak_hint(ws)
+        )
+    return sol
+
+
+@dataclass(frozen=True)
+class ConeProgram:
+    P: sp.csc_matrix
+    A: sp.csc_matrix
+    b: FloatArray
+    cones: list[Any]
+    settings: Any
+    soc_first: IntArray  # row of each cone's first entry (its multiplier lam)
+    f_rows: IntArray  # rows of the cones' other entries (their force vectors f)
+
+
+def csc(a: FloatArray) -> sp.csc_matrix:
+    """A dense matrix in compressed-column form, built directly (scipy's
+    general constructors cost more than the small solves they feed)."""
+    col, row = np.nonzero(a.T)
+    indptr = np.zeros(a.shape[1] + 1, dtype=np.int64)
+    np.cumsum(np.bincount(col, minlength=a.shape[1]), out=indptr[1:])
+    return sp.csc_matrix((a[row, col], row.astype(np.int64), indptr), shape=a.shape)

@@ -1,0 +1,392 @@
+"""``--exact``: the equilibrium with exact rotations, by re-linearization.
+
+Start from the small-displacement answer. At the current placement of every
+body (``finite.placements``: P -> c_b + V + R(Omega)(P - c_b)), linearize
+each contact's exact cone (``Contact.exact_parts``) and the loads' virtual
+work, and solve that cone program for a step; repeat until the step and the
+exact overshoot of every clearance are below ``exact_tolerance_mm`` (1e-9 mm). A small proximal term
+(the joint metric) makes each step unique; it vanishes at the fixed point,
+where the step is 0, so the answer is an exact-geometry equilibrium: its
+contact forces (the last program's duals) balance the loads at the displaced
+points, which ``Result.equilibrium_residual`` checks in global axes.
+
+Free motions of the current placement keep the value of the small-displacement
+answer (0). Derivatives are analytic: each contact's parts with respect to a
+virtual twist of b in a's joint frame (``Contact.exact_jacobian``), each
+body's twist with respect to its unknowns through the rotation's left
+Jacobian, and the loads' virtual work likewise.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import clarabel
+import numpy as np
+
+from jointplay.assembly import Assembly
+from jointplay.errors import SolverError
+from jointplay.finite import IDENTITY, Linearization, Placement, placements, relative_in_joint
+from jointplay.geometry import (
+    FloatArray,
+    cross,
+    left_jacobian,
+    rotation_matrix,
+    rotation_vector,
+    skew,
+)
+from jointplay.model.mechanism import Load
+from jointplay.result import (
+    BodyResult,
+    Certificate,
+    ContactResult,
+    JointResult,
+    Result,
+    _clean,
+    equilibrium_residual,
+    points_of,
+)
+from jointplay.solver import conic
+
+if TYPE_CHECKING:
+    from jointplay.solver.workspace import Workspace
+
+
+def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
+    """The equilibrium of ``ws``'s model with exact rotations (see module doc)."""
+    start = time.perf_counter()
+    asm = ws.asm
+    loads = tuple(asm.model.loads_of(None) if loads is None else loads)
+    linear = ws.solve(loads=loads)
+    x = asm.unknowns_of(linear.bodies)
+    iterations = 0
+    st = ws.settings
+    for iterations in range(1, st.exact_max_steps + 1):  # noqa: B007 - reported below
+        parts = _contact_parts(asm, x)
+        g = _virtual_work(asm, x, loads)
+        g_norm = float(np.linalg.norm(g))
+        step, lam, f, nu = _step(ws, x, parts, g, g_norm)
+        x = x + step
+        moved = float(np.max(np.abs(step))) * asm.s  # mm (a turn: mm at the length scale)
+        if moved <= st.exact_settle_mm:
+            break
+    else:
+        raise SolverError(
+            f"--exact: the re-linearization did not settle in {st.exact_max_steps} steps "
+            f"(last step {moved:.3g} mm); the small-displacement answer is the one printed "
+            "without --exact"
+        )
+    parts = _contact_parts(asm, x)
+    g = _virtual_work(asm, x, loads)
+    g_norm = float(np.linalg.norm(g))
+    _, lam, f, nu = _step(ws, x, parts, g, g_norm)
+    to_newton = g_norm / asm.s
+    result = _build(ws, x, lam * to_newton, f * to_newton, nu * to_newton, loads)
+    feas = max(
+        [
+            float(np.linalg.norm(a) + b) - r
+            for (a, b), r in zip(parts.balls, _reach(ws, ws.softness(g_norm), lam), strict=True)
+        ]
+        + [0.0]
+    )
+    fixed = max([float(np.max(np.abs(a))) for a, _ in parts.fixed if len(a)] + [0.0])
+    feas_mm = max(feas, fixed)
+    cert = Certificate(
+        certified=feas_mm <= st.exact_tolerance_mm
+        and result.equilibrium_residual <= st.equilibrium_tolerance,
+        method=f"exact rotations ({iterations} re-linearizations)",
+        feasibility_mm=max(feas_mm, 0.0),
+        equilibrium_residual=result.equilibrium_residual,
+        complementarity=0.0,
+        min_force=float(np.min(lam)) * to_newton if len(lam) else 0.0,
+        iterations=iterations,
+    )
+    if not cert.certified:
+        raise SolverError(
+            "--exact: the exact-geometry answer could not be certified: "
+            f"{cert.feasibility_mm:.3g} mm past a clearance, equilibrium residual "
+            f"{cert.equilibrium_residual:.3g}; please report this model"
+        )
+    object.__setattr__(result, "certificate", cert)
+    object.__setattr__(result, "solve_time", time.perf_counter() - start)
+    worst = max(feas_mm, 0.0)
+    object.__setattr__(result, "_linearization", Linearization(worst, None, ()))
+    return result
+
+
+class _Parts:
+    """Every contact's exact cone parts at one placement, in mm (balls, fixed)."""
+
+    def __init__(
+        self, balls: list[tuple[FloatArray, float]], fixed: list[tuple[FloatArray, float]]
+    ):
+        self.balls = balls
+        self.fixed = fixed
+
+    def flat(self) -> FloatArray:
+        out: list[float] = []
+        for a, b in (*self.balls, *self.fixed):
+            out.extend(a)
+            out.append(b)
+        return np.array(out)
+
+
+def _contact_parts(asm: Assembly, x: FloatArray) -> _Parts:
+    place = placements(asm, x)
+    relative: dict[int, tuple[FloatArray, FloatArray, FloatArray]] = {}
+    balls: list[tuple[FloatArray, float]] = []
+    fixed: list[tuple[FloatArray, float]] = []
+    for c in (*asm.balls, *asm.fixed):
+        if c.joint_index not in relative:
+            relative[c.joint_index] = relative_in_joint(asm, place, c.joint_index)
+        a, b = c.contact.exact_parts(*relative[c.joint_index])
+        (fixed if c.is_fixed else balls).append((np.asarray(a, dtype=float), b))
+    return _Parts(balls, fixed)
+
+
+def _virtual_work(asm: Assembly, x: FloatArray, loads: Sequence[Load]) -> FloatArray:
+    """The loads' generalized forces at the placement ``x``: forces follow their
+    points, torques do work on the spatial rotation increment ``J_l dOmega``."""
+    g = np.zeros(asm.m)
+    for load in loads:
+        i = asm.body_index[load.body]
+        omega = asm.turn[i] * x[6 * i + 3 : 6 * i + 6]
+        R = rotation_matrix(omega)
+        moment = np.zeros(3) if load.torque is None else np.array(load.torque, dtype=float)
+        if load.force is not None:
+            force = np.array(load.force, dtype=float)
+            at = np.array(load.at) if load.at is not None else asm.body_ref[i]
+            g[6 * i : 6 * i + 3] += asm.s * force
+            moment = moment + cross(R @ (at - asm.body_ref[i]), force)
+        g[6 * i + 3 : 6 * i + 6] += asm.turn[i] * left_jacobian(omega).T @ moment
+    return g
+
+
+def _twist_map(asm: Assembly, x: FloatArray, place: dict[str, Placement], jdx: int) -> FloatArray:
+    """(6, m): scaled unknowns' variation -> virtual twist of b relative to a,
+    in a's joint frame, about a's displaced joint centre."""
+    joint = asm.model.joints[jdx]
+    a_place = place.get(joint.between[0], IDENTITY)
+    R_ga = a_place.R @ joint.R_world_joint
+    O_a = a_place(joint.centre)
+    T = np.zeros((6, asm.m))
+    for sign, name in ((-1.0, joint.between[0]), (1.0, joint.between[1])):
+        if name not in asm.body_index:
+            continue
+        i = asm.body_index[name]
+        omega = asm.turn[i] * x[6 * i + 3 : 6 * i + 6]
+        turn = asm.turn[i] * left_jacobian(omega)  # dtheta per unit scaled x
+        lever = O_a - place[name](asm.body_ref[i])
+        T[:3, 6 * i : 6 * i + 3] = sign * R_ga.T * asm.s
+        T[:3, 6 * i + 3 : 6 * i + 6] = sign * R_ga.T @ (-skew(lever) @ turn)
+        T[3:, 6 * i + 3 : 6 * i + 6] = sign * R_ga.T @ turn
+    return T
+
+
+def _parts_jacobian(asm: Assembly, x: FloatArray) -> FloatArray:
+    """d(exact parts)/dx, stacked like ``_Parts.flat`` (mm per scaled unit)."""
+    place = placements(asm, x)
+    rows = []
+    maps: dict[int, FloatArray] = {}
+    for c in (*asm.balls, *asm.fixed):
+        jdx = c.joint_index
+        if jdx not in maps:
+            maps[jdx] = _twist_map(asm, x, place, jdx)
+        G = c.contact.exact_jacobian(*relative_in_joint(asm, place, jdx))
+        rows.append(G @ maps[jdx])
+    return np.vstack(rows) if rows else np.zeros((0, asm.m))
+
+
+def _reach(ws: Workspace, sigma: FloatArray, lam: FloatArray) -> FloatArray:
+    """Each contact's reach (mm): its play, plus a compliant one's penetration."""
+    return (ws.stack.r + sigma * np.maximum(lam, 0.0)) * ws.asm.s
+
+
+def _step(
+    ws: Workspace, x: FloatArray, parts: _Parts, g: FloatArray, g_norm: float
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """One linearized cone program: (step, lam, f, fixed multipliers), scaled."""
+    asm, m, s = ws.asm, ws.m, ws.asm.s
+    J = _parts_jacobian(asm, x) / s
+    now = parts.flat() / s
+    sigma = ws.softness(g_norm)
+    soft = np.flatnonzero(ws.stack.spring > 0)
+    n_soft = len(soft)
+    # rows: zero cone (fixed contacts, then K), then one cone per ball, then p >= 0
+    A_rows: list[FloatArray] = []
+    b_rows: list[float] = []
+    cones: list[Any] = []
+    row = 0
+    ball_first, ball_vec = [], []
+    # where each cone's parts sit in ``flat``: balls (vector rows, scalar), then fixed
+    ball_offsets = []
+    cursor = 0
+    for a, _ in parts.balls:
+        ball_offsets.append(cursor)
+        cursor += len(a) + 1
+    fixed_rows: list[int] = []
+    for a, _ in parts.fixed:
+        fixed_rows.extend(range(cursor, cursor + len(a)))
+        cursor += len(a) + 1
+    n_var = m + n_soft
+    Z = [np.hstack([J[fixed_rows], np.zeros((len(fixed_rows), n_soft))])] if fixed_rows else []
+    z_rhs = [-now[fixed_rows]] if fixed_rows else []
+    # free motions of the current placement (no cone or fixed row moves them):
+    # the step leaves them alone, as the small-displacement answer did
+    _, sv, Vt = np.linalg.svd(J, full_matrices=True)
+    rcond = ws.settings.free_motion_rcond
+    rank = int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
+    K = (asm.metric @ Vt[rank:].T).T
+    if len(K):
+        Z.append(np.hstack([K, np.zeros((len(K), n_soft))]))
+        z_rhs.append(np.zeros(len(K)))
+    if Z:
+        A_rows.append(np.vstack(Z))
+        b_rows.extend(np.concatenate(z_rhs))
+        cones.append(clarabel.ZeroConeT(int(sum(len(z) for z in Z))))
+        row += int(sum(len(z) for z in Z))
+    soft_of = {int(i): k for k, i in enumerate(soft)}
+    for i, (a, _) in enumerate(parts.balls):
+        o = ball_offsets[i]
+        k = len(a)
+        vec_rows, scal_row = list(range(o, o + k)), o + k
+        block = np.zeros((k + 1, n_var))
+        block[0, :m] = J[scal_row]
+        if i in soft_of:
+            block[0, m + soft_of[i]] = -1.0
+        block[1:, :m] = -J[vec_rows]
+        A_rows.append(block)
+        b_rows.extend([ws.stack.r[i] - now[scal_row], *now[vec_rows]])
+        ball_first.append(row)
+        ball_vec.append(np.arange(row + 1, row + 1 + k))
+        cones.append(clarabel.SecondOrderConeT(k + 1) if k else clarabel.NonnegativeConeT(1))
+        row += k + 1
+    if n_soft:
+        block = np.zeros((n_soft, n_var))
+        block[:, m:] = -np.eye(n_soft)
+        A_rows.append(block)
+        b_rows.extend(np.zeros(n_soft))
+        cones.append(clarabel.NonnegativeConeT(n_soft))
+    P = np.zeros((n_var, n_var))
+    P[:m, :m] = ws.settings.exact_proximal * asm.metric
+    if n_soft:
+        P[m + np.arange(n_soft), m + np.arange(n_soft)] = 1.0 / sigma[soft]
+    q = np.zeros(n_var)
+    q[:m] = -g / g_norm if g_norm else 0.0
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    fine = ws.settings.fine_ipm_tolerance
+    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = fine
+    settings.max_iter = ws.settings.exact_ipm_iterations
+    A = np.vstack(A_rows) if A_rows else np.zeros((0, n_var))
+    sol = clarabel.DefaultSolver(
+        conic.csc(np.triu(P)), q, conic.csc(A), np.array(b_rows, dtype=float), cones, settings
+    ).solve()
+    if not conic.has_answer(sol):
+        raise SolverError(f"--exact: the cone solver stopped with status {conic.status_name(sol)}")
+    z = np.asarray(sol.z)
+    lam = z[np.array(ball_first, dtype=np.intp)] if ball_first else np.zeros(0)
+    f = -np.concatenate(ball_vec and [z[v] for v in ball_vec]) if ball_vec else np.zeros(0)
+    n_fixed = len(fixed_rows)
+    nu = z[:n_fixed] if n_fixed else np.zeros(0)
+    return np.asarray(sol.x)[:m], lam, f, nu
+
+
+def _build(
+    ws: Workspace,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    nu: FloatArray,
+    loads: tuple[Load, ...],
+) -> Result:
+    """The exact answer as a ``Result``: bodies with their exact rotations,
+    joint torsors of the exact relative placement, forces at the displaced points."""
+    asm = ws.asm
+    st = ws.settings
+    model = asm.model
+    place = placements(asm, x)
+    bodies = {}
+    for b in model.bodies:
+        pl = place.get(b.name, IDENTITY)
+        bodies[b.name] = BodyResult(
+            b.name, _clean(pl.shift, asm.s), _clean(rotation_vector(pl.R), asm.s / asm.ell), pl.R
+        )
+    ball_index = {id(c): i for i, c in enumerate(asm.balls)}
+    fixed_index: dict[int, int] = {}
+    row = 0
+    for c in asm.fixed:
+        fixed_index[id(c)] = row
+        row += c.k
+    f_start = np.concatenate([[0], np.cumsum([c.k for c in asm.balls])]).astype(int)
+    joints = {}
+    for jdx, joint in enumerate(model.joints):
+        R_rel, phi, t_rel = relative_in_joint(asm, place, jdx)
+        a_place = place.get(joint.between[0], IDENTITY)
+        Rw = joint.R_world_joint
+        contacts = []
+        total = np.zeros(6)
+        for c in asm.contacts:
+            if c.joint_index != jdx:
+                continue
+            G = c.contact.exact_jacobian(R_rel, phi, t_rel)
+            i = ball_index.get(id(c))
+            if i is None:
+                k0 = fixed_index[id(c)]
+                wrench = -G[: c.k].T @ nu[k0 : k0 + c.k]
+                local_point = c.contact.point
+                gap, touching, past = 1.0, True, 0.0
+            else:
+                fi = f[f_start[i] : f_start[i + 1]]
+                wrench = -(G[: c.k].T @ fi + lam[i] * G[c.k])
+                local_point = c.contact.acting_point(fi, float(lam[i]))
+                level = c.contact.exact_level(R_rel, phi, t_rel)
+                r = c.contact.radius
+                reached = level >= -st.zero_play_reach
+                gap = float(np.clip(level / r, 0.0, 1.0)) if r > 0 else float(reached)
+                touching = gap >= st.touching
+                past = max(level - r, 0.0) if c.stiffness > 0 else 0.0
+            total += wrench
+            q = t_rel + R_rel @ local_point  # where b's contact point is, in a's joint frame
+            contacts.append(
+                ContactResult(
+                    c.contact.name,
+                    gap,
+                    touching,
+                    wrench[:3] + 0.0,
+                    a_place(joint.centre + Rw @ q),
+                    past,
+                )
+            )
+        joints[joint.name] = JointResult(
+            joint.name,
+            joint.type_name,
+            joint.between,
+            joint.centre,
+            Rw,
+            _clean(t_rel, asm.s),
+            _clean(phi, asm.s / asm.ell),
+            tuple(contacts),
+            total[:3],
+            total[3:],
+        )
+    points = points_of(model, bodies)
+    energy = 0.0
+    for ld in loads:
+        if ld.force is not None:
+            i = asm.body_index[ld.body]
+            at = np.array(ld.at) if ld.at is not None else asm.body_ref[i]
+            energy -= float(np.array(ld.force) @ (place[ld.body](at) - at))
+    return Result(
+        "optimal",
+        energy,
+        bodies,
+        joints,
+        points,
+        Certificate(True, "exact", 0.0, 0.0, 0.0, 0.0, 0),
+        equilibrium_residual(asm, joints, loads, place),
+        0.0,
+        ws.free_motions,
+    )

@@ -1,0 +1,180 @@
+"""Active sets: which contacts hold a candidate optimum, and the face of
+positions they leave.
+
+A ``Point`` is one candidate answer in scaled unknowns with its multipliers.
+A ``Face`` is an active set's equations, built once per workspace and kept
+(``Workspace.faces``): the batch and the warm starts meet the same sets
+again and again. Whether a face pins the position down decides between a
+plain Newton polish and the least-norm rule for ties (``ties.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from jointplay.assembly import BallStack, IntArray
+from jointplay.geometry import FloatArray
+from jointplay.numerics import linalg
+from jointplay.numerics.linalg import Matrix
+from jointplay.result import Certificate
+from jointplay.settings import TINY
+
+if TYPE_CHECKING:
+    from jointplay.solver.workspace import Workspace
+
+#: An active set: (cones on their surface, cones whose rows all hold as equalities).
+FaceKey = tuple[tuple[int, ...], tuple[int, ...]]
+
+
+@dataclass
+class Point:
+    """A candidate optimum in scaled unknowns, with its multipliers."""
+
+    x: FloatArray
+    lam: FloatArray  # per ball contact (scaled)
+    f: FloatArray  # force vectors, stacked like the rows of BallStack.A (scaled)
+    method: str = "interior-point"
+    iterations: int = 0
+    certificate: Certificate | None = None
+    active: FaceKey | None = None  # the active set that determines x, if any
+    nu: FloatArray | None = None  # the rigid rows' multipliers (None: least squares)
+
+
+@dataclass(frozen=True)
+class Face:
+    """An active set, split by how its cones are held.
+
+    ``surface``: cones on their curved surface, ``|A_i x| + B_i x = r_i``
+    with ``A_i x != 0`` (their force is along ``A_i x``). ``linear``: cones
+    whose rows all hold as equalities: one-sided limits (no rows) and faces
+    resting flat at their apex (``A_i x = 0``, ``B_i x = r_i``; their force
+    vector is free inside ``|f_i| <= lam_i``). The linear cones' rows ``L x = l``
+    join the equalities; ``lam_rows`` are the rows of L that carry a cone's
+    ``lam`` (and its compliance), ``f_rows`` the rows that carry its ``f``.
+    """
+
+    key: FaceKey
+    stack: BallStack  # the surface cones
+    L: Matrix
+    rhs: FloatArray
+    lam_rows: IntArray
+    f_rows: IntArray
+    Eq: Matrix  # the workspace's equalities, then L
+    e: FloatArray
+    surface_rows: IntArray  # rows of the full stack's A (and f) of the surface cones
+    linear_rows: IntArray  # ... and of the linear cones
+    #: Whether the active cones and equalities determine x uniquely; None when
+    #: that depends on x (a tilting face: see ``is_determined``).
+    #: Computed when first asked (a null space): most trial faces never are.
+    _determine: Callable[[], bool | None] = field(repr=False, compare=False)
+
+    @cached_property
+    def determined(self) -> bool | None:
+        return self._determine()
+
+
+def face_of(ws: Workspace, key: FaceKey) -> Face:
+    """The face of the active set ``key`` (built on first use, then kept)."""
+    face = ws.faces.get(key)
+    if face is None:
+        surface, linear = key
+        stack = ws.stack
+        sub = stack.take(surface)
+        lin = stack.take(linear)
+        k = lin.k
+        n_l, n_f = int(np.sum(k)) + len(k), int(np.sum(k))
+        rhs = np.zeros(n_l)
+        first = (lin.start + np.arange(len(k))).astype(np.intp)  # each cone's A rows, then B
+        lam_rows = first + k
+        f_rows = lin.rows_of(np.arange(len(k))) + np.repeat(np.arange(len(k)), k)
+        order = np.empty(n_l, dtype=np.intp)  # row of L -> row of (A; B)
+        order[f_rows] = np.arange(n_f)
+        order[lam_rows] = n_f + np.arange(len(k))
+        L = linalg.vstack([lin.A, lin.B], ws.m)[order]
+        rhs[lam_rows] = lin.r
+        tilting = bool(np.any(sub.has_offset & (sub.k > 0)))
+
+        def determined(L: Matrix = L, sub: BallStack = sub) -> bool | None:
+            if tilting:
+                return None
+            return pins_position(ws, linalg.vstack([L, sub.A], ws.m))
+
+        face = Face(
+            key,
+            sub,
+            L,
+            rhs,
+            lam_rows,
+            f_rows,
+            linalg.vstack([ws.Eq, L], ws.m),
+            np.concatenate([np.zeros(ws.Eq.shape[0]), rhs]),
+            stack.rows_of(surface),
+            stack.rows_of(linear),
+            determined,
+        )
+        ws.faces[key] = face
+    return face
+
+
+def pins_position(ws: Workspace, rows: Matrix) -> bool:
+    """Whether ``rows`` with the workspace's equalities leave no motion free."""
+    all_rows = linalg.vstack([ws.Eq, rows], ws.m)
+    return linalg.full_column_rank(all_rows, ws.m)
+
+
+def is_determined(ws: Workspace, face: Face, x: FloatArray) -> bool:
+    """Whether the optimum on ``face`` is unique. On a tilting face
+    (``|A_i x| + B_i x = r_i`` with ``B_i != 0``) two optima may trade
+    tilt for shift along ``(A_i d, B_i d) ~ (u_i, -1)``, so only the rows
+    of ``(A_i; B_i)`` across that direction count; they depend on x."""
+    if face.determined is not None:
+        return face.determined
+    sub = face.stack
+    v, rho = sub.norms(x)
+    rows = [face.L]
+    for i in range(len(sub.k)):
+        if not sub.has_offset[i]:
+            rows.append(sub.cone_rows(i))
+            continue
+        if rho[i] == 0.0:
+            return False
+        w = np.append(v[sub.start[i] : sub.start[i] + sub.k[i]] / rho[i], -1.0) / np.sqrt(2)
+        M = linalg.dense(sub.face_rows(i))
+        rows.append(M - np.outer(w, w @ M))
+    return pins_position(ws, linalg.vstack(rows, ws.m))
+
+
+def active_set(
+    ws: Workspace,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    stack: BallStack,
+    lam_scale: float | None = None,
+) -> FaceKey:
+    """Contacts whose multiplier outweighs their slack (both relative),
+    split into those on their cone's surface and those at its apex (or
+    with no rows): see ``Face``. Multipliers are relative to the largest,
+    or to ``lam_scale`` if that is larger (when rigid joints carry the
+    loads, the contacts' multipliers are round-off)."""
+    if len(lam) == 0:
+        return (), ()
+    st = ws.settings
+    floor = st.noise_force if lam_scale is None else lam_scale
+    lam_max = max(float(np.max(lam)), floor, TINY)
+    _, rho, level = stack.levels(x)
+    r = np.where(stack.r > 0, stack.r, ws.max_radius)
+    slack = (stack.r - level) / r
+    held = np.flatnonzero(lam / lam_max > np.maximum(slack, st.feasibility_tolerance))
+    f_norm = np.sqrt(stack.segment_sum(f * f))
+    apex = (stack.k == 0) | (
+        (rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * np.maximum(lam, 0.0))
+    )
+    surface = tuple(int(i) for i in held if not apex[i])
+    linear = tuple(int(i) for i in held if apex[i])
+    return surface, linear

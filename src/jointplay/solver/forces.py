@@ -1,0 +1,504 @@
+"""The split of the loads between redundant contacts: one rule, whatever the route.
+
+When touching contacts are redundant (a carriage on four corners of its
+guide, a weld in a closed loop), the optimal positions fix only some sums of
+their forces. Any split that balances the loads is an optimum, and the one a
+solver stops at depends on its path and on the order of the file's entries.
+We report one split, the same whatever the order: among the contact forces
+that balance the loads at the answer's positions (only touching contacts
+push, each along its contact's direction, inside its cone), the one of least
+
+    sum over contacts of |F_c|^2 + |M_c / ell|^2
+
+where ``(F_c, M_c)`` is the contact's wrench at its joint centre (N, N*mm)
+and ``ell`` the mechanism's length (``Assembly.ell``, which weighs rotations
+in the least-norm metric of positions too). Rigid joints take part with the
+wrench of their multipliers; a compliant contact's force is fixed by its
+penetration and stays as it is.
+
+The least-squares split comes from one linear (KKT) solve. Only when it
+would make a contact pull, or push outside its cone, the same objective is
+minimized as a small cone program with those limits.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import clarabel
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from jointplay.assembly import Assembly, BallStack, IntArray
+from jointplay.geometry import FloatArray
+from jointplay.numerics import linalg
+from jointplay.settings import TINY
+from jointplay.solver import conic
+
+if TYPE_CHECKING:
+    from jointplay.settings import SolverSettings
+
+
+@dataclass(frozen=True)
+class Split:
+    """Multipliers (scaled) of one answer: per cone ``lam``, force vectors
+    ``f`` (stacked like ``BallStack.A``), and the rigid rows' ``nu``."""
+
+    lam: FloatArray
+    f: FloatArray
+    nu: FloatArray
+
+
+def least_squares_split(
+    asm: Assembly,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    nu: FloatArray,
+    g_hat: FloatArray,
+    apex_level: float,
+    settings: SolverSettings,
+) -> Split | None:
+    """The least-squares split (module docstring) at positions ``x`` under
+    unit loads ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split;
+    its compliant contacts keep theirs. ``apex_level``: a cone with
+    ``|A_i x|`` at or below it rests at its apex, its force vector free
+    inside the cone (the position's round-off). None when no split with
+    these contacts is found, or when only one balances the loads (the
+    caller keeps its own). ``settings``: the
+    equilibrium tolerance (how far a force may fall below 0 or outside its
+    cone by round-off), the rank cutoff, the KKT regularization and the
+    interior-point tolerance."""
+    stack = asm.stack
+    surface, apex, u = _classes(stack, x, stack.r, apex_level, settings)
+    keep_lam, keep_f = _compliant(stack, lam, f)
+    b = g_hat - stack.adjoint(keep_f, keep_lam)
+    Z, owner = _unknowns(stack, surface, apex, u, asm.E.shape[0], asm.sparse)
+    if Z.shape[1] == 0:
+        return None
+    G = _work(asm, Z)
+    if not asm.sparse and _determined_rows(G[None], settings.free_motion_rcond)[0]:
+        return None  # one split balances the loads: the solver's own
+    P = _wrenches(asm, Z)
+    centred = apex & ~stack.has_offset
+
+    def split_of(y: FloatArray, cols: IntArray | slice = slice(None)) -> Split:
+        return _split_of(stack, Z[:, cols] @ y, keep_lam, keep_f, centred)
+
+    given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
+    given = given / np.asarray((Z.multiply(Z) if asm.sparse else Z * Z).sum(axis=0)).ravel()
+    y = _least_squares(P, G, b, given, settings)
+    if y is not None:
+        split = split_of(y)
+        if _inside(split.lam, split.f, stack, settings.equilibrium_tolerance):
+            return split
+    faces = apex & stack.has_offset
+    y = _cone_program(P, G, given, int(np.sum(surface)), stack.k[faces], settings)
+    if y is None:
+        return None
+    split = split_of(y)
+    # the cone program's answer is good to its tolerance; the limits that
+    # bind it held as equalities, the split is exact
+    if not asm.sparse:
+        rows = least_squares_rows(
+            asm,
+            x[None],
+            lam[None],
+            f[None],
+            g_hat[None],
+            stack.r[None],
+            (split.lam[None], split.f[None]),
+            apex_level,
+            settings,
+        )
+        if rows[0][0]:
+            return Split(rows[1][0], rows[2][0], rows[3][0])
+        return split
+    pushing = split.lam > settings.positive_force * float(np.max(np.abs(split.lam)))
+    cols = np.flatnonzero((owner < 0) | pushing[np.maximum(owner, 0)])
+    y = _least_squares(P[:, cols], G[:, cols], b, y[cols], settings)
+    if y is not None:
+        exact = split_of(y, cols)
+        if _inside(exact.lam, exact.f, stack, settings.equilibrium_tolerance):
+            return exact
+    return split
+
+
+def least_squares_rows(
+    asm: Assembly,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    g_hat: FloatArray,
+    radii: FloatArray,
+    near: tuple[FloatArray, FloatArray],
+    apex_level: float,
+    settings: SolverSettings,
+) -> tuple[NDArray[np.bool_], FloatArray, FloatArray, FloatArray]:
+    """``least_squares_split`` of B answers at once (rows of ``x``, ``lam``,
+    ``f``, ``g_hat``, each with its own cone ``radii``; dense models), on
+    the cone limits that bind a split ``near`` it.
+
+    ``near = (lam, f)``: rows of a split close to each row's, such as the
+    cone program's answer or a neighbouring sample's split. Its touching
+    contacts with no force are left unloaded (the least-squares split of all
+    would pull on them), and its faces whose force reaches their rim
+    (``|f_i| = lam_i``: the centre of pressure on the rim) keep it there.
+    The split is the least-squares one with those limits held as
+    equalities, by Newton from ``near`` (``_split_newton``). It is the
+    rule's only if no other limit is broken and none of these could be let
+    go with profit (their multipliers are >= 0).
+
+    Returns the mask of the rows whose split is the rule's, and every row's
+    ``(lam, f, nu)`` (the rule's where the mask holds)."""
+    stack = asm.stack
+    B, n_e = x.shape[0], asm.E.shape[0]
+    surface, apex, u = _classes(stack, x, radii, apex_level, settings)
+    keep_lam, keep_f = _compliant(stack, lam, f)
+    b = g_hat - stack.adjoint(keep_f, keep_lam)
+    ok = np.zeros(B, dtype=bool)
+    lam, f, nu = lam.copy(), f.copy(), np.zeros((B, n_e))
+    faces = apex & stack.has_offset & (stack.k > 0)
+    lam_n, f_n = near
+    top = np.max(np.abs(lam_n), axis=1, keepdims=True, initial=0.0)
+    pushing = lam_n > settings.noise_force * top  # below: the cone program's round-off
+    on_rim = np.sqrt(stack.segment_sum(f_n * f_n)) >= (1.0 - settings.apex) * lam_n
+    # only one-sign unknowns are held at 0: a surface force, a one-sided
+    # limit's (a ball at its centre has a vector of either sign)
+    unloaded = ~pushing & (surface | (apex & (stack.k == 0)))
+    rim = pushing & on_rim & faces
+    start = np.concatenate([f_n - keep_f, lam_n - keep_lam, np.zeros((B, n_e))], axis=1)
+    # rows whose contacts touch alike share the shape of their unknowns
+    first_kind, kind = linalg.distinct_rows(np.hstack([surface, apex, unloaded, rim]))
+    for rows in (np.flatnonzero(kind == g) for g in range(len(first_kind))):
+        s, a, d, e = surface[rows[0]], apex[rows[0]], unloaded[rows[0]], rim[rows[0]]
+        # rows that pose the same problem (a study whose plays vary and whose
+        # loads do not, on contacts whose directions do not move) are solved once
+        first, same = linalg.distinct_rows(np.hstack([b[rows], u[rows], start[rows]]))
+        Z, owner = _unknowns(stack, s, a, u[rows[first]], n_e, False)
+        if Z.shape[-1] == 0:
+            continue
+        G = _work(asm, Z)
+        # a split that one balance determines is the row's own (as in
+        # ``least_squares_split``): its touching contacts are not redundant
+        determinate = _determined_rows(G, settings.free_motion_rcond)[same]
+        ok[rows[determinate]] = True
+        if np.all(determinate):
+            continue
+        P = _wrenches(asm, Z)
+        cone = np.maximum(owner, 0)
+        keep = np.flatnonzero((owner < 0) | ~d[cone])
+        # a face's columns: its lam first, then its force vector
+        rims = [np.flatnonzero(owner == i) for i in np.flatnonzero(e)]
+        y0 = np.einsum("brj,br->bj", Z, start[rows[first]]) / np.sum(Z * Z, axis=1)
+        y, optimal = _split_newton(P, G, b[rows[first]], keep, rims, settings, y0)
+        z = (Z @ y[:, :, None])[same, :, 0]
+        out = _split_of(stack, z, keep_lam[rows], keep_f[rows], a & ~stack.has_offset)
+        split = rows[~determinate]
+        lam[split], f[split], nu[split] = (v[~determinate] for v in (out.lam, out.f, out.nu))
+        inside = _inside(out.lam, out.f, stack, settings.equilibrium_tolerance)
+        ok[split] = (optimal[same] & inside)[~determinate]
+    return ok, lam, f, nu
+
+
+def _split_newton(
+    P: FloatArray,
+    G: FloatArray,
+    b: FloatArray,
+    keep: IntArray,
+    rims: list[IntArray],
+    settings: SolverSettings,
+    y0: FloatArray | None = None,
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The ``y`` (rows) of least ``|P y|^2 / 2`` with ``G y = b``, the
+    unknowns outside ``keep`` at 0 and each face of ``rims`` (its columns:
+    ``lam_i``, then ``f_i``) with ``|f_i| = lam_i``: Newton on the KKT
+    equations from ``y0`` (needed with rims: their force's direction; else
+    the first step is the least-squares split, the problem being linear).
+    Also the mask of the rows where that is the optimum of the cone
+    program: the equations hold (``newton_accept``), each rim's multiplier
+    is >= 0 and so is the gradient on each unknown held at 0 (to
+    ``equilibrium_tolerance``)."""
+    B, m, n_y = G.shape
+    Pk, Gk = P[:, :, keep], G[:, :, keep]
+    Q = Pk.transpose(0, 2, 1) @ Pk
+    where = {int(c): j for j, c in enumerate(keep)}
+    rims = [np.array([where[int(c)] for c in cols]) for cols in rims]
+    nk, nr = len(keep), len(rims)
+    n = nk + m + nr
+    z = np.zeros((B, n))  # y on keep, mu, eta
+    if y0 is not None:
+        z[:, :nk] = y0[:, keep]
+    ok = np.zeros(B, dtype=bool)
+    scale = np.maximum(np.max(np.abs(b), axis=1, initial=0.0), TINY)
+    # G's rows depend on each other where no contact works (a free spin):
+    # a regularization of mu that small leaves every step exact to round-off
+    # on a consistent system (the steps refine it), and LU never meets a
+    # singular matrix
+    K0 = np.zeros((B, n, n))
+    K0[:, :nk, :nk] = Q
+    K0[:, :nk, nk : nk + m] = Gk.transpose(0, 2, 1)
+    K0[:, nk : nk + m, :nk] = Gk
+    size = np.max(np.abs(K0), axis=(1, 2), initial=1.0)
+    K0[:, nk + np.arange(m), nk + np.arange(m)] = -settings.kkt_round_off * size[:, None]
+    polished = False
+    for step in range(settings.batch_newton_steps + 1):
+        yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
+        K = K0.copy()
+        grad = (Q @ yk[:, :, None])[:, :, 0] + np.einsum("bmy,bm->by", Gk, mu)
+        c = np.zeros((B, nr))
+        for j, cols in enumerate(rims):
+            at, fc = cols[0], cols[1:]
+            size = np.maximum(np.linalg.norm(yk[:, fc], axis=1), TINY)
+            w = yk[:, fc] / size[:, None]
+            c[:, j] = size - yk[:, at]
+            row = np.zeros((B, nk))
+            row[:, fc], row[:, at] = w, -1.0
+            grad += eta[:, j : j + 1] * row
+            curve = (np.eye(len(fc))[None] - w[:, :, None] * w[:, None, :]) / size[:, None, None]
+            K[:, fc[:, None], fc[None, :]] += eta[:, j, None, None] * curve
+            K[:, nk + m + j, :nk] = row
+            K[:, :nk, nk + m + j] = row
+        F = np.concatenate([grad, (Gk @ yk[:, :, None])[:, :, 0] - b, c], axis=1)
+        ok = np.max(np.abs(F), axis=1) <= settings.newton_accept * scale
+        if np.all(ok):
+            if polished:
+                break
+            polished = True  # one more step: from there quadratic to round-off
+        if step == settings.batch_newton_steps:
+            break  # ``ok`` is that of the last step's answer
+        z += linalg.solve_stack(K, -F, settings.kkt_plain, settings.lstsq_rcond)
+    yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
+    y = np.zeros((B, n_y))
+    y[:, keep] = yk
+    # multipliers of the limits: each rim's, and the gradient on each unknown at 0
+    size = settings.equilibrium_tolerance * np.maximum(
+        np.max(np.abs(Q @ yk[:, :, None]), axis=(1, 2), initial=0.0), TINY
+    )
+    held = np.setdiff1d(np.arange(n_y), keep)
+    if len(held):
+        grad = (P.transpose(0, 2, 1) @ (P @ y[:, :, None]))[:, :, 0]
+        grad += np.einsum("bmy,bm->by", G, mu)
+        ok &= np.all(grad[:, held] >= -size[:, None], axis=1)
+    ok &= np.all(eta >= -size[:, None], axis=1)
+    return y, ok
+
+
+def _classes(
+    stack: BallStack, x: FloatArray, radii: FloatArray, apex_level: float, settings: SolverSettings
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], FloatArray]:
+    """Which hard contacts touch on their cone's surface, and which rest at
+    its apex (a one-sided limit, a face flat, a ball centred: ``|A_i x|`` at
+    or below ``apex_level``); and each cone's direction of contact ``u``.
+    One answer (m,) or rows (B, m) with their ``radii``."""
+    v, rho, level = stack.levels(x)
+    touching = (stack.spring == 0) & (stack.gap_used(level, radii) >= settings.touching)
+    apex = touching & ((stack.k == 0) | (rho <= apex_level))
+    safe = np.where(rho > 0, rho, 1.0)
+    return touching & ~apex, apex, v / np.repeat(safe, stack.k, axis=-1)
+
+
+def _compliant(stack: BallStack, lam: FloatArray, f: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The forces the split keeps: the compliant contacts' (0 on the others)."""
+    hard = stack.spring == 0
+    return np.where(hard, 0.0, lam), np.where(np.repeat(hard, stack.k), 0.0, f)
+
+
+def _split_of(
+    stack: BallStack,
+    z: FloatArray,
+    keep_lam: FloatArray,
+    keep_f: FloatArray,
+    centred: NDArray[np.bool_],
+) -> Split:
+    """The multipliers ``z`` of the unknowns (``Z @ y``, one row or rows)
+    added to the kept ones, as ``(lam, f, nu)``."""
+    n, n_rows = len(stack.k), stack.A.shape[0]
+    out = Split(
+        keep_lam + z[..., n_rows : n_rows + n], keep_f + z[..., :n_rows], z[..., n_rows + n :]
+    )
+    # a ball at its centre (no play): its force is its vector's size
+    size = np.sqrt(stack.segment_sum(out.f * out.f))
+    out.lam[..., centred] = size[..., centred]
+    return out
+
+
+def _unknowns(
+    stack: BallStack,
+    surface: NDArray[np.bool_],
+    apex: NDArray[np.bool_],
+    u: FloatArray,
+    n_e: int,
+    sparse: bool,
+) -> tuple[Any, IntArray]:
+    """The map Z from the split's unknowns ``y`` to all multipliers
+    ``(f, lam, nu)``, and each unknown's cone (-1 for a rigid row). In this
+    order: a surface cone's force along ``u``; a face at its apex, its force
+    and vector (``lam_i >= |f_i|``); a ball at its centre (no face row, no
+    play), its vector (its force is ``|f_i|``, see ``_split``); a rigid row."""
+    k = stack.k
+    n_rows, n = int(np.sum(k)), len(k)
+    s_idx = np.flatnonzero(surface)
+    a_idx = np.flatnonzero(apex & stack.has_offset)
+    c_idx = np.flatnonzero(apex & ~stack.has_offset)
+    ns, ka, kc = len(s_idx), k[a_idx], k[c_idx]
+    # surface cones: one column, f_i = u_i lam_i
+    s_rows = stack.rows_of(s_idx)
+    rows = [s_rows, n_rows + s_idx]
+    cols = [np.repeat(np.arange(ns), k[s_idx]), np.arange(ns)]
+    lead = u.shape[:-1]  # rows of a batch, if any (dense only)
+    vals = [u[..., s_rows], np.ones((*lead, ns))]
+    # faces at their apex: lam_i, then f_i
+    first = (ns + np.cumsum(1 + ka) - (1 + ka)).astype(np.intp)
+    within = np.arange(int(np.sum(ka))) - np.repeat(np.cumsum(ka) - ka, ka)
+    rows += [n_rows + a_idx, stack.rows_of(a_idx)]
+    cols += [first, np.repeat(first + 1, ka) + within]
+    vals += [np.ones((*lead, len(a_idx))), np.ones((*lead, int(np.sum(ka))))]
+    # balls at their centre: f_i
+    col = ns + int(np.sum(1 + ka))
+    rows.append(stack.rows_of(c_idx))
+    cols.append(col + np.arange(int(np.sum(kc))))
+    vals.append(np.ones((*lead, int(np.sum(kc)))))
+    col += int(np.sum(kc))
+    # rigid rows
+    rows.append(n_rows + n + np.arange(n_e))
+    cols.append(col + np.arange(n_e))
+    vals.append(np.ones((*lead, n_e)))
+    col += n_e
+    owner = np.concatenate(
+        [s_idx, np.repeat(a_idx, 1 + ka), np.repeat(c_idx, kc), np.full(n_e, -1)]
+    ).astype(np.intp)
+    shape = (n_rows + n + n_e, col)
+    i_all = np.concatenate(rows).astype(np.intp)
+    j_all = np.concatenate(cols).astype(np.intp)
+    v_all = np.concatenate(vals, axis=-1)
+    if sparse:
+        Z: Any = sp.csc_matrix((v_all, (i_all, j_all)), shape=shape)
+    else:
+        Z = np.zeros((*lead, *shape))
+        Z[..., i_all, j_all] = v_all
+    return Z, owner
+
+
+def _work(asm: Assembly, Z: Any) -> Any:
+    """``G = [A^T B^T E^T] Z``: the unknowns' work."""
+    stack = asm.stack
+    if asm.sparse:
+        G_full = sp.hstack([stack.A.T, stack.B.T, sp.csr_matrix(asm.E).T], format="csr")
+        return sp.csr_matrix(G_full @ Z)
+    G_full = np.hstack([np.asarray(stack.A).T, np.asarray(stack.B).T, np.asarray(asm.E).T])
+    return G_full @ Z
+
+
+def _determined_rows(G: FloatArray, rcond: float) -> NDArray[np.bool_]:
+    """For each row of a stack (B, m, n_y): whether G's columns are
+    independent, so that a single split balances the loads."""
+    if not G.shape[2] or G.shape[2] > G.shape[1]:
+        return np.zeros(len(G), dtype=bool)
+    sv = np.linalg.svd(G, compute_uv=False)
+    return np.asarray(sv[:, -1] > rcond * sv[:, 0])
+
+
+def _wrenches(asm: Assembly, Z: Any) -> Any:
+    """``P``: the unknowns' wrenches at the joint centres (6 per contact,
+    moments over ``ell``)."""
+    stack, T = asm.stack, asm.tables
+    n_rows, n = stack.A.shape[0], len(stack.k)
+    per = np.r_[np.ones(3), np.full(3, 1.0 / asm.ell)]
+    n_ball, n_fixed = T.wrench_ball.shape[0], T.wrench_fixed.shape[0]
+    w_ball, w_fixed = np.tile(per, n_ball // 6), np.tile(per, n_fixed // 6)
+    offset = -(T.offset_ball * per).ravel()  # lam_i's wrench: its face row, against it
+    o_rows = np.arange(6 * n)
+    o_cols = np.repeat(np.arange(n), 6)
+    if asm.sparse:
+        ball = sp.hstack(
+            [
+                sp.diags(w_ball) @ T.wrench_ball,
+                sp.csr_matrix((offset, (o_rows, o_cols)), shape=(6 * n, n)),
+            ]
+        )
+        P_full = sp.block_diag([ball, sp.diags(w_fixed) @ T.wrench_fixed], format="csr")
+        return sp.csr_matrix(P_full @ Z)
+    n_e = asm.E.shape[0]
+    P_full = np.zeros((n_ball + n_fixed, n_rows + n + n_e))
+    P_full[:n_ball, :n_rows] = w_ball[:, None] * T.wrench_ball
+    P_full[o_rows, n_rows + o_cols] = offset
+    P_full[n_ball:, n_rows + n :] = w_fixed[:, None] * T.wrench_fixed
+    return P_full @ Z
+
+
+def _least_squares(
+    P: Any, G: Any, b: FloatArray, given: FloatArray, settings: SolverSettings
+) -> FloatArray | None:
+    """The ``y`` of least ``|P y|`` with ``G y = b``. Dense: from an SVD of
+    G (rows below ``rcond`` of the largest are dependent ones), to machine
+    precision. Sparse: ``given + z``, a split near the answer (``G given = b``
+    to round-off) corrected by the ``z`` of least ``|P (given + z)|`` with
+    ``G z = b - G given``: one KKT solve, singular where G's rows depend on
+    each other, regularized (``kkt_round_off``) and refined to round-off
+    (``linalg.proximal_solve``); the certificate judges the answer."""
+    n_y = G.shape[1]
+    round_off, kkt_round_off = settings.round_off, settings.kkt_round_off
+    if not linalg.is_sparse(G):
+        y, ok = _split_newton(P[None], G[None], b[None], np.arange(n_y), [], settings)
+        return y[0] if ok[0] else None
+    PtP = sp.csr_matrix(P.T @ P)
+    K = sp.bmat([[PtP, G.T], [G, None]], format="csc")
+    rhs = np.r_[-(PtP @ given), b - G @ given]
+    size = float(np.max(np.abs(rhs), initial=0.0))
+    eps = kkt_round_off * float(abs(K).max())
+    step = linalg.proximal_solve(K, rhs, n_y, eps, round_off * size, settings.newton_stall)
+    return None if step is None else np.asarray(given + step[:n_y])
+
+
+def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:
+    """Whether every contact pushes (``lam >= 0``) with its force vector
+    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force:
+    one bool, or a mask over rows."""
+    if not lam.shape[-1]:
+        return np.ones(lam.shape[:-1], dtype=bool) if lam.ndim > 1 else True
+    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), TINY)
+    f_norm = np.sqrt(stack.segment_sum(f * f))
+    inside = np.all(lam >= -size, axis=-1) & np.all(f_norm <= lam + size, axis=-1)
+    return inside if lam.ndim > 1 else bool(inside)
+
+
+def _cone_program(
+    P: Any, G: Any, given: FloatArray, n_s: int, k_faces: IntArray, settings: SolverSettings
+) -> FloatArray | None:
+    """The ``y`` of least ``|P y|`` among ``y = given + z`` with ``G z = 0``
+    (the same work as the solver's own split ``given``), surface forces
+    non-negative and each face's ``(lam_i, f_i)`` in its cone: one Clarabel
+    call. Written on ``z``, the equalities are consistent even where G's
+    rows depend on each other."""
+    m, n_y = G.shape
+    n_cone = n_s + int(np.sum(k_faces + 1))
+    cone_part = sp.eye(n_cone, n_y, format="csr")
+    A = sp.vstack([sp.csr_matrix(G), -cone_part], format="csc")
+    cones: list[Any] = [clarabel.ZeroConeT(m)] if m else []
+    if n_s:
+        cones.append(clarabel.NonnegativeConeT(n_s))
+    cones += [
+        clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
+        for k in k_faces
+    ]
+    options = clarabel.DefaultSettings()
+    options.verbose = False
+    options.tol_gap_abs = options.tol_gap_rel = options.tol_feas = settings.ipm_tolerance
+    options.max_iter = settings.max_iterations
+    refine = settings.ipm_refinement
+    options.iterative_refinement_reltol = options.iterative_refinement_abstol = refine
+    Q = sp.csc_matrix(P.T @ P)
+    sol = clarabel.DefaultSolver(
+        sp.triu(Q, format="csc"),
+        Q @ given,
+        A,
+        np.r_[np.zeros(m), given[:n_cone]],
+        cones,
+        options,
+    ).solve()
+    if not conic.has_answer(sol):
+        return None
+    return np.asarray(given + np.asarray(sol.x))

@@ -1,0 +1,173 @@
+"""Motions the joints do not hold, in the user's words.
+
+A load that works on a free motion has no equilibrium (exit 3): these name
+the body and the motion. ``weak_hint`` words the motion held most weakly,
+for a solve that fails on a nearly free mechanism.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.sparse as sp
+
+from jointplay.assembly import Assembly
+from jointplay.errors import UnboundedMechanismError
+from jointplay.geometry import FloatArray, describe_motion
+from jointplay.numerics import linalg
+from jointplay.numerics.linalg import Matrix
+from jointplay.settings import DEFAULT, TINY
+
+if TYPE_CHECKING:
+    from jointplay.solver.workspace import Workspace
+
+
+def limit_rows(ws: Workspace) -> Matrix:
+    """Every row that limits a motion: the contacts' rows, the offsets of the
+    faces that tilt, the rigid rows. What they leave free is ``ws.N``."""
+    stack = ws.stack
+    return linalg.vstack([stack.A, stack.B[np.flatnonzero(stack.has_offset)], ws.E], ws.m)
+
+
+def check_driven(ws: Workspace, g: FloatArray) -> None:
+    if ws.N.shape[1] == 0:
+        return
+    drive = ws.N.T @ g
+    if np.linalg.norm(drive) <= ws.settings.drive_tolerance * np.linalg.norm(g):
+        return
+    raise unbounded(ws.asm, ws.N @ drive)
+
+
+def driven_motion(ws: Workspace, g: FloatArray, fallback: FloatArray) -> FloatArray:
+    """A motion that the joints let go on for ever and the loads ``g``
+    drive (a body lifting off its point contacts, say), in the simplest
+    words found: a translation or a rotation of one body, or of all the
+    moving bodies together, along a global axis; else the solver's own
+    certificate of unboundedness (``fallback``)."""
+    m, n = ws.m, len(ws.asm.body_names)
+    stack = ws.stack
+    # each body alone (a translation, or a turn about its reference): unit
+    # vectors, whose levels are the columns' norms per cone plus B
+    S = stack.segment_matrix  # (rows, cones)
+    if ws.sparse:
+        rho = sp.csr_matrix(S.T @ stack.A.multiply(stack.A)).sqrt()  # (cones, m)
+    else:
+        rho = np.sqrt(S.T @ stack.A**2)
+    e_cols = column_max(abs(ws.E), m)
+    tol = ws.settings.feasibility_tolerance  # a unit motion that moves nothing
+    best, best_work = fallback[:m], 0.0
+    for sign in (1.0, -1.0):
+        held = column_max(rho + sign * stack.B, m) > tol
+        works = sign * g
+        free = ~held & (e_cols <= tol) & (works > best_work)
+        if np.any(free):
+            j = int(np.flatnonzero(free)[np.argmax(works[free])])
+            best, best_work = sign * np.eye(1, m, j)[0], float(works[j])
+    if n > 1:  # all together: a translation (a common turn has no obvious centre)
+        for d in [*(np.tile(np.eye(6)[a], n) / np.sqrt(n) for a in range(3))]:
+            for sd in (d, -d):
+                work = float(g @ sd)
+                if work <= best_work:
+                    continue
+                _, _, level = stack.levels(sd)
+                if len(level) and float(np.max(level)) > tol:
+                    continue
+                if ws.E.shape[0] and float(np.max(np.abs(ws.E @ sd))) > tol:
+                    continue
+                best, best_work = sd, work
+    return best
+
+
+def check_turns(ws: Workspace, x: FloatArray) -> None:
+    """A body that the loads turn by more than ``free_turn_rad`` is not
+    held in any sense a small-displacement answer can describe."""
+    asm = ws.asm
+    if not ws.m:
+        return
+    turns = np.linalg.norm(x.reshape(-1, 6)[:, 3:], axis=1) * asm.turn
+    worst = int(np.argmax(turns))
+    if turns[worst] > ws.settings.free_turn_rad:
+        raise unbounded(asm, x, one_way=True, turn=float(turns[worst]))
+
+
+def weak_hint(ws: Workspace) -> str:
+    """Words on the motion the joints hold most weakly, for a solve that
+    fails: a nearly free mechanism is the usual cause."""
+    C = limit_rows(ws)
+    if ws.sparse or not C.shape[0]:
+        return "Check for nearly coincident joints or a contact almost on an axis."
+    C = C - (C @ ws.N) @ ws.N.T  # leave out the free motions
+    _, sv, Vt = np.linalg.svd(C)
+    keep = sv > ws.settings.free_motion_rcond * sv[0]
+    weakest = int(np.flatnonzero(keep)[-1])
+    ratio = sv[0] / sv[weakest]
+    d = Vt[weakest]
+    body = int(np.argmax([np.linalg.norm(d[6 * i : 6 * i + 6]) for i in range(ws.m // 6)]))
+    omega, v_origin = ws.asm.body_motion(d, body)
+    motion = describe_motion(omega, v_origin, ws.asm.ell)
+    return (
+        f"The motion the joints hold most weakly is body '{ws.asm.body_names[body]}': "
+        f"{motion}, held {ratio:.1e} times less firmly than the best-held one. Nearly "
+        "coincident joints or a contact almost on an axis make a mechanism nearly "
+        "free: move them apart, or make that motion free (remove the joint) and "
+        "balance the loads on it."
+    )
+
+
+def column_max(a: Matrix, m: int) -> FloatArray:
+    """Each column's largest entry (0 for no rows)."""
+    if not a.shape[0]:
+        return np.zeros(m)
+    if linalg.is_sparse(a):
+        return np.asarray(a.max(axis=0).toarray()).ravel()
+    return np.asarray(np.max(a, axis=0))
+
+
+def unbounded(
+    asm: Assembly, direction: FloatArray, one_way: bool = False, turn: float | None = None
+) -> UnboundedMechanismError:
+    """Describe a driven free motion (scaled unknowns) in words (``one_way``:
+    a motion the joints stop in one sense only, such as lifting off; ``turn``:
+    the motion is held, but only after this many radians)."""
+    moves = []
+    for i, name in enumerate(asm.body_names):
+        omega, v_origin = asm.body_motion(direction, i)
+        size = float(np.linalg.norm(asm.s * direction[6 * i : 6 * i + 3])) + asm.ell * float(
+            np.linalg.norm(omega)
+        )
+        moves.append((size, name, omega, v_origin))
+    moves.sort(key=lambda t: -t[0])
+    biggest = moves[0][0]
+    moving = [mv for mv in moves if mv[0] > DEFAULT.mover_share * biggest]
+    _, body, omega, v_origin = moving[0]
+    motion = describe_motion(omega, v_origin, asm.ell, signed=one_way)
+    others = [mv[1] for mv in moving[1:]]
+    with_others = f" (together with {', '.join(repr(o) for o in others)})" if others else ""
+    message = (
+        f"body '{body}': {motion} is not held by any joint, and the loads drive it{with_others}. "
+        "There is no equilibrium: add a joint or a clearance limit that holds this motion, "
+        "or balance the loads on it."
+    )
+    if turn is not None:
+        message = (
+            f"body '{body}': {motion} is held only weakly{with_others}: the loads drive it "
+            f"until the body has turned by {turn:.3g} rad, far beyond the small "
+            "displacements that this model describes. Nearly coincident joints, or a "
+            "contact or an axis almost along this motion, leave it practically free: "
+            "move them apart, add a joint that holds it, or balance the loads on it."
+        )
+    scale = 1.0 / max(biggest, TINY)
+    direction_map = {
+        mv[1]: (
+            tuple(float(c) for c in mv[2] * scale),
+            tuple(float(c) for c in mv[3] * scale),
+        )
+        for mv in moving
+    }
+    return UnboundedMechanismError(
+        message,
+        body=body,
+        motion=motion,
+        direction=direction_map,  # type: ignore[arg-type]
+    )

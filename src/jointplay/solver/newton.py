@@ -1,0 +1,277 @@
+"""Newton's method on the KKT equations of an active set.
+
+``newton`` is the one algorithm: stationarity, the active cones on their
+surface and the equalities, solved to round-off from a nearby point (an
+interior-point answer, the previous solve's optimum or a batch neighbour).
+``kkt_point`` and ``newton_on`` put it on a face and judge what it returns.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.sparse as sp
+
+from jointplay.assembly import BallStack, IntArray
+from jointplay.geometry import FloatArray
+from jointplay.numerics import linalg
+from jointplay.numerics.linalg import Matrix
+from jointplay.settings import DEFAULT, SolverSettings
+from jointplay.solver import certificate, faces
+
+if TYPE_CHECKING:
+    from jointplay.solver.workspace import Workspace
+
+
+def newton_on(
+    ws: Workspace,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    key: faces.FaceKey,
+    x0: FloatArray,
+    lam0: FloatArray,
+    iterations: int,
+    method: str,
+    max_iter: int,
+) -> faces.Point | None:
+    """Solve the KKT equations of the active set ``key`` and accept only a
+    certified, unique optimum: feasible, forces balancing the loads, every
+    active force strictly positive (strictly inside its cone for a face at
+    its apex), on a face that pins the position down."""
+    point = kkt_point(ws, g_hat, sigma, key, x0, lam0, iterations, method, max_iter)
+    if point is None or weak_forces(ws, point, key).size:
+        return None
+    point.certificate = certificate.certify(ws, g_hat, sigma, point)
+    return point if point.certificate.certified else None
+
+
+def weak_forces(ws: Workspace, point: faces.Point, key: faces.FaceKey) -> IntArray:
+    """The cones of ``key`` whose force is not strictly positive (or, at
+    the apex of a face, not strictly inside its cone)."""
+    surface, linear = key
+    both = np.array([*surface, *linear], dtype=np.intp)
+    lam_a = point.lam[both]
+    if not len(lam_a):
+        return both
+    strict = ws.settings.positive_force
+    weak = lam_a <= strict * float(np.max(lam_a))
+    if linear:
+        lin = ws.stack.take(linear)
+        f_norm = np.sqrt(lin.segment_sum(point.f[ws.stack.rows_of(linear)] ** 2))
+        at_apex = lin.k > 0
+        weak[len(surface) :] |= at_apex & (f_norm >= (1.0 - strict) * point.lam[list(linear)])
+    return both[weak]
+
+
+def kkt_point(
+    ws: Workspace,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    key: faces.FaceKey,
+    x0: FloatArray,
+    lam0: FloatArray,
+    iterations: int,
+    method: str,
+    max_iter: int,
+    pinned: bool = True,
+) -> faces.Point | None:
+    """The solution of the KKT equations of the active set ``key``, if
+    Newton converges and (``pinned``) the face pins the position down
+    (forces unchecked). Unpinned, Newton's least-squares steps stop at an
+    optimum near ``x0`` on the tied face."""
+    face = faces.face_of(ws, key)
+    if pinned and not faces.is_determined(ws, face, x0):
+        return None
+    surface, linear = key
+    ne = ws.Eq.shape[0]
+    eq_soft = None
+    if linear and np.any(sigma[list(linear)]):
+        eq_soft = np.zeros(face.Eq.shape[0])
+        eq_soft[ne + face.lam_rows] = sigma[list(linear)]
+    out = newton(
+        None,
+        -g_hat,
+        face.Eq,
+        face.e,
+        face.stack,
+        x0,
+        lam0[list(surface)],
+        max_iter,
+        sigma[list(surface)],
+        eq_soft,
+        settings=ws.settings,
+        prox=0.0 if pinned else ws.settings.tie_prox,
+        accept=ws.settings.newton_accept if pinned else ws.settings.equilibrium_tolerance,
+    )
+    if out is None:
+        return None
+    x, lam_s, nu, its = out
+    if pinned and not faces.is_determined(ws, face, x):
+        return None
+    return assemble_point(ws, x, face, lam_s, nu[ne:], method, iterations + its)
+
+
+def assemble_point(
+    ws: Workspace,
+    x: FloatArray,
+    face: faces.Face,
+    lam_surface: FloatArray,
+    nu_linear: FloatArray,
+    method: str,
+    iterations: int,
+) -> faces.Point:
+    """The full multipliers from a face's: ``lam`` and ``f`` of every cone."""
+    surface, linear = face.key
+    lam = np.zeros(len(ws.balls))
+    f = np.zeros(ws.stack.A.shape[0])
+    lam[list(surface)] = lam_surface
+    v, rho = face.stack.norms(x)
+    f[face.surface_rows] = face.stack.surface_forces(v, rho, lam_surface)
+    lam[list(linear)] = nu_linear[face.lam_rows]
+    f[face.linear_rows] = nu_linear[face.f_rows]
+    return faces.Point(x, lam, f, method, iterations, active=face.key)
+
+
+def newton(
+    P: Matrix | None,
+    q: FloatArray,
+    Eq: Matrix,
+    e: FloatArray,
+    stack: BallStack,
+    x0: FloatArray,
+    lam0: FloatArray,
+    max_iter: int = 30,
+    soft: FloatArray | None = None,
+    eq_soft: FloatArray | None = None,
+    settings: SolverSettings = DEFAULT,
+    prox: float = 0.0,
+    accept: float = DEFAULT.newton_accept,
+) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
+    """Newton's method on the KKT equations of an active set.
+
+    Stationarity ``P x + q + sum lam_i (A_i^T u_i + B_i) + Eq^T nu = 0``,
+    active contacts on their surface ``|A_i x| + B_i x = r_i + soft_i lam_i``
+    (``soft``: compliance, default 0), equalities ``Eq x = e + eq_soft nu``.
+    A singular system (statically indeterminate contact forces) takes
+    least-squares steps. ``prox`` > 0: the steps are proximal ones
+    (``linalg.solve_kkt``): on a tied face, whose directions make the system
+    singular only up to round-off, they stay short and end at the optimum
+    nearest ``x0``, with the forces nearest ``lam0``. Returns None when its
+    equations do not hold to ``accept`` (relative: stationarity to the size
+    of the forces that balance, the other rows to the size of x).
+    """
+    m, na, ne = len(x0), len(stack.k), Eq.shape[0]
+    A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
+    sparse = linalg.is_sparse(A) or linalg.is_sparse(Eq)
+    x, lam = x0.copy(), lam0.astype(float).copy()
+    soft_na = np.zeros(na) if soft is None else soft
+    soft_eq = np.zeros(ne) if eq_soft is None else eq_soft
+    nu = np.zeros(ne)
+    n = m + na + ne
+    if not sparse:
+        K = np.zeros((n, n))
+        K[m + np.arange(na), m + np.arange(na)] = -soft_na
+        K[m + na + np.arange(ne), m + na + np.arange(ne)] = -soft_eq
+        K[:m, m + na :] = Eq.T
+        K[m + na :, :m] = Eq
+    S = stack.segment_matrix if sparse else None
+    best: tuple[float, FloatArray, FloatArray, FloatArray, int] | None = None
+    history: list[float] = []
+    for it in range(max_iter + 1):
+        grad = q + linalg.adjoint(Eq, nu)
+        if P is not None:
+            grad = grad + P @ x
+        if na:
+            v = linalg.times(A, x)
+            rho = np.sqrt(np.add.reduceat(v * v, start))
+            if float(np.min(rho)) == 0.0:
+                return None
+            u = v / np.repeat(rho, k)
+            if S is None:
+                J = np.add.reduceat(A * u[:, None], start, axis=0) + Bo
+            else:
+                J = sp.csr_matrix(S.T @ sp.diags(u) @ A + Bo)
+            grad = grad + linalg.adjoint(J, lam)
+            F = np.concatenate(
+                [grad, rho + linalg.times(Bo, x) - r - soft_na * lam, Eq @ x - e - soft_eq * nu]
+            )
+        else:
+            F = np.concatenate([grad, Eq @ x - e - soft_eq * nu])
+        # relative errors: stationarity to the forces that balance (round-off
+        # grows with them: long chains carry large ones), the contact and
+        # equality rows to the size of the position
+        force_scale = term_scale(q, lam, nu)
+        if P is not None:
+            force_scale = max(force_scale, float(np.max(np.abs(P @ x), initial=0.0)))
+        length_scale = max(1.0, float(np.max(np.abs(x), initial=0.0)))
+        err = max(
+            float(np.max(np.abs(F[:m]), initial=0.0)) / force_scale,
+            float(np.max(np.abs(F[m:]), initial=0.0)) / length_scale,
+        )
+        if best is None or err < best[0]:
+            best = (err, x, lam, nu, it)
+        history.append(err)
+        stalled = it >= 3 and err > settings.newton_stall * min(history[-4:-1])
+        if err <= settings.round_off or it == max_iter or stalled:
+            break
+        if na:
+            c = lam / rho
+            Ju = J - Bo
+        if not sparse:
+            H = np.zeros((m, m)) if P is None else np.array(P, dtype=float)
+            if na:
+                H += (A.T * np.repeat(c, k)) @ A - (Ju.T * c) @ Ju
+                K[:m, m : m + na] = J.T
+                K[m : m + na, :m] = J
+            K[:m, :m] = H
+            Kmat: Matrix = K
+        else:
+            H = sp.csr_matrix((m, m)) if P is None else sp.csr_matrix(P)
+            if na:
+                H = H + A.T @ sp.diags(np.repeat(c, k)) @ A - Ju.T @ sp.diags(c) @ Ju
+                Jm = J
+            else:
+                Jm = sp.csr_matrix((0, m))
+            Kmat = sp.bmat(
+                [
+                    [H, Jm.T, sp.csr_matrix(Eq).T],
+                    [Jm, sp.diags(-soft_na) if na else None, None],
+                    [sp.csr_matrix(Eq), None, sp.diags(-soft_eq) if ne else None],
+                ],
+                format="csc",
+            )
+        try:
+            # proximal steps where a tie may be (dense: small systems, whose
+            # refinement is cheap); a large system's only when its plain step
+            # is absurd (they converge slowly on a long chain's weak modes)
+            step = linalg.solve_kkt(Kmat, -F, m, 0.0 if sparse else prox)
+            if (
+                prox
+                and sparse
+                and (
+                    float(np.max(np.abs(step[:m]))) > settings.far * length_scale
+                    or float(np.max(np.abs(step[m:]), initial=0.0)) > settings.far * force_scale
+                )
+            ):  # round-off's step along a tie or an indeterminate force
+                step = linalg.solve_kkt(Kmat, -F, m, prox)
+        except linalg.SingularSystemError:
+            break
+        x = x + step[:m]
+        lam = lam + step[m : m + na]
+        nu = nu + step[m + na :]
+    assert best is not None
+    err, x, lam, nu, its = best
+    if err > accept:  # the certificate has the last word
+        return None
+    return x, lam, nu, its
+
+
+def term_scale(q: FloatArray, lam: FloatArray, nu: FloatArray) -> float:
+    """The size of the terms that balance in the KKT equations."""
+    return max(
+        1.0,
+        float(np.linalg.norm(q)),
+        float(np.max(np.abs(lam), initial=0.0)),
+        float(np.max(np.abs(nu), initial=0.0)),
+    )

@@ -1,0 +1,347 @@
+"""The single solve: from a workspace and loads to a certified equilibrium.
+
+Minimizing the loads' potential energy ``-g @ x`` under the clearance cones is
+convex, so Clarabel's interior-point answer is the global optimum. Then:
+
+1. *Free motions* that no joint limits form the lineality space ``N`` of the
+   cones. If the loads work on any of them there is no equilibrium: we raise
+   ``UnboundedMechanismError`` naming the body and the motion (``held.py``).
+   Otherwise the answer is pinned orthogonal to ``N`` in the least-norm
+   metric, so free unloaded motions come out as exactly 0.
+2. *Polish.* The interior-point answer is accurate to its tolerance only.
+   From it we read the active contacts and solve the optimality (KKT)
+   equations of that active set with Newton's method (``newton.py``), to
+   machine precision, with a few active-set rounds where the interior point
+   cannot tell a faintly loaded contact from a nearly touching one.
+3. *Ties.* When the optimal positions form a face, one more cone program
+   picks its least-norm point (``ties.py``).
+4. *Forces* by the documented least-squares split (``forces.py``).
+5. *Certificate.* Whatever the route, the answer is accepted only if the one
+   certificate (``certificate.py``) holds; else once more at a finer
+   interior-point tolerance, then declined.
+
+The routes, in order: warm start (Newton on the last active set); interior
+point, then polish (active-set rounds from three starts); least-norm face
+program when the face does not pin the position; the finer retry.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import replace
+
+import clarabel
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from jointplay.assembly import assemble
+from jointplay.errors import SolverError
+from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Load, Model
+from jointplay.result import EQUILIBRIUM_TOLERANCE, Result, build_result
+from jointplay.settings import SolverSettings
+from jointplay.solver import certificate, conic, faces, forces, held, newton, ties
+from jointplay.solver.workspace import Workspace
+
+
+def solve(
+    model: Model,
+    settings: SolverSettings | None = None,
+    *,
+    case: str | None = None,
+    exact: bool = False,
+) -> Result:
+    """Find the equilibrium of ``model`` (under load case ``case``, if given):
+    positions, contacts, forces and certificate. ``exact``: with exact
+    rotations, refined from the small-displacement answer (``exact.py``)."""
+    ws = Workspace(assemble(model), settings)
+    return ws.solve(loads=None if case is None else model.loads_of(case), exact=exact)
+
+
+def solve_cases(
+    model: Model, settings: SolverSettings | None = None, *, exact: bool = False
+) -> dict[str, Result]:
+    """Every load case of ``model`` on one assembly: ``{case: Result}``."""
+    ws = Workspace(assemble(model), settings)
+    return {case: ws.solve(loads=model.loads_of(case), exact=exact) for case in model.case_names}
+
+
+def solve_loads(
+    ws: Workspace, loads: Sequence[Load] | None = None, *, exact: bool = False
+) -> Result:
+    """The certified equilibrium of ``ws``'s model under its loads, or under
+    ``loads`` instead (``exact``: with exact rotations, see ``exact.py``)."""
+    if exact:
+        from jointplay.solver.exact import solve_exact
+
+        return solve_exact(ws, loads)
+    start = time.perf_counter()
+    if loads is None:
+        loads = ws.asm.model.loads_of(None)
+        g = ws.asm.g
+    else:
+        loads = tuple(loads)
+        g = ws.asm.work_of(loads)
+    held.check_driven(ws, g)
+    g_norm = float(np.linalg.norm(g))
+    g_hat = g / g_norm if g_norm else g
+    point = optimum(ws, g_hat, ws.softness(g_norm))
+    assert point.certificate is not None
+    to_newton = g_norm / ws.asm.s  # scaled multipliers -> N
+    nu = point.nu if point.nu is not None else rigid_multipliers(ws, g_hat, point)
+    rigid = nu * to_newton
+    elapsed = time.perf_counter() - start
+    result = build_result(
+        ws.asm,
+        point.x,
+        point.lam * to_newton,
+        point.f * to_newton,
+        rigid,
+        point.certificate,
+        elapsed,
+        ws.free_motions,
+        loads,
+        g,
+    )
+    # The certificate balances the forces in the solver's scaled unknowns;
+    # per body and in newtons (Result.check) a badly scaled mechanism can
+    # fall short. A number that fails its own check is not printed.
+    if result.equilibrium_residual > EQUILIBRIUM_TOLERANCE:
+        raise SolverError(
+            "the solver's answer could not be certified: its contact forces balance the "
+            f"loads on each body only to {result.equilibrium_residual:.3g} of the largest "
+            f"force ({EQUILIBRIUM_TOLERANCE:g} is required). "
+            + held.weak_hint(ws)
+            + " If not, please report this model."
+        )
+    return result
+
+
+def split(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point) -> faces.Point:
+    """The optimum with the least-squares split of its forces
+    (``forces.least_squares_split``: forces from the positions, by the
+    documented rule) and its rigid multipliers, if that split certifies;
+    else the route's own forces."""
+    st = ws.settings
+    apex = st.feasibility_tolerance * ws.max_radius  # positions' round-off
+    nu = rigid_multipliers(ws, g_hat, point)
+    shared = forces.least_squares_split(ws.asm, point.x, point.lam, point.f, nu, g_hat, apex, st)
+    if shared is not None:
+        trial = replace(point, lam=shared.lam, f=shared.f, nu=shared.nu, certificate=None)
+        cert = certificate.certify(ws, g_hat, sigma, trial, shared.nu)
+        if cert.certified:
+            trial.certificate = cert
+            return trial
+    return replace(point, nu=nu)
+
+
+def rigid_multipliers(ws: Workspace, g_hat: FloatArray, point: faces.Point) -> FloatArray:
+    """Forces in the rigid rows (scaled): what the contacts leave of the loads.
+
+    Statically indeterminate rigid joints share the load in the least-squares way.
+    """
+    rest = g_hat - ws.stack.adjoint(point.f, point.lam)
+    return np.asarray(ws.balance.rigid_multipliers(rest[None])[0])
+
+
+def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -> faces.Point:
+    """The certified optimum for unit loads ``g_hat`` (or 0 for no load),
+    with contact softness ``sigma`` (default: every contact hard)."""
+    sigma = np.zeros(len(ws.balls)) if sigma is None else sigma
+    if not np.any(g_hat):
+        point = faces.Point(
+            np.zeros(ws.m), np.zeros(len(ws.balls)), np.zeros(ws.stack.A.shape[0]), method="no load"
+        )
+    else:
+        warmed = warm(ws, g_hat, sigma) if ws.settings.warm_start else None
+        point = warmed if warmed is not None else interior_point(ws, g_hat, sigma)
+        held.check_turns(ws, point.x)  # before polishing, which a nearly free body defeats
+        if warmed is None and ws.settings.polish:
+            point = polish(ws, g_hat, sigma, point)
+        ws.last = point if point.active is not None else None
+        point = split(ws, g_hat, sigma, point)
+    cert = point.certificate or certificate.certify(ws, g_hat, sigma, point, point.nu)
+    fine_ipm = ws.settings.fine_ipm_tolerance
+    if not cert.certified and np.any(g_hat) and ws.settings.ipm_tolerance > fine_ipm:
+        # a nearly degenerate mechanism can leave the interior-point answer
+        # (and its polish) 1e-7 mm off at the usual tolerance: once more, finer
+        fine = Workspace(ws.asm, replace(ws.settings, ipm_tolerance=fine_ipm, warm_start=False))
+        try:
+            point = optimum(fine, g_hat, sigma)
+        except SolverError:
+            pass
+        else:
+            assert point.certificate is not None
+            cert = point.certificate
+    if not cert.certified:
+        raise SolverError(
+            "the solver's answer could not be certified: "
+            f"feasibility {cert.feasibility_mm:.3g} mm, equilibrium residual "
+            f"{cert.equilibrium_residual:.3g} (relative), smallest contact force "
+            f"{cert.min_force:.3g} N. " + held.weak_hint(ws) + " If not, please report "
+            "this model."
+        )
+    point.certificate = cert
+    return point
+
+
+def interior_point(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:
+    if np.any(sigma > 0):
+        return interior_point_compliant(ws, g_hat, sigma)
+    prog = ws.interior_program
+    sol = conic.run(ws, prog, -g_hat)
+    z = np.asarray(sol.z)
+    return faces.Point(
+        np.asarray(sol.x), z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations
+    )
+
+
+def interior_point_compliant(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:
+    """The cone program with a penetration ``p_i >= 0`` per compliant contact:
+    ``|A_i x| <= r_i + p_i`` and energy ``-g_hat x + sum p_i^2 / (2 sigma_i)``."""
+    soft = np.flatnonzero(ws.stack.spring > 0)
+    m, nc = ws.m, len(soft)
+    if ws.compliant_program is None:  # built on first use, then kept
+        base = conic.cone_program(ws, None, ws.Eq, np.zeros(ws.Eq.shape[0]), ws.stack)
+        n_base = base.A.shape[0]
+        extra = sp.csr_matrix(
+            (
+                -np.ones(2 * nc),
+                (
+                    np.r_[base.soc_first[soft], n_base + np.arange(nc)],
+                    np.r_[np.arange(nc), np.arange(nc)],
+                ),
+            ),
+            shape=(n_base + nc, nc),
+        )  # cone radius r_i + p_i, and p_i >= 0
+        A = sp.hstack([sp.vstack([base.A, sp.csr_matrix((nc, m))]), extra], format="csc")
+        b = np.concatenate([base.b, np.zeros(nc)])
+        cones = [*base.cones, clarabel.NonnegativeConeT(nc)]
+        ws.compliant_program = conic.ConeProgram(
+            base.P, A, b, cones, base.settings, base.soc_first, base.f_rows
+        )
+    prog = ws.compliant_program
+    P = sp.csc_matrix(
+        (1.0 / sigma[soft], (m + np.arange(nc), m + np.arange(nc))), shape=(m + nc, m + nc)
+    )
+    prog = conic.ConeProgram(
+        P, prog.A, prog.b, prog.cones, prog.settings, prog.soc_first, prog.f_rows
+    )
+    sol = conic.run(ws, prog, np.concatenate([-g_hat, np.zeros(nc)]))
+    z = np.asarray(sol.z)
+    x = np.asarray(sol.x)[:m]
+    return faces.Point(x, z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations)
+
+
+def warm(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point | None:
+    last = ws.last
+    if last is None or last.active is None:
+        return None
+    return newton.newton_on(
+        ws, g_hat, sigma, last.active, last.x, last.lam, 0, "warm-started Newton", 12
+    )
+
+
+def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point) -> faces.Point:
+    key = faces.active_set(ws, point.x, point.lam, point.f, ws.stack)
+    optimum = refine_active(ws, g_hat, sigma, point, key)
+    if optimum is None:  # the interior point as it is, if it certifies
+        optimum = point
+    elif optimum.active is not None:
+        key = optimum.active
+    if faces.is_determined(ws, faces.face_of(ws, key), optimum.x):
+        return optimum
+    optimum.active = None  # the face is not a warm start: x is not unique
+    return ties.least_norm(ws, sigma, optimum, key)
+
+
+def refine_active(
+    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
+) -> faces.Point | None:
+    """A certified optimum, from the KKT equations of the active set
+    ``key`` read from the interior-point answer or, failing that, of every
+    cone near its limit; if some force comes out negative or a cone is
+    pushed past its limit, take a few steps of an active-set method: drop
+    those cones, add these. A large mechanism needs them: there an
+    interior-point answer to 1e-10 cannot tell a slightly loaded contact
+    from a nearly touching one. The optimum need not be unique (a tie)."""
+    stack = ws.stack
+    if not len(stack.k):
+        return None
+    _, rho, level = stack.levels(point.x)
+    r = np.where(stack.r > 0, stack.r, ws.max_radius)
+    f_norm = np.sqrt(stack.segment_sum(point.f * point.f))
+    st = ws.settings
+    at_apex = (stack.k == 0) | ((rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * point.lam))
+    near = set(np.flatnonzero((stack.r - level) / r <= st.near_limit).tolist())
+    # a contact the interior point loads faintly may be one that nearly
+    # touches (its equations then contradict the others')
+    both = np.array([*key[0], *key[1]], dtype=np.intp)
+    top = float(np.max(point.lam, initial=0.0))
+    faint = set(both[point.lam[both] < st.faint * top].tolist())
+    seen: set[frozenset[int]] = set()
+    for start in ({*key[0], *key[1]}, near, {*key[0], *key[1]} - faint):
+        found = active_set_steps(ws, g_hat, sigma, point, start, at_apex, seen)
+        if found is not None:
+            return found
+    return None
+
+
+def active_set_steps(
+    ws: Workspace,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    point: faces.Point,
+    active: set[int],
+    at_apex: NDArray[np.bool_],
+    seen: set[frozenset[int]],
+) -> faces.Point | None:
+    """The active-set rounds of ``_refine_active`` from ``active``."""
+    stack = ws.stack
+    r = np.where(stack.r > 0, stack.r, ws.max_radius)
+    lam_scale = float(np.max(np.abs(point.lam)))
+    x, lam = point.x, point.lam
+    st = ws.settings
+    for _ in range(st.refine_rounds):
+        if frozenset(active) in seen:
+            return None
+        seen.add(frozenset(active))
+        trial_key: faces.FaceKey = (
+            tuple(sorted(i for i in active if not at_apex[i])),
+            tuple(sorted(i for i in active if at_apex[i])),
+        )
+        trial = newton.kkt_point(
+            ws, g_hat, sigma, trial_key, x, lam, point.iterations, "polished", 30, pinned=False
+        )
+        if trial is None:
+            return None
+        weak = newton.weak_forces(ws, trial, trial_key)
+        _, _, level = stack.levels(trial.x)
+        past = np.flatnonzero((level - stack.r) / r > st.feasibility_tolerance)
+        past = past[[i not in active for i in past]]
+        if not past.size:
+            trial.certificate = certificate.certify(ws, g_hat, sigma, trial)
+            if trial.certificate.certified:
+                # a cone with no force (to round-off) does not bound the tie
+                trial.active = (
+                    tuple(i for i in trial_key[0] if i not in weak),
+                    tuple(i for i in trial_key[1] if i not in weak),
+                )
+                return trial
+            if not weak.size:
+                return None
+        # a face at its apex whose force reaches its cone's edge tilts
+        # onto its surface; the other weak cones leave the set
+        lam_top = float(np.max(trial.lam, initial=0.0))
+        tilts = {
+            int(i)
+            for i in weak
+            if at_apex[i] and ws.stack.k[i] and trial.lam[i] > st.positive_force * lam_top
+        }
+        at_apex = at_apex.copy()
+        at_apex[list(tilts)] = False
+        active = (active - (set(weak.tolist()) - tilts)) | set(past.tolist())
+        x, lam = trial.x, np.maximum(trial.lam, st.positive_force * lam_scale)
+    return None

@@ -1,0 +1,159 @@
+"""Ties: when the optimal positions form a face, the least-norm one.
+
+A load pushing squarely on a flat limit leaves a face of optimal positions.
+The documented answer is the point of that face nearest the nominal one in
+the least-norm metric: one more cone program on the face, polished by Newton.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from jointplay.assembly import BallStack
+from jointplay.errors import SolverError
+from jointplay.geometry import FloatArray
+from jointplay.numerics import linalg
+from jointplay.numerics.linalg import Matrix
+from jointplay.settings import TINY
+from jointplay.solver import conic, faces, held, newton
+
+if TYPE_CHECKING:
+    from jointplay.solver.workspace import Workspace
+
+
+def face_equalities(
+    ws: Workspace, stack: BallStack, which: faces.FaceKey, x: FloatArray, reach: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Linear rows that keep the cones ``which`` where they are at ``x``:
+    a surface cone keeps its direction ``u`` (``A_i x`` along ``u`` and
+    ``u . A_i x + B_i x = reach_i``); a linear cone ``A_i x = 0``,
+    ``B_i x = reach_i``. ``reach`` is per cone of ``which`` (surface first)."""
+    surface, linear = which
+    rows: list[Matrix] = []
+    rhs: list[FloatArray] = []
+    v, rho = stack.norms(x)
+    for j, i in enumerate((*surface, *linear)):
+        Ai = stack.cone_rows(i)
+        if j < len(surface) and stack.k[i]:
+            u = v[stack.start[i] : stack.start[i] + stack.k[i]] / max(rho[i], TINY)
+            if not stack.has_offset[i]:
+                rows.append(Ai)
+                rhs.append(reach[j] * u)
+                continue
+            across = np.linalg.svd(u[None, :])[2][1:]  # directions across u
+            M = linalg.dense(stack.face_rows(i))
+            rows.append(np.vstack([across @ M[:-1], u @ M[:-1] + M[-1]]))
+        else:
+            rows.append(stack.face_rows(i))
+        rhs.append(np.append(np.zeros(rows[-1].shape[0] - 1), reach[j]))
+    if not rows:
+        return np.zeros((0, ws.m)), np.zeros(0)
+    return linalg.vstack(rows, ws.m), np.concatenate(rhs)
+
+
+def least_norm(
+    ws: Workspace, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
+) -> faces.Point:
+    """Least-norm point of the optimal face (a tie between positions)."""
+    surface, linear = key
+    both = [*surface, *linear]
+    # a compliant contact keeps its penetration; the others stay on its face
+    reach = ws.stack.r[both] + sigma[both] * point.lam[both]
+    L, L_rhs = face_equalities(ws, ws.stack, key, point.x, reach)
+    Eq, e = independent_rows(
+        ws, linalg.vstack([ws.Eq, L], ws.m), np.concatenate([np.zeros(ws.Eq.shape[0]), L_rhs])
+    )
+    rest_index = [i for i in range(len(ws.balls)) if i not in set(both)]
+    rest = ws.stack.take(rest_index)
+    # a tilting face stays on the side it leans to: u . A_i x >= 0
+    v, rho = ws.stack.norms(point.x)
+    lean = [
+        -(v[ws.stack.start[i] : ws.stack.start[i] + ws.stack.k[i]] / rho[i])
+        @ linalg.dense(ws.stack.cone_rows(i))
+        for i in surface
+        if ws.stack.k[i] and ws.stack.has_offset[i] and rho[i] > 0
+    ]
+    if lean:
+        rest = rest.with_limits(np.array(lean))
+    metric = ws.asm.metric_matrix
+    prog = conic.cone_program(ws, metric, Eq, e, rest)
+    try:
+        sol = conic.run(ws, prog, np.zeros(ws.m))
+    except SolverError:
+        # badly scaled (levers of 100 m on plays of 0.1 mm): the active-set
+        # Newton alone, from the optimum, with no other contact active
+        x = polish_least_norm(
+            ws, point.x, np.zeros(len(rest.k)), np.zeros(rest.A.shape[0]), rest, Eq, e, strict=True
+        )
+    else:
+        z = np.asarray(sol.z)
+        lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
+        x = polish_least_norm(ws, np.asarray(sol.x), lam_rest, f_rest, rest, Eq, e)
+    # any optimal forces are complementary to every optimal position:
+    # those of ``point`` hold at x, which keeps its active cones as they were
+    return faces.Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
+
+
+def polish_least_norm(
+    ws: Workspace,
+    x: FloatArray,
+    lam: FloatArray,
+    f: FloatArray,
+    rest: BallStack,
+    Eq: Matrix,
+    e: FloatArray,
+    strict: bool = False,
+) -> FloatArray:
+    """Newton on the KKT equations of the least-norm program from its
+    interior point ``x``, with a few active-set rounds (cones pushed past
+    their limit join); ``x`` itself if that does not end feasible (or,
+    ``strict``, SolverError)."""
+    metric = ws.asm.metric_matrix
+    surface, linear = faces.active_set(ws, x, lam, f, rest, float(np.max(np.abs(metric @ x))))
+    active = {*surface, *linear}
+    apex = set(linear)
+    r = np.where(rest.r > 0, rest.r, ws.max_radius)
+    st = ws.settings
+    for _ in range(st.refine_rounds):
+        on_surface = sorted(i for i in active if i not in apex)
+        at_apex = sorted(i for i in active if i in apex)
+        L2, l2 = face_equalities(ws, rest, ((), tuple(at_apex)), x, rest.r[at_apex])
+        polished = newton.newton(
+            metric,
+            np.zeros(ws.m),
+            linalg.vstack([Eq, L2], ws.m),
+            np.concatenate([e, l2]),
+            rest.take(on_surface),
+            x,
+            np.maximum(lam[on_surface], 0.0),
+            settings=st,
+        )
+        if polished is None:
+            break
+        _, _, level = rest.levels(polished[0])
+        past = set(np.flatnonzero((level - rest.r) / r > st.feasibility_tolerance).tolist())
+        past -= active
+        if not past:
+            return polished[0]
+        active |= past
+        apex |= {i for i in past if rest.k[i] == 0}
+    if strict:
+        raise SolverError(
+            "the least-norm point of a tie (an optimum that is not unique) could not "
+            "be found accurately on this model. " + held.weak_hint(ws)
+        )
+    return x
+
+
+def independent_rows(ws: Workspace, C: Matrix, c: FloatArray) -> tuple[Matrix, FloatArray]:
+    """Equalities ``C x = c`` as orthonormal, independent rows (least
+    squares): the face's rows often repeat each other (a joint's cones
+    share them), and nearly dependent rows make the solvers' multipliers
+    huge and their accuracy poor. A large (sparse) system is kept as it is."""
+    if linalg.is_sparse(C) or not C.shape[0]:
+        return C, c
+    U, sv, Vt = np.linalg.svd(np.asarray(C), full_matrices=False)
+    keep = sv > ws.settings.free_motion_rcond * sv[0] if sv[0] > 0 else sv > 0
+    return Vt[keep], (U[:, keep].T @ c) / sv[keep]

@@ -1,0 +1,116 @@
+"""The workspace: one model's cone program as plain data, made once.
+
+It holds what every solve of the model shares: the assembled matrices, the
+free motions ``N`` and the rows that pin them (``K``), the equalities, and
+data derived from them on first use (the interior-point program, each active
+set's face). A solve reads it and changes nothing but those caches and the
+warm-start hint ``last``; the algorithms are functions (``pipeline.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.sparse as sp
+
+from jointplay.assembly import Assembly, assemble
+from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Load, Model
+from jointplay.numerics import linalg
+from jointplay.result import Result, describe_free_motions
+from jointplay.settings import SolverSettings
+from jointplay.solver import certificate, conic, held
+
+if TYPE_CHECKING:
+    from jointplay.solver.batch import BatchSolution
+    from jointplay.solver.faces import Face, FaceKey, Point
+
+
+class Workspace:
+    """The solver's side of one model: assembled matrices and free motions.
+
+    Built once from an ``Assembly``; the model is never modified. ``solve``
+    may be called again with other loads (``loads=``): each call after the
+    first starts from the previous active set (see ``SolverSettings.warm_start``).
+    """
+
+    def __init__(self, assembly: Assembly, settings: SolverSettings | None = None):
+        self.asm = assembly
+        self.settings = settings or SolverSettings()
+        self.m = assembly.m
+        self.balls = assembly.balls
+        self.stack = stack = assembly.stack
+        self.E = assembly.E
+        self.sparse = assembly.sparse
+        #: the free motions (dense, or sparse for a large mechanism)
+        self.N = linalg.null_space(held.limit_rows(self), self.m, self.settings.free_motion_rcond)
+        #: rows that hold the answer orthogonal to N in the least-norm metric
+        self.K = (
+            sp.csr_matrix((assembly.metric_matrix @ self.N).T)
+            if self.sparse
+            else assembly.metric_times(self.N).T
+        )
+        self.Eq = linalg.vstack([self.E, self.K], self.m)
+        largest = float(np.max(stack.r)) if len(stack.r) else 0.0
+        self.max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
+        self.balance = certificate.Balance(self)
+        #: each active set's face, built when first met (``faces.face_of``)
+        self.faces: dict[FaceKey, Face] = {}
+        #: the cone program with penetrations, built when first needed
+        self.compliant_program: conic.ConeProgram | None = None
+        #: the warm start: the last solve's optimum and active set (a hint only:
+        #: what it leads to is certified like any other answer)
+        self.last: Point | None = None
+
+    @classmethod
+    def of(cls, model: Model, settings: SolverSettings | None = None) -> Workspace:
+        return cls(assemble(model), settings)
+
+    @cached_property
+    def interior_program(self) -> conic.ConeProgram:
+        """The cone program of the hard problem (its loads are set per solve)."""
+        return conic.cone_program(self, None, self.Eq, np.zeros(self.Eq.shape[0]), self.stack)
+
+    @cached_property
+    def _free_motion_words(self) -> tuple[str, ...]:
+        return describe_free_motions(self.asm, self.N)
+
+    def free_motions(self) -> tuple[str, ...]:
+        """The free motions in words (computed once)."""
+        return self._free_motion_words
+
+    def solve(self, loads: Sequence[Load] | None = None, *, exact: bool = False) -> Result:
+        """The equilibrium under the model's loads, or under ``loads`` instead
+        (``exact``: with exact rotations, see ``solver/exact.py``)."""
+        from jointplay.solver import pipeline
+
+        return pipeline.solve_loads(self, loads, exact=exact)
+
+    def solve_batch(self, work: FloatArray, radii: FloatArray | None = None) -> BatchSolution:
+        """Equilibria under many loads at once: ``work`` is (B, m), one row of
+        the loads' work per sample (build rows with ``Assembly.wrench_work``).
+        ``radii`` (B, n): each sample's own plays, as scaled cone radii in the
+        order of ``Assembly.balls`` (``variation.PlayMap.radii`` builds them)."""
+        from jointplay.solver.batch import solve_batch
+
+        return solve_batch(self, work, radii)
+
+    def with_radii(self, radii: FloatArray) -> Workspace:
+        """A workspace of the same mechanism with other plays: ``radii`` are
+        the scaled cone radii (``Assembly.balls`` order); scales, free motions
+        and unknowns stay those of this one, so answers compare row by row."""
+        return Workspace(self.asm.with_radii(radii), self.settings)
+
+    def softness(self, g_norm: float | FloatArray) -> FloatArray:
+        """Compliant contacts: the elastic energy k p^2 / 2 (p in mm) becomes
+        ``p~^2 / (2 sigma)`` in the scaled problem whose loads have unit norm,
+        with ``sigma = |g| / (k s^2)``: the answer depends on the load's size."""
+        spring = self.stack.spring
+        g_arr = np.asarray(g_norm, dtype=float)
+        out = np.zeros((*g_arr.shape, len(spring)))
+        mask = spring > 0
+        out[..., mask] = g_arr[..., None] / (spring[mask] * self.asm.s**2)
+        return out

@@ -1,0 +1,275 @@
+"""Which play drives the functional deviation: sensitivities and contributions.
+
+(Load components that vary, ``force: [{min: 8, max: 12}, 0, 0]``, take part
+like plays.)
+
+For each functional measure y (a point's displacement size |d|, or its
+component along a requirement's ``along``) and each toleranced play p_i,
+the sensitivity ``s_i = dy/dp_i`` at the nominal plays (their means) comes
+from central differences on the exact equilibrium, all solved in one batch:
+the equilibrium is piecewise linear in the plays (exactly linear while the
+contacts stay the same), so a step of a thousandth of each tolerance gives
+the slope to round-off; where the contact directions turn with the plays the
+curve is smooth, and central differences at h and h/2 with Richardson's
+extrapolation give the slope to O(h^4). Both one-sided slopes are kept; where
+they differ by a jump that does not shrink with the step, the nominal sits on
+a change of contacts (a kink), and the result says so.
+
+From the slopes, the two contributions tolerance analysts use:
+
+- worst case (arithmetic stack): ``|s_i| T_i / sum_k |s_k| T_k``, with T_i
+  the width of the play's tolerance (max - min);
+- statistical (RSS): ``(s_i sigma_i)^2 / sum_k (s_k sigma_k)^2``, with
+  sigma_i the play's standard deviation (uniform: T/sqrt(12); normal: T/6; a
+  fit: the hole's and the shaft's zones combined).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from jointplay.assembly import assemble
+from jointplay.errors import ModelError
+from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Model, check_case
+from jointplay.solver.workspace import Workspace
+from jointplay.studies.variation import LoadVariable, PlayVariable, load_map, play_map
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: One-sided slopes differing by more than this (relative), and not converging
+#: as the step halves, mark a kink.
+KINK = 1e-6
+
+
+@dataclass(frozen=True)
+class Measure:
+    """A functional measure: point ``point``'s displacement size, or its
+    component along ``along`` (a unit vector)."""
+
+    point: str
+    along: tuple[float, float, float] | None = None
+
+    @property
+    def label(self) -> str:
+        if self.along is None:
+            return f"|d {self.point}|"
+        return f"d {self.point} along [{', '.join(f'{c:.4g}' for c in self.along)}]"
+
+    def of(self, d: FloatArray) -> FloatArray:
+        """(B,) the measure of (B, 3) displacements."""
+        if self.along is None:
+            return np.asarray(np.linalg.norm(d, axis=1))
+        return np.asarray(d @ np.asarray(self.along))
+
+
+@dataclass(frozen=True)
+class Contributions:
+    """Settings of a contribution study; ``run`` returns a ``ContributionsResult``.
+
+    ``step``: the difference step as a fraction of each play's tolerance
+    width. ``case``: the load case (default: the model's loads)."""
+
+    step: float = 1e-3
+    case: str | None = None
+
+    def __post_init__(self) -> None:
+        if not 0 < self.step <= 0.1:
+            raise ValueError("step: a fraction of the tolerance, above 0 and at most 0.1")
+
+    def run(self, model: Model, *, source: str | None = None) -> ContributionsResult:
+        source = source or model.name or "<model>"
+        asm = assemble(model)
+        pmap = play_map(asm, source)
+        check_case(model, self.case, source)
+        lmap = load_map(asm, self.case)
+        variables: list[PlayVariable | LoadVariable] = [*pmap.variables, *lmap.variables]
+        if not variables:
+            raise ModelError(
+                "no play varies from part to part, so none contributes; give a joint's "
+                "clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
+                "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12})",
+                source=source,
+                entry="joints",
+            )
+        measures = _measures(model, source)
+        nv = len(variables)
+        width = np.array([v.value.high - v.value.low for v in variables])
+        sigma = np.array([v.value.sigma for v in variables])
+        h = self.step * width
+        # rows: the nominal, then each variable up and down by h, then by h / 2
+        nominal = np.concatenate([pmap.nominal, lmap.nominal])
+        eye = np.eye(nv)
+        values = np.vstack(
+            [nominal[None, :]]
+            + [nominal + sign * frac * eye * h for frac in (1.0, 0.5) for sign in (1, -1)]
+        )
+        n_plays = len(pmap.variables)
+        work = lmap.work(values[:, n_plays:])
+        ws = Workspace(asm)
+        batch = ws.solve_batch(work, pmap.radii(values[:, :n_plays]))
+        names = [p.name for p in model.points]
+        y = np.zeros((len(measures), len(values)))
+        for k, m in enumerate(measures):
+            point = model.points[names.index(m.point)]
+            motion = batch.body_displacement(point.body)
+            d = motion[:, :3] + np.cross(motion[:, 3:], np.asarray(point.at))
+            y[k] = m.of(d)
+        y0 = y[:, :1]
+        up_h, down_h, up_half, down_half = (y[:, 1 + q * nv : 1 + (q + 1) * nv] for q in range(4))
+        safe = np.where(h > 0, h, 1.0)
+        up = np.where(h > 0, (up_half - y0) / (safe / 2), 0.0)
+        down = np.where(h > 0, (y0 - down_half) / (safe / 2), 0.0)
+        central_h = np.where(h > 0, (up_h - down_h) / (2 * safe), 0.0)
+        central_half = (up + down) / 2
+        # Richardson: the central slope to O(h^4) where y is smooth
+        slope = (4 * central_half - central_h) / 3
+        # a kink keeps its jump of slope as the step halves; a curve's halves with it
+        jump_h = np.abs((up_h - y0) / safe - (y0 - down_h) / safe)
+        jump_half = np.abs(up - down)
+        kink = (jump_half > 0.75 * jump_h) & (
+            jump_half > KINK * np.maximum(np.abs(up), np.abs(down)) + 1e-9
+        )
+        return ContributionsResult(
+            self,
+            model.name,
+            tuple(m.label for m in measures),
+            tuple(v.label for v in variables),
+            {v.label: v.value.describe() for v in variables},
+            y[:, 0],
+            np.where(kink, central_half, slope),
+            up,
+            down,
+            kink,
+            width,
+            sigma,
+            float(np.max(batch.feasibility_mm, initial=0.0)),
+            float(np.max(batch.equilibrium_residual, initial=0.0)),
+        )
+
+
+def _measures(model: Model, source: str) -> list[Measure]:
+    if not model.points:
+        raise ModelError(
+            "contributions are to the deviation of functional points, and the model has "
+            "none; add 'points: [{name: tip, body: ..., at: [x, y, z]}]'",
+            source=source,
+            entry="points",
+        )
+    out = [Measure(p.name) for p in model.points]
+    for req in model.requirements:
+        if req.along is not None:
+            u = np.asarray(req.along, dtype=float)
+            u = u / np.linalg.norm(u)
+            m = Measure(req.point, (float(u[0]), float(u[1]), float(u[2])))
+            if m not in out:
+                out.append(m)
+    return out
+
+
+@dataclass(frozen=True)
+class ContributionsResult:
+    """Per measure and play: the sensitivity (mm of the measure per mm of
+    play, or per N or N*mm of a load's varying component) and the worst-case
+    and statistical (RSS) contributions in %. ``plays`` lists the plays, then
+    the load components."""
+
+    settings: Contributions
+    model_name: str | None
+    measures: tuple[str, ...]
+    plays: tuple[str, ...]
+    plays_described: dict[str, str]
+    nominal: FloatArray  # (M,) mm: each measure at the nominal plays
+    sensitivity: FloatArray  # (M, nv): central slopes
+    slope_up: FloatArray  # (M, nv): one-sided slopes (step h / 2)
+    slope_down: FloatArray
+    kink: np.ndarray[Any, np.dtype[np.bool_]]  # (M, nv): the contacts change at the nominal
+    width: FloatArray  # (nv,) tolerance widths (max - min): mm, N or N*mm
+    sigma: FloatArray  # (nv,) standard deviations
+    feasibility_mm: float
+    equilibrium_residual: float
+
+    @property
+    def worst_case(self) -> FloatArray:
+        """(M, nv) % of the arithmetic stack ``sum |s| T``."""
+        part = np.abs(self.sensitivity) * self.width
+        return _percent(part)
+
+    @property
+    def rss(self) -> FloatArray:
+        """(M, nv) % of the statistical stack ``sum (s sigma)^2``."""
+        return _percent((self.sensitivity * self.sigma) ** 2)
+
+    @property
+    def worst_case_range(self) -> FloatArray:
+        """(M,) mm: the measure's linear worst-case spread, ``sum |s| T``."""
+        return np.asarray(np.sum(np.abs(self.sensitivity) * self.width, axis=1))
+
+    @property
+    def rss_sigma(self) -> FloatArray:
+        """(M,) mm: the measure's standard deviation, ``sqrt(sum (s sigma)^2)``."""
+        return np.asarray(np.sqrt(np.sum((self.sensitivity * self.sigma) ** 2, axis=1)))
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """One row per measure and play."""
+        import pandas as pd
+
+        rows = []
+        wc, rss, kink = self.worst_case, self.rss, self.kink
+        for k, measure in enumerate(self.measures):
+            for i, play in enumerate(self.plays):
+                rows.append(
+                    {
+                        "measure": measure,
+                        "play": play,
+                        "tolerance_mm": self.width[i],
+                        "sigma_mm": self.sigma[i],
+                        "sensitivity": self.sensitivity[k, i],
+                        "worst_case_pct": wc[k, i],
+                        "rss_pct": rss[k, i],
+                        "kink": bool(kink[k, i]),
+                    }
+                )
+        return pd.DataFrame(rows)
+
+    def to_dict(self) -> dict[str, Any]:
+        wc, rss, kink = self.worst_case, self.rss, self.kink
+        return {
+            "study": "contributions",
+            "model": self.model_name,
+            "case": self.settings.case,
+            "plays": self.plays_described,
+            "measures": {
+                measure: {
+                    "nominal": float(self.nominal[k]),
+                    "worst_case_range": float(self.worst_case_range[k]),
+                    "rss_sigma": float(self.rss_sigma[k]),
+                    "plays": {
+                        play: {
+                            "tolerance": float(self.width[i]),
+                            "sigma": float(self.sigma[i]),
+                            "sensitivity": float(self.sensitivity[k, i]),
+                            "worst_case_pct": float(wc[k, i]),
+                            "rss_pct": float(rss[k, i]),
+                            "kink": bool(kink[k, i]),
+                        }
+                        for i, play in enumerate(self.plays)
+                    },
+                }
+                for k, measure in enumerate(self.measures)
+            },
+            "certificate": {
+                "feasibility_mm": self.feasibility_mm,
+                "equilibrium_residual": self.equilibrium_residual,
+            },
+        }
+
+
+def _percent(part: FloatArray) -> FloatArray:
+    total = np.sum(part, axis=1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.asarray(np.where(total > 0, 100.0 * part / total, 0.0))

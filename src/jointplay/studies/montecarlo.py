@@ -1,0 +1,414 @@
+"""Monte Carlo over real parts: plays drawn from their limits or ISO fits.
+
+Each sample is one set of parts: every toleranced play of the model
+(``tolerance.Toleranced``) is drawn, and the equilibrium under the model's
+loads is solved exactly (``Workspace.solve_batch``: Newton on the active set
+that most samples share, each answer certified on its own, the full solver
+for the rest). The functional points' displacements are then summarized:
+mean, standard deviation, percentiles (0.135 % and 99.865 % are the +-3 sigma
+points of a normal law) and the fraction of parts that miss each requirement.
+
+Reproducible anywhere. Samples come in chunks of a fixed size; chunk ``i``
+draws from its own random stream, ``numpy.random.default_rng([seed, i])``, so
+the numbers do not depend on how many processes, machines or Dask workers
+solve the chunks, nor in which order: a local run and a cluster run with the
+same seed give the same samples and the same answers.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from scipy import stats
+
+from jointplay.assembly import assemble
+from jointplay.errors import ModelError
+from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Model, Requirement, check_case
+from jointplay.solver.workspace import Workspace
+from jointplay.studies.parallel import run_chunks
+from jointplay.studies.variation import load_map, play_map
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: Percentiles reported (in %): the +-3 sigma points, 2.5/97.5 and the median.
+PERCENTILES = (0.135, 2.5, 50.0, 97.5, 99.865)
+
+
+@dataclass(frozen=True)
+class MonteCarlo:
+    """Settings of a Monte Carlo study; ``run`` returns a ``MonteCarloResult``.
+
+    ``samples``: how many sets of parts (with ``target_rel_error``: the most
+    to draw). ``target_rel_error``: stop as soon as every estimate's relative
+    error at ``confidence`` is below it: the fraction of parts missing each
+    requirement, or, without requirements, each point's mean displacement.
+    ``chunk``: samples per chunk (fixes the random streams; keep it to get the
+    same numbers). ``case``: the load case to solve (default: the model's loads).
+    """
+
+    samples: int = 10_000
+    seed: int = 0
+    target_rel_error: float | None = None
+    confidence: float = 0.95
+    chunk: int = 10_000
+    case: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.samples < 1:
+            raise ValueError("samples: at least 1")
+        if self.chunk < 1:
+            raise ValueError("chunk: at least 1")
+        if self.target_rel_error is not None and not 0 < self.target_rel_error < 1:
+            raise ValueError("target relative error: between 0 and 1 (0.01 is 1 %)")
+        if not 0 < self.confidence < 1:
+            raise ValueError("confidence: between 0 and 1 (0.95 is 95 %)")
+
+    def run(
+        self,
+        model: Model,
+        *,
+        workers: int | None = 1,
+        scheduler: str | None = None,
+        progress: Callable[[int, int], None] | None = None,
+        source: str | None = None,
+    ) -> MonteCarloResult:
+        """Draw and solve the samples. ``workers``: local processes (None: one
+        per core; 1: this process). ``scheduler``: a Dask scheduler address
+        (``tcp://host:8786``) to solve the chunks on a cluster instead.
+        ``progress(done, total)`` is called after each chunk. ``source``: the
+        model file's name, for messages."""
+        source = source or model.name or "<model>"
+        _study_inputs(model, self.case, source)
+        sizes = _chunk_sizes(self.samples, self.chunk)
+        parts: list[_Chunk] = []
+        done = 0
+        for batch in _waves(sizes, self, workers, scheduler):
+            done += sum(n for _, n in batch)
+            results = _solve_chunks(model, self, batch, workers, scheduler)
+            parts.extend(results)
+            if progress is not None:
+                progress(done, self.samples)
+            if self.target_rel_error is not None and _converged(model, self, parts):
+                break
+        return _result(model, self, parts)
+
+
+@dataclass(frozen=True)
+class _Chunk:
+    index: int
+    plays: FloatArray  # (n, nv) mm
+    loads: FloatArray  # (n, nl) N or N*mm: the load components that vary
+    displacement: FloatArray  # (n, points, 3) mm
+    batched: int
+    full_solves: int
+    feasibility_mm: float
+    equilibrium_residual: float
+
+
+def _chunk_sizes(samples: int, chunk: int) -> list[tuple[int, int]]:
+    out, index, left = [], 0, samples
+    while left > 0:
+        out.append((index, min(chunk, left)))
+        left -= chunk
+        index += 1
+    return out
+
+
+def _waves(
+    sizes: list[tuple[int, int]], mc: MonteCarlo, workers: int | None, scheduler: str | None
+) -> Iterator[list[tuple[int, int]]]:
+    """All chunks at once, or (converging) a few at a time, to stop early."""
+    if mc.target_rel_error is None:
+        yield sizes
+        return
+    width = 8 if scheduler else max(1, workers or (os.cpu_count() or 1))
+    for lo in range(0, len(sizes), width):
+        yield sizes[lo : lo + width]
+
+
+def _study_inputs(model: Model, case: str | None, source: str) -> None:
+    check_case(model, case, source)
+    asm = assemble(model)
+    if not play_map(asm, source).variables and not load_map(asm, case).variables:
+        raise ModelError(
+            "no play varies from part to part, so every sample would be the same; give a "
+            "joint's clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
+            "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12})",
+            source=source,
+            entry="joints",
+        )
+    if not model.points:
+        raise ModelError(
+            "a Monte Carlo study measures functional points, and the model has none; add "
+            "'points: [{name: tip, body: ..., at: [x, y, z]}]'",
+            source=source,
+            entry="points",
+        )
+
+
+def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
+    """Chunk ``index`` of the study: its ``size`` samples, drawn and solved."""
+    asm = assemble(model)
+    pmap = play_map(asm, model.name or "<model>")
+    lmap = load_map(asm, mc.case)
+    rng = np.random.default_rng([mc.seed, index])
+    plays = pmap.sample(rng, size)
+    loads = lmap.sample(rng, size)  # after the plays: draws nothing when no load varies
+    work = lmap.work(loads) if lmap.variables else np.tile(lmap.g0, (size, 1))
+    ws = Workspace(asm)
+    batch = ws.solve_batch(work, pmap.radii(plays))
+    displacement = np.zeros((size, len(model.points), 3))
+    for p, point in enumerate(model.points):
+        motion = batch.body_displacement(point.body)
+        at = np.asarray(point.at)
+        displacement[:, p] = motion[:, :3] + np.cross(motion[:, 3:], at)
+    return _Chunk(
+        index,
+        plays,
+        loads,
+        displacement,
+        int(np.sum(batch.batched)),
+        batch.full_solves,
+        float(np.max(batch.feasibility_mm, initial=0.0)),
+        float(np.max(batch.equilibrium_residual, initial=0.0)),
+    )
+
+
+def _solve_chunks(
+    model: Model,
+    mc: MonteCarlo,
+    chunks: Sequence[tuple[int, int]],
+    workers: int | None,
+    scheduler: str | None,
+) -> list[_Chunk]:
+    return run_chunks(solve_chunk, model, [(mc, i, n) for i, n in chunks], workers, scheduler)
+
+
+def _z(confidence: float) -> float:
+    return float(stats.norm.ppf(0.5 + confidence / 2))
+
+
+def _outside(req: Requirement, model: Model, displacement: FloatArray) -> FloatArray:
+    """(n,) bool: the samples whose point misses the requirement."""
+    p = [pt.name for pt in model.points].index(req.point)
+    d = displacement[:, p]
+    if req.along is None:
+        size = np.linalg.norm(d, axis=1)
+    else:
+        u = np.asarray(req.along) / np.linalg.norm(req.along)
+        size = np.abs(d @ u)
+    return np.asarray(size > req.max_displacement)
+
+
+def _converged(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> bool:
+    assert mc.target_rel_error is not None
+    d = np.concatenate([c.displacement for c in parts])
+    return bool(np.all(_rel_errors(model, d, mc.confidence) <= mc.target_rel_error))
+
+
+def _rel_errors(model: Model, displacement: FloatArray, confidence: float) -> FloatArray:
+    """Relative error (half-width of the confidence interval over the estimate)
+    of the study's estimates: each requirement's miss fraction, or each
+    point's mean displacement size. inf while an estimate is 0."""
+    n, z = displacement.shape[0], _z(confidence)
+    out = []
+    if model.requirements:
+        for req in model.requirements:
+            p = float(np.mean(_outside(req, model, displacement)))
+            out.append(z * math.sqrt(p * (1 - p) / n) / p if p > 0 else math.inf)
+    else:
+        size = np.linalg.norm(displacement, axis=2)
+        mean, std = np.mean(size, axis=0), np.std(size, axis=0, ddof=1) if n > 1 else 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.where(mean > 0, z * std / np.sqrt(n) / mean, math.inf)
+        out.extend(np.atleast_1d(rel).tolist())
+    return np.array(out)
+
+
+@dataclass(frozen=True)
+class PointStats:
+    """One functional point over the samples (mm, global axes)."""
+
+    name: str
+    mean: FloatArray  # (3,)
+    std: FloatArray  # (3,)
+    percentiles: dict[float, FloatArray]  # % -> (3,) per component
+    size_mean: float  # |d|
+    size_std: float
+    size_percentiles: dict[float, float]
+    size_max: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "mean": self.mean.tolist(),
+            "std": self.std.tolist(),
+            "percentiles": {f"{k:g}": v.tolist() for k, v in self.percentiles.items()},
+            "size": {
+                "mean": self.size_mean,
+                "std": self.size_std,
+                "max": self.size_max,
+                "percentiles": {f"{k:g}": v for k, v in self.size_percentiles.items()},
+            },
+        }
+
+
+@dataclass(frozen=True)
+class RequirementStats:
+    """How many parts miss one requirement, with a confidence interval (Wilson)."""
+
+    requirement: Requirement
+    outside: int
+    fraction: float
+    interval: tuple[float, float]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "point": self.requirement.point,
+            "max_displacement": self.requirement.max_displacement,
+            "along": None if self.requirement.along is None else list(self.requirement.along),
+            "outside": self.outside,
+            "fraction_outside": self.fraction,
+            "interval": list(self.interval),
+            "ppm": self.fraction * 1e6,
+        }
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """The samples (plays and point displacements) and their summary."""
+
+    settings: MonteCarlo
+    model_name: str | None
+    play_labels: tuple[str, ...]
+    point_names: tuple[str, ...]
+    plays: FloatArray  # (N, nv) mm
+    displacement: FloatArray  # (N, points, 3) mm
+    points: dict[str, PointStats]
+    requirements: tuple[RequirementStats, ...]
+    relative_error: FloatArray  # the estimates' relative errors at the confidence
+    batched: int  # samples solved by the batched Newton path
+    full_solves: int
+    feasibility_mm: float  # worst over the samples
+    equilibrium_residual: float  # worst over the samples
+    plays_described: dict[str, str] = field(default_factory=dict)
+    load_labels: tuple[str, ...] = ()
+    loads: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))  # (N, nl)
+    loads_described: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def samples(self) -> int:
+        return int(self.plays.shape[0])
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "study": "montecarlo",
+            "model": self.model_name,
+            "samples": self.samples,
+            "seed": self.settings.seed,
+            "chunk": self.settings.chunk,
+            "case": self.settings.case,
+            "plays": self.plays_described,
+            "loads": self.loads_described,
+            "points": {n: p.to_dict() for n, p in self.points.items()},
+            "requirements": [r.to_dict() for r in self.requirements],
+            "confidence": self.settings.confidence,
+            "relative_error": [float(e) for e in self.relative_error],
+            "certificate": {
+                "feasibility_mm": self.feasibility_mm,
+                "equilibrium_residual": self.equilibrium_residual,
+                "batched": self.batched,
+                "full_solves": self.full_solves,
+            },
+        }
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """One row per sample: the plays (mm), the varying load components (N,
+        N*mm) and each point's displacement (mm)."""
+        import pandas as pd
+
+        columns: dict[str, FloatArray] = {}
+        for j, label in enumerate(self.play_labels):
+            columns[label] = self.plays[:, j]
+        for j, label in enumerate(self.load_labels):
+            columns[label] = self.loads[:, j]
+        for p, name in enumerate(self.point_names):
+            for c, axis in enumerate("xyz"):
+                columns[f"{name}.d{axis}"] = self.displacement[:, p, c]
+            columns[f"{name}.size"] = np.linalg.norm(self.displacement[:, p], axis=1)
+        return pd.DataFrame(columns)
+
+    def summary(self) -> pd.DataFrame:
+        """One row per point: mean, std and percentiles of its displacement size."""
+        import pandas as pd
+
+        rows = []
+        for name, ps in self.points.items():
+            row: dict[str, Any] = {"point": name, "mean": ps.size_mean, "std": ps.size_std}
+            row.update({f"p{k:g}": v for k, v in ps.size_percentiles.items()})
+            row["max"] = ps.size_max
+            rows.append(row)
+        return pd.DataFrame(rows).set_index("point")
+
+
+def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResult:
+    parts = sorted(parts, key=lambda c: c.index)
+    asm = assemble(model)
+    pmap = play_map(asm, model.name or "<model>")
+    lmap = load_map(asm, mc.case)
+    plays = np.concatenate([c.plays for c in parts])
+    d = np.concatenate([c.displacement for c in parts])
+    points = {}
+    for p, point in enumerate(model.points):
+        dp = d[:, p]
+        size = np.linalg.norm(dp, axis=1)
+        pct = np.percentile(dp, PERCENTILES, axis=0)
+        spct = np.percentile(size, PERCENTILES)
+        points[point.name] = PointStats(
+            point.name,
+            dp.mean(axis=0),
+            dp.std(axis=0, ddof=1) if len(dp) > 1 else np.zeros(3),
+            {k: pct[i] for i, k in enumerate(PERCENTILES)},
+            float(size.mean()),
+            float(size.std(ddof=1)) if len(size) > 1 else 0.0,
+            {k: float(spct[i]) for i, k in enumerate(PERCENTILES)},
+            float(size.max()),
+        )
+    reqs = []
+    z = _z(mc.confidence)
+    for req in model.requirements:
+        out = int(np.sum(_outside(req, model, d)))
+        reqs.append(RequirementStats(req, out, out / len(d), _wilson(out, len(d), z)))
+    return MonteCarloResult(
+        mc,
+        model.name,
+        pmap.labels,
+        tuple(p.name for p in model.points),
+        plays,
+        d,
+        points,
+        tuple(reqs),
+        _rel_errors(model, d, mc.confidence),
+        sum(c.batched for c in parts),
+        sum(c.full_solves for c in parts),
+        max(c.feasibility_mm for c in parts),
+        max(c.equilibrium_residual for c in parts),
+        {v.label: v.value.describe() for v in pmap.variables},
+        lmap.labels,
+        np.concatenate([c.loads for c in parts]),
+        {v.label: v.value.describe() for v in lmap.variables},
+    )
+
+
+def _wilson(k: int, n: int, z: float) -> tuple[float, float]:
+    """Wilson score interval of a binomial fraction k / n."""
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (max(0.0, centre - half), min(1.0, centre + half))
