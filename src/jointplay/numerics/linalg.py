@@ -120,9 +120,11 @@ class SingularSystemError(Exception):
 def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> FloatArray:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
     equations). A singular but consistent system (statically indeterminate
-    forces) gets a regularized-and-refined solution (dense: least squares if
-    that fails too); raises ``SingularSystemError`` when no step solves it
-    accurately.
+    forces) gets a solution: the plain factors' if round-off lets them solve
+    it (its split of the indeterminate multipliers is then any; the position
+    step is the one there is), else a regularized-and-refined one (dense:
+    least squares if that fails too). Raises ``SingularSystemError`` when no
+    step solves it accurately.
 
     ``prox`` > 0: the system is expected to be singular up to round-off (a
     tied face); the step is the regularized-and-refined one, which stays

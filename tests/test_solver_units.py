@@ -1,0 +1,187 @@
+"""Unit tests of the solver's pieces: the maps from cone-program rows back to
+contacts, Newton on an active set, and the KKT solves under it.
+
+The end-to-end tests (paper, properties, fuzz) judge whole answers; these pin
+down each piece's own promise, so a change to one shows where it broke.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import jointplay
+from jointplay.numerics import linalg
+from jointplay.solver import Workspace, conic, faces, newton, pipeline
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Exact to round-off: the maps copy entries, they compute nothing.
+EXACT = 1e-15
+
+
+@pytest.fixture(scope="module")
+def carriage() -> Workspace:
+    """Planar faces (cones with an offset row), one-sided point contacts and
+    balls: every kind of cone the program holds."""
+    return Workspace.of(jointplay.load(ROOT / "examples" / "studies" / "carriage.yaml"))
+
+
+@pytest.fixture(scope="module")
+def paper() -> Workspace:
+    return Workspace.of(jointplay.load(ROOT / "examples" / "paper" / "6.1.6.1.yaml"))
+
+
+def test_the_cone_program_maps_every_row_back_to_its_contact(carriage: Workspace) -> None:
+    """Clarabel's slack ``s = b - A x`` is, row by row: the equalities
+    ``e - Eq x`` (zero cone), then per contact ``r_i - B_i x`` at
+    ``soc_first[i]`` and ``-A_i x`` at its ``f_rows``; the cones' sizes are
+    the contacts' rows plus one."""
+    ws = carriage
+    prog = ws.interior_program
+    x = np.random.default_rng(1).standard_normal(ws.m)
+    s = prog.b - prog.A @ x
+    n_eq = ws.Eq.shape[0]
+    st = ws.stack
+    assert np.allclose(s[:n_eq], -linalg.times(ws.Eq, x), rtol=0, atol=EXACT)
+    assert np.allclose(s[prog.soc_first], st.r - linalg.times(st.B, x), rtol=0, atol=EXACT)
+    assert np.allclose(s[prog.f_rows], -linalg.times(st.A, x), rtol=0, atol=EXACT)
+    covered = np.concatenate([np.arange(n_eq), prog.soc_first, prog.f_rows])
+    assert sorted(covered.tolist()) == list(range(prog.A.shape[0]))  # each row once
+    contact_cones = prog.cones[1:] if n_eq else prog.cones  # the zero cone first, if any
+    assert len(contact_cones) == len(st.k)
+    for k, cone in zip(st.k, contact_cones, strict=True):
+        assert repr(cone) == (f"SecondOrderConeT({k + 1})" if k else "NonnegativeConeT(1)")
+
+
+def test_a_face_maps_its_resting_contacts_force_rows(carriage: Workspace) -> None:
+    """A face's linear cones (resting flat, or one-sided) become equalities
+    ``L x = rhs``: the row at ``lam_rows[j]`` is the cone's ``B`` (rhs its
+    radius), those at ``f_rows`` its ``A`` rows (rhs 0)."""
+    ws = carriage
+    point = pipeline.optimum(ws, ws.asm.g / np.linalg.norm(ws.asm.g), np.zeros(len(ws.balls)))
+    assert point.active is not None and point.active[1], "the carriage rests on flat faces"
+    face = faces.face_of(ws, point.active)
+    _, linear = point.active
+    st = ws.stack
+    L = linalg.dense(face.L)
+    for j, i in enumerate(linear):
+        assert np.array_equal(L[face.lam_rows[j]], linalg.dense(st.B[i : i + 1])[0])
+        assert face.rhs[face.lam_rows[j]] == st.r[i]
+    lin = st.take(linear)
+    assert np.array_equal(L[face.f_rows], linalg.dense(lin.A))
+    assert not np.any(face.rhs[face.f_rows])
+    assert np.array_equal(face.linear_rows, st.rows_of(linear))
+    assert faces.face_of(ws, point.active) is face  # built once, then kept
+
+
+def test_newton_returns_to_the_optimum_from_a_nearby_start(paper: Workspace) -> None:
+    """From a start 1e-3 away (scaled), Newton on the optimum's active set
+    comes back to it to round-off in a few steps, as quadratic convergence
+    does."""
+    ws = paper
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    point = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
+    assert point.active is not None
+    surface, linear = point.active
+    assert surface and not linear  # the paper's shaft leans on both cylinders' surfaces
+    face = faces.face_of(ws, point.active)
+    rng = np.random.default_rng(7)
+    x0 = point.x + 1e-3 * rng.standard_normal(ws.m)
+    lam0 = point.lam * (1 + 0.1 * rng.standard_normal(len(point.lam)))
+    out = newton.newton(None, -g_hat, face.Eq, face.e, face.stack, x0, lam0[list(surface)])
+    assert out is not None
+    x, lam, _, iterations = out
+    assert iterations <= 8
+    assert np.max(np.abs(x - point.x)) * ws.asm.s <= 1e-12  # mm
+    assert np.allclose(lam, point.lam[list(surface)], rtol=1e-10, atol=0)
+
+
+def test_newton_gives_up_where_a_contact_has_no_direction(paper: Workspace) -> None:
+    """At x = 0 every ball contact sits at its centre: the force direction
+    ``A_i x / |A_i x|`` is undefined, and Newton says so (None) instead of
+    dividing by zero."""
+    ws = paper
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    point = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
+    assert point.active is not None
+    face = faces.face_of(ws, point.active)
+    lam0 = point.lam[list(point.active[0])]
+    assert newton.newton(None, -g_hat, face.Eq, face.e, face.stack, np.zeros(ws.m), lam0) is None
+
+
+def _kkt(duplicate: bool) -> tuple[np.ndarray, int]:
+    """A KKT matrix ``[[H, J^T], [J, 0]]`` with H positive definite; with
+    ``duplicate``, J repeats a row (forces statically indeterminate)."""
+    rng = np.random.default_rng(3)
+    M = rng.standard_normal((4, 4))
+    H = M @ M.T + 4 * np.eye(4)
+    J = rng.standard_normal((2, 4))
+    if duplicate:
+        J = np.vstack([J, J[:1]])
+    n = 4 + J.shape[0]
+    K = np.zeros((n, n))
+    K[:4, :4], K[:4, 4:], K[4:, :4] = H, J.T, J
+    return K, 4
+
+
+@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
+def test_a_regular_kkt_system_is_solved_exactly(sparse: bool) -> None:
+    K, n = _kkt(duplicate=False)
+    rhs = np.arange(1.0, K.shape[0] + 1)
+    step = linalg.solve_kkt(sp.csc_matrix(K) if sparse else K, rhs, n)
+    assert np.allclose(step, np.linalg.solve(K, rhs), rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
+def test_indeterminate_forces_still_give_the_one_position_step(sparse: bool) -> None:
+    """A repeated constraint row makes K singular but the system consistent.
+    A plain step (``prox`` 0) solves it with the unique position step; its
+    split of the multiplier between the copies is any (Newton needs only the
+    positions: ``forces.py`` splits the forces afterwards). A proximal step
+    is the solution nearest 0: the copies share equally."""
+    K, n = _kkt(duplicate=True)
+    want = np.r_[1.0, -2.0, 0.5, 3.0, 1.0, 2.0, 0.0]
+    rhs = K @ want
+    matrix = sp.csc_matrix(K) if sparse else K
+    step = linalg.solve_kkt(matrix, rhs, n)
+    assert np.max(np.abs(K @ step - rhs)) <= 1e-10 * np.max(np.abs(rhs))
+    assert np.allclose(step[:n], want[:n], rtol=0, atol=1e-9)
+    assert step[4] + step[6] == pytest.approx(want[4] + want[6], abs=1e-9)
+    nearest = linalg.solve_kkt(matrix, rhs, n, prox=1e-8)
+    assert np.allclose(nearest, np.linalg.lstsq(K, rhs, rcond=None)[0], rtol=0, atol=1e-8)
+    assert nearest[4] == pytest.approx(nearest[6], abs=1e-8)  # the two copies share
+
+
+def test_an_inconsistent_singular_system_is_refused() -> None:
+    """No step solves it: a sparse system raises (the caller falls back), a
+    small dense one gets the least-squares step."""
+    K, n = _kkt(duplicate=True)
+    rhs = np.zeros(K.shape[0])
+    rhs[4], rhs[6] = 1.0, -1.0  # the same row asked for two values
+    with pytest.raises(linalg.SingularSystemError):
+        linalg.solve_kkt(sp.csc_matrix(K), rhs, n)
+    step = linalg.solve_kkt(K, rhs, n)
+    assert np.allclose(step, np.linalg.lstsq(K, rhs, rcond=None)[0], atol=1e-10)
+
+
+def test_the_proximal_solve_converges_to_the_solution_nearest_zero() -> None:
+    K, n = _kkt(duplicate=True)
+    rhs = K @ np.r_[0.3, 0.1, -0.2, 0.4, 2.0, -1.0, 0.5]
+    step = linalg.proximal_solve(K, rhs, n, eps=1e-6, tol=1e-13)
+    assert step is not None
+    assert np.allclose(step, np.linalg.lstsq(K, rhs, rcond=None)[0], rtol=0, atol=1e-10)
+
+
+def test_the_status_map_and_the_program_agree_on_a_solve(paper: Workspace) -> None:
+    """One raw Clarabel call on the workspace's program is ``optimal`` in our
+    words, and its dual is the optimum's contact forces before the polish."""
+    ws = paper
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    sol = conic.run(ws, ws.interior_program, -g_hat)
+    assert conic.outcome(sol) == "optimal"
+    point = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
+    z = np.asarray(sol.z)
+    assert np.allclose(z[ws.interior_program.soc_first], point.lam, rtol=1e-6, atol=1e-9)
