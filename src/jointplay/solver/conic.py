@@ -7,7 +7,7 @@ status that a new Clarabel release adds stops the solve with its name.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import clarabel
@@ -61,11 +61,20 @@ def has_answer(solution: Any) -> bool:
 
 
 def cone_program(
-    ws: Workspace, P: Matrix | None, Eq: Matrix, e: FloatArray, stack: BallStack
+    ws: Workspace,
+    P: Matrix | None,
+    Eq: Matrix,
+    e: FloatArray,
+    stack: BallStack,
+    *,
+    shift: FloatArray | None = None,
+    tolerance: float | None = None,
+    max_iter: int | None = None,
 ) -> ConeProgram:
-    """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, -A_i x)``
+    """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, -A_i x - a_i)``
     per contact (a one-sided limit, with no rows, is a non-negative slack).
-    Its dual is ``(lam_i, f_i)``."""
+    Its dual is ``(lam_i, f_i)``. ``shift``: the offsets ``a`` stacked like
+    the rows of A (0 by default; a re-linearized contact has them)."""
     n_eq, n_cones, n_rows = Eq.shape[0], len(stack.k), stack.A.shape[0]
     n_all = n_eq + n_rows + n_cones
     b = np.zeros(n_all)
@@ -73,6 +82,8 @@ def cone_program(
     soc_first = n_eq + stack.start + np.arange(n_cones)
     ball_rows = n_eq + np.arange(n_rows) + np.repeat(np.arange(1, n_cones + 1), stack.k)
     b[soc_first] = stack.r
+    if shift is not None:
+        b[ball_rows] = -shift
     order = np.empty(n_all, dtype=np.intp)  # row of the program -> row of (Eq; A; B)
     order[:n_eq] = np.arange(n_eq)
     order[ball_rows] = n_eq + np.arange(n_rows)
@@ -87,23 +98,56 @@ def cone_program(
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in stack.k
     ]
-    if P is None:
-        P_upper = sp.csc_matrix((ws.m, ws.m))
-    elif linalg.is_sparse(P):
-        P_upper = sp.csc_matrix(sp.triu(P))
-    else:
-        P_upper = csc(np.triu(P))
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    tol = ws.settings.ipm_tolerance
+    tol = ws.settings.ipm_tolerance if tolerance is None else tolerance
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
-    settings.max_iter = ws.settings.max_iterations
+    settings.max_iter = ws.settings.max_iterations if max_iter is None else max_iter
     # refine each step's linear solve further than the default: with
     # stiff springs pressed far past their play, the default leaves some
     # programs "AlmostSolved" at a 1e-7 gap
     refine = ws.settings.ipm_refinement
     settings.iterative_refinement_reltol = settings.iterative_refinement_abstol = refine
-    return ConeProgram(P_upper, A, b, cones, settings, soc_first, ball_rows)
+    return ConeProgram(_upper(P, ws.m), A, b, cones, settings, soc_first, ball_rows)
+
+
+def with_penetrations(prog: ConeProgram, soft: IntArray) -> ConeProgram:
+    """The program with a penetration ``p_i >= 0`` per compliant contact
+    ``soft``: cone radius ``r_i + p_i``, unknowns ``(x, p)``. Its energy
+    ``sum p_i^2 / (2 sigma_i)`` depends on the loads: ``softened`` sets it."""
+    n_base, m = prog.A.shape
+    nc = len(soft)
+    extra = sp.csr_matrix(
+        (
+            -np.ones(2 * nc),
+            (
+                np.r_[prog.soc_first[soft], n_base + np.arange(nc)],
+                np.r_[np.arange(nc), np.arange(nc)],
+            ),
+        ),
+        shape=(n_base + nc, nc),
+    )
+    A = sp.hstack([sp.vstack([prog.A, sp.csr_matrix((nc, m))]), extra], format="csc")
+    b = np.concatenate([prog.b, np.zeros(nc)])
+    cones = [*prog.cones, clarabel.NonnegativeConeT(nc)]
+    P = sp.block_diag([prog.P, sp.csc_matrix((nc, nc))], format="csc")
+    return ConeProgram(P, A, b, cones, prog.settings, prog.soc_first, prog.f_rows)
+
+
+def softened(prog: ConeProgram, soft: IntArray, sigma: FloatArray) -> ConeProgram:
+    """``with_penetrations``' program with the energy ``p_i^2 / (2 sigma_i)``."""
+    m = prog.P.shape[0] - len(soft)
+    P = sp.block_diag([prog.P[:m, :m], sp.diags(1.0 / sigma[soft])], format="csc")
+    return replace(prog, P=P)
+
+
+def _upper(P: Matrix | None, m: int) -> sp.csc_matrix:
+    """The upper triangle Clarabel reads (``P`` None: no quadratic term)."""
+    if P is None:
+        return sp.csc_matrix((m, m))
+    if linalg.is_sparse(P):
+        return sp.csc_matrix(sp.triu(P))
+    return csc(np.triu(P))
 
 
 def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:

@@ -21,12 +21,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-import clarabel
 import numpy as np
 
-from jointplay.assembly import Assembly
+from jointplay.assembly import Assembly, BallStack
 from jointplay.errors import SolverError
 from jointplay.finite import IDENTITY, Linearization, Placement, placements, relative_in_joint
 from jointplay.geometry import (
@@ -207,91 +206,52 @@ def _reach(ws: Workspace, sigma: FloatArray, lam: FloatArray) -> FloatArray:
 def _step(
     ws: Workspace, x: FloatArray, parts: _Parts, g: FloatArray, g_norm: float
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """One linearized cone program: (step, lam, f, fixed multipliers), scaled."""
-    asm, m, s = ws.asm, ws.m, ws.asm.s
-    J = _parts_jacobian(asm, x) / s
-    now = parts.flat() / s
-    sigma = ws.softness(g_norm)
-    soft = np.flatnonzero(ws.stack.spring > 0)
-    n_soft = len(soft)
-    # rows: zero cone (fixed contacts, then K), then one cone per ball, then p >= 0
-    A_rows: list[FloatArray] = []
-    b_rows: list[float] = []
-    cones: list[Any] = []
-    row = 0
-    ball_first, ball_vec = [], []
-    # where each cone's parts sit in ``flat``: balls (vector rows, scalar), then fixed
-    ball_offsets = []
-    cursor = 0
-    for a, _ in parts.balls:
-        ball_offsets.append(cursor)
-        cursor += len(a) + 1
+    """One linearized cone program: (step, lam, f, fixed multipliers), scaled.
+
+    The same program as a small-displacement solve (``conic.cone_program``),
+    with each contact's exact parts linearized at ``x``: cone i is
+    ``|a_i + J_a d| + b_i + J_b d <= r_i``, a fixed contact ``a_i + J_a d = 0``,
+    plus the proximal term that makes the step unique."""
+    asm, m, st = ws.asm, ws.m, ws.settings
+    J = _parts_jacobian(asm, x) / asm.s
+    now = parts.flat() / asm.s
+    # where each contact's parts sit in ``flat``: balls (vector rows, scalar), then fixed
+    k = np.array([len(a) for a, _ in parts.balls], dtype=np.intp)
+    scalar = np.cumsum(k + 1) - 1
+    vector = np.flatnonzero(~np.isin(np.arange(int(np.sum(k + 1))), scalar))
+    cursor = int(np.sum(k + 1))
     fixed_rows: list[int] = []
     for a, _ in parts.fixed:
         fixed_rows.extend(range(cursor, cursor + len(a)))
         cursor += len(a) + 1
-    n_var = m + n_soft
-    Z = [np.hstack([J[fixed_rows], np.zeros((len(fixed_rows), n_soft))])] if fixed_rows else []
-    z_rhs = [-now[fixed_rows]] if fixed_rows else []
+    stack = ws.stack
+    assert np.array_equal(k, stack.k), "the exact parts follow the assembly's cones"
+    linear = BallStack(J[vector], stack.start, k, stack.r - now[scalar], stack.spring, J[scalar])
     # free motions of the current placement (no cone or fixed row moves them):
     # the step leaves them alone, as the small-displacement answer did
     _, sv, Vt = np.linalg.svd(J, full_matrices=True)
-    rcond = ws.settings.free_motion_rcond
-    rank = int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
+    rank = int(np.sum(sv > st.free_motion_rcond * sv[0])) if sv.size and sv[0] > 0 else 0
     K = (asm.metric @ Vt[rank:].T).T
-    if len(K):
-        Z.append(np.hstack([K, np.zeros((len(K), n_soft))]))
-        z_rhs.append(np.zeros(len(K)))
-    if Z:
-        A_rows.append(np.vstack(Z))
-        b_rows.extend(np.concatenate(z_rhs))
-        cones.append(clarabel.ZeroConeT(int(sum(len(z) for z in Z))))
-        row += int(sum(len(z) for z in Z))
-    soft_of = {int(i): k for k, i in enumerate(soft)}
-    for i, (a, _) in enumerate(parts.balls):
-        o = ball_offsets[i]
-        k = len(a)
-        vec_rows, scal_row = list(range(o, o + k)), o + k
-        block = np.zeros((k + 1, n_var))
-        block[0, :m] = J[scal_row]
-        if i in soft_of:
-            block[0, m + soft_of[i]] = -1.0
-        block[1:, :m] = -J[vec_rows]
-        A_rows.append(block)
-        b_rows.extend([ws.stack.r[i] - now[scal_row], *now[vec_rows]])
-        ball_first.append(row)
-        ball_vec.append(np.arange(row + 1, row + 1 + k))
-        cones.append(clarabel.SecondOrderConeT(k + 1) if k else clarabel.NonnegativeConeT(1))
-        row += k + 1
-    if n_soft:
-        block = np.zeros((n_soft, n_var))
-        block[:, m:] = -np.eye(n_soft)
-        A_rows.append(block)
-        b_rows.extend(np.zeros(n_soft))
-        cones.append(clarabel.NonnegativeConeT(n_soft))
-    P = np.zeros((n_var, n_var))
-    P[:m, :m] = ws.settings.exact_proximal * asm.metric
-    if n_soft:
-        P[m + np.arange(n_soft), m + np.arange(n_soft)] = 1.0 / sigma[soft]
-    q = np.zeros(n_var)
+    Eq = np.vstack([J[fixed_rows], K])
+    e = np.concatenate([-now[fixed_rows], np.zeros(len(K))])
+    prog = conic.cone_program(
+        ws,
+        st.exact_proximal * asm.metric,
+        Eq,
+        e,
+        linear,
+        shift=now[vector],
+        tolerance=st.fine_ipm_tolerance,
+        max_iter=st.exact_ipm_iterations,
+    )
+    soft = np.flatnonzero(stack.spring > 0)
+    if len(soft):
+        prog = conic.softened(conic.with_penetrations(prog, soft), soft, ws.softness(g_norm))
+    q = np.zeros(prog.A.shape[1])
     q[:m] = -g / g_norm if g_norm else 0.0
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    fine = ws.settings.fine_ipm_tolerance
-    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = fine
-    settings.max_iter = ws.settings.exact_ipm_iterations
-    A = np.vstack(A_rows) if A_rows else np.zeros((0, n_var))
-    sol = clarabel.DefaultSolver(
-        conic.csc(np.triu(P)), q, conic.csc(A), np.array(b_rows, dtype=float), cones, settings
-    ).solve()
-    if not conic.has_answer(sol):
-        raise SolverError(f"--exact: the cone solver stopped with status {conic.status_name(sol)}")
+    sol = conic.run(ws, prog, q)
     z = np.asarray(sol.z)
-    lam = z[np.array(ball_first, dtype=np.intp)] if ball_first else np.zeros(0)
-    f = -np.concatenate(ball_vec and [z[v] for v in ball_vec]) if ball_vec else np.zeros(0)
-    n_fixed = len(fixed_rows)
-    nu = z[:n_fixed] if n_fixed else np.zeros(0)
-    return np.asarray(sol.x)[:m], lam, f, nu
+    return np.asarray(sol.x)[:m], z[prog.soc_first], z[prog.f_rows], z[: len(fixed_rows)]
 
 
 def _build(

@@ -31,9 +31,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import replace
 
-import clarabel
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from jointplay.assembly import assemble
@@ -202,36 +200,12 @@ def interior_point_compliant(ws: Workspace, g_hat: FloatArray, sigma: FloatArray
     """The cone program with a penetration ``p_i >= 0`` per compliant contact:
     ``|A_i x| <= r_i + p_i`` and energy ``-g_hat x + sum p_i^2 / (2 sigma_i)``."""
     soft = np.flatnonzero(ws.stack.spring > 0)
-    m, nc = ws.m, len(soft)
     if ws.compliant_program is None:  # built on first use, then kept
-        base = conic.cone_program(ws, None, ws.Eq, np.zeros(ws.Eq.shape[0]), ws.stack)
-        n_base = base.A.shape[0]
-        extra = sp.csr_matrix(
-            (
-                -np.ones(2 * nc),
-                (
-                    np.r_[base.soc_first[soft], n_base + np.arange(nc)],
-                    np.r_[np.arange(nc), np.arange(nc)],
-                ),
-            ),
-            shape=(n_base + nc, nc),
-        )  # cone radius r_i + p_i, and p_i >= 0
-        A = sp.hstack([sp.vstack([base.A, sp.csr_matrix((nc, m))]), extra], format="csc")
-        b = np.concatenate([base.b, np.zeros(nc)])
-        cones = [*base.cones, clarabel.NonnegativeConeT(nc)]
-        ws.compliant_program = conic.ConeProgram(
-            base.P, A, b, cones, base.settings, base.soc_first, base.f_rows
-        )
-    prog = ws.compliant_program
-    P = sp.csc_matrix(
-        (1.0 / sigma[soft], (m + np.arange(nc), m + np.arange(nc))), shape=(m + nc, m + nc)
-    )
-    prog = conic.ConeProgram(
-        P, prog.A, prog.b, prog.cones, prog.settings, prog.soc_first, prog.f_rows
-    )
-    sol = conic.run(ws, prog, np.concatenate([-g_hat, np.zeros(nc)]))
+        ws.compliant_program = conic.with_penetrations(ws.interior_program, soft)
+    prog = conic.softened(ws.compliant_program, soft, sigma)
+    sol = conic.run(ws, prog, np.concatenate([-g_hat, np.zeros(len(soft))]))
     z = np.asarray(sol.z)
-    x = np.asarray(sol.x)[:m]
+    x = np.asarray(sol.x)[: ws.m]
     return faces.Point(x, z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations)
 
 
