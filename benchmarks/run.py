@@ -6,7 +6,9 @@
    mechanism: batch, warm, cold);
 2. ``bench_cases.py``: every case of the paper against SLSQP and CVXPY;
 3. ``bench_scaling.py``: chains and closed loops of 10 to 10,000 bodies;
-4. ``bench_montecarlo.py``: Monte Carlo samples per second against SLSQP.
+4. ``bench_montecarlo.py``: Monte Carlo samples per second against SLSQP;
+5. ``bench_startup.py``: a command's wall time against the bare import of
+   the solver's dependencies.
 
 Run from the repository root with jointplay installed (CVXPY from the
 ``bench`` extra): ``python benchmarks/run.py`` (``--quick``: fewer repeats,
@@ -25,6 +27,7 @@ import bench_cases
 import bench_montecarlo
 import bench_paper
 import bench_scaling
+import bench_startup
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -42,6 +45,8 @@ def main(argv: list[str] | None = None) -> int:
     bench_scaling.main(["--sizes", *sizes])
     print("\n" + "=" * 100 + "\n4. Monte Carlo over real parts\n" + "=" * 100)
     bench_montecarlo.main(["--samples", "200000" if args.quick else "1000000"])
+    print("\n" + "=" * 100 + "\n5. Start-up\n" + "=" * 100)
+    bench_startup.main(["--runs", "5" if args.quick else "15"])
     return 0
 
 

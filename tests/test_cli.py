@@ -47,12 +47,13 @@ def test_solve_json_has_exactly_the_documented_schema() -> None:
         "linearization_error",
         "warnings",
         "accuracy",
+        "requirements",
     }
     assert 0.0 <= doc["linearization_error"] < 1e-4 and doc["warnings"] == []
     assert doc["accuracy"]["certified"] and doc["accuracy"]["method"] == "polished"
     assert doc["accuracy"]["feasibility_mm"] <= 1e-9
     assert doc["equilibrium_residual"] < 1e-8
-    assert doc["points"] == {}
+    assert doc["points"] == {} and doc["requirements"] == []
     assert doc["status"] == "optimal"
     assert set(doc["bodies"]) == {"S0", "S1"}
     for body in doc["bodies"].values():

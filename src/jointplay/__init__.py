@@ -18,7 +18,15 @@ from jointplay.errors import (
 from jointplay.io.modelfile import load, model_from_dict
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import Body, Load, Model
-from jointplay.result import BodyResult, Certificate, ContactResult, JointResult, Result
+from jointplay.result import (
+    BodyResult,
+    Certificate,
+    ContactResult,
+    JointResult,
+    RequirementResult,
+    Result,
+    check_requirements,
+)
 from jointplay.settings import SolverSettings
 from jointplay.solver.batch import BatchSolution
 from jointplay.solver.pipeline import solve, solve_cases
@@ -78,6 +86,7 @@ __all__ = [
     "MonteCarloResult",
     "OptionError",
     "Report",
+    "RequirementResult",
     "Result",
     "RotateLoad",
     "SolverError",
@@ -88,6 +97,7 @@ __all__ = [
     "Vary",
     "Workspace",
     "__version__",
+    "check_requirements",
     "load",
     "model_from_dict",
     "solve",

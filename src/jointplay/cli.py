@@ -27,6 +27,8 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
+#: ``solve --fail-on-requirements``: solved and certified, but a requirement fails.
+REQUIREMENT_FAILED = 4
 
 R = TypeVar("R")
 
@@ -143,38 +145,57 @@ def solve(
             "holds within 1e-9 mm).",
         ),
     ] = False,
+    fail_on_requirements: Annotated[
+        bool,
+        typer.Option(
+            "--fail-on-requirements",
+            help=f"Exit with code {REQUIREMENT_FAILED} when a requirement fails for the "
+            "solution of any load case (after printing everything): a gate for CI.",
+        ),
+    ] = False,
 ) -> None:
-    """Solve the equilibrium of MODEL: joints, contacts, forces and bodies.
+    """Solve the equilibrium of MODEL: joints, contacts, forces and bodies, and
+    each requirement's pass or fail.
 
     A model with load cases is solved for each case (or only --case NAME).
     """
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render
+    from jointplay.result import check_requirements
     from jointplay.solver.workspace import Workspace
 
+    failed = False
+
     def run() -> None:
+        nonlocal failed
         from jointplay.model.mechanism import check_case
 
         model = load(model_path)
         check_case(model, case, str(model_path))
         ws = Workspace.of(model)
-        if not model.case_names:
-            result = ws.solve(exact=exact)
-            if as_json:
-                typer.echo(json.dumps(result.to_dict(), indent=2))
-            else:
-                render(model, result, str(model_path), _console())
-            return
-        names = [case] if case is not None else list(model.case_names)
-        results = {name: ws.solve(loads=model.loads_of(name), exact=exact) for name in names}
+        if model.case_names:
+            names: list[str | None] = [case] if case is not None else list(model.case_names)
+        else:
+            names = [None]
+        results = {
+            name: ws.solve(loads=None if name is None else model.loads_of(name), exact=exact)
+            for name in names
+        }
+        docs = {}
+        for name, result in results.items():
+            checks = check_requirements(model, result)
+            failed = failed or not all(c.passed for c in checks)
+            docs[name] = {**result.to_dict(), "requirements": [c.to_dict() for c in checks]}
         if as_json:
-            doc = {"status": "optimal", "cases": {n: r.to_dict() for n, r in results.items()}}
+            doc = docs.get(None, {"status": "optimal", "cases": docs})
             typer.echo(json.dumps(doc, indent=2))
         else:
             for name, result in results.items():
                 render(model, result, str(model_path), _console(), case=name)
 
     _guarded(run, as_json)
+    if failed and fail_on_requirements:
+        raise typer.Exit(REQUIREMENT_FAILED)
 
 
 @app.command(short_help="Monte Carlo over real parts drawn from their tolerances.")

@@ -23,7 +23,7 @@ from jointplay.settings import DEFAULT, TINY
 
 if TYPE_CHECKING:
     from jointplay.assembly import Assembly
-    from jointplay.model.mechanism import Load, Model
+    from jointplay.model.mechanism import Load, Model, Requirement
 
 #: Largest relative imbalance of loads and contact forces that ``check`` accepts.
 EQUILIBRIUM_TOLERANCE = DEFAULT.equilibrium_tolerance
@@ -455,6 +455,43 @@ def points_of(model: Model, bodies: dict[str, BodyResult]) -> dict[str, PointRes
         )
         for p in model.points
     }
+
+
+@dataclass(frozen=True)
+class RequirementResult:
+    """One requirement checked on one answer: what it bounds, measured (mm),
+    against its limit. Passed when the measure is at most the limit."""
+
+    requirement: Requirement
+    measured: float  # mm
+
+    @property
+    def passed(self) -> bool:
+        return self.measured <= self.requirement.max_displacement
+
+    @property
+    def margin(self) -> float:
+        """mm left before the limit (negative: by how much it is missed)."""
+        return self.requirement.max_displacement - self.measured
+
+    def to_dict(self) -> dict[str, Any]:
+        req = self.requirement
+        return {
+            "point": req.point,
+            "max_displacement": req.max_displacement,
+            "along": None if req.along is None else list(req.along),
+            "measured": self.measured,
+            "margin": self.margin,
+            "passed": self.passed,
+        }
+
+
+def check_requirements(model: Model, result: Result) -> tuple[RequirementResult, ...]:
+    """Each of the model's requirements on ``result``'s functional points."""
+    return tuple(
+        RequirementResult(req, float(req.measure(result.points[req.point].displacement)))
+        for req in model.requirements
+    )
 
 
 def describe_free_motions(asm: Assembly, free_basis: Any) -> tuple[str, ...]:

@@ -12,6 +12,7 @@ from collections.abc import Iterable
 from functools import cached_property
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, model_validator
 
 from jointplay.model.fields import (
@@ -114,6 +115,16 @@ class Requirement(BaseModel):
     def describe(self) -> str:
         what = "|displacement|" if self.along is None else f"displacement along {list(self.along)}"
         return f"point '{self.point}': {what} <= {self.max_displacement:g} mm"
+
+    def measure(self, displacement: Any) -> Any:
+        """What the requirement bounds, in mm: the length of the point's
+        displacement, or the size of its component ``along``; on (..., 3)
+        arrays of displacements (global, mm), one value per row."""
+        d = np.asarray(displacement, dtype=float)
+        if self.along is None:
+            return np.linalg.norm(d, axis=-1)
+        u = np.asarray(self.along, dtype=float)
+        return np.abs(d @ (u / np.linalg.norm(u)))
 
 
 class Load(BaseModel):

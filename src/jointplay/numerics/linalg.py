@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from scipy.linalg import lapack
 
@@ -191,6 +190,8 @@ def _factored(K: Matrix) -> Any:
     exactly singular."""
     try:
         if sp.issparse(K):
+            import scipy.sparse.linalg as spla  # large mechanisms only: 0.05 s to import
+
             with _silenced():  # SuperLU on an exactly singular K fails inside BLAS, which prints
                 return spla.splu(sp.csc_matrix(K)).solve
         # LAPACK directly: scipy's wrappers cost more than a small system's solve
@@ -252,6 +253,8 @@ def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
     if not sp.issparse(A):
         return np.asarray(np.linalg.lstsq(A, b, rcond=None)[0])
     tol = DEFAULT.lsmr_tolerance
+    import scipy.sparse.linalg as spla  # large mechanisms only
+
     out = spla.lsmr(A, b, atol=tol, btol=tol, maxiter=20 * max(A.shape))
     return np.asarray(out[0])
 

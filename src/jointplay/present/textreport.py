@@ -4,6 +4,7 @@ vectorial sets per joint, and which contacts touch."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from rich.console import Console, Group
@@ -12,11 +13,13 @@ from rich.text import Text
 
 from jointplay.geometry import FloatArray, fmt_point
 from jointplay.model.mechanism import Model
-from jointplay.result import Result
-from jointplay.studies.contributions import ContributionsResult
-from jointplay.studies.envelope import EnvelopeResult
-from jointplay.studies.montecarlo import MonteCarloResult
-from jointplay.studies.sweep import SweepResult
+from jointplay.result import Result, check_requirements
+
+if TYPE_CHECKING:  # the studies bring SciPy's statistics: a solve does not need them
+    from jointplay.studies.contributions import ContributionsResult
+    from jointplay.studies.envelope import EnvelopeResult
+    from jointplay.studies.montecarlo import MonteCarloResult
+    from jointplay.studies.sweep import SweepResult
 
 
 def _num(v: float, digits: int = 8) -> str:
@@ -128,6 +131,25 @@ def render(
                 pr.name, pr.body, *(_num(v, 6) for v in d), _num(float(np.linalg.norm(d)), 6)
             )
         parts.append(point_table)
+    checks = check_requirements(model, result)
+    if checks:
+        req_table = Table(
+            title="requirements on this solution (mm)", title_justify="left", show_edge=False
+        )
+        for name in ("point", "bounds", "measured", "limit", "margin", "verdict"):
+            req_table.add_column(name, justify="left" if name in ("point", "bounds") else "right")
+        for check in checks:
+            req = check.requirement
+            req_table.add_row(
+                req.point,
+                "|d|" if req.along is None else f"|d . {_vec(np.asarray(req.along), 3)}|",
+                f"{check.measured:.6g}",
+                f"{req.max_displacement:g}",
+                f"{check.margin:.6g}",
+                "pass" if check.passed else "FAIL",
+                style=None if check.passed else "bold red",
+            )
+        parts.append(req_table)
     if result.free_motions:
         parts.append(
             Text(

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from jointplay.assembly import Assembly, BallStack, IntArray
 from jointplay.geometry import FloatArray
@@ -104,6 +103,8 @@ def _blas() -> Any:
 
 
 def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> BatchSolution:
+    from scipy.spatial import cKDTree  # here: a single solve need not import it
+
     work = np.atleast_2d(np.asarray(work, dtype=float))
     if work.ndim != 2 or work.shape[1] != ws.m:
         raise ValueError(f"work must have shape (B, {ws.m}), not {work.shape}")

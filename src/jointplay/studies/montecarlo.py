@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy import stats
 
 from jointplay.assembly import assemble
 from jointplay.errors import ModelError
@@ -192,19 +191,15 @@ def _solve_chunks(
 
 
 def _z(confidence: float) -> float:
+    from scipy import stats  # on first use: it takes half a second to import
+
     return float(stats.norm.ppf(0.5 + confidence / 2))
 
 
 def _outside(req: Requirement, model: Model, displacement: FloatArray) -> FloatArray:
     """(n,) bool: the samples whose point misses the requirement."""
     p = [pt.name for pt in model.points].index(req.point)
-    d = displacement[:, p]
-    if req.along is None:
-        size = np.linalg.norm(d, axis=1)
-    else:
-        u = np.asarray(req.along) / np.linalg.norm(req.along)
-        size = np.abs(d @ u)
-    return np.asarray(size > req.max_displacement)
+    return np.asarray(req.measure(displacement[:, p]) > req.max_displacement)
 
 
 def _converged(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> bool:
