@@ -13,7 +13,6 @@ import yaml
 
 import jointplay
 from conftest import MM, spherical_shaft
-from jointplay.result import check_requirements
 from test_cli import run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,7 +46,7 @@ def test_each_requirement_is_measured_on_the_solution() -> None:
     )
     result = jointplay.solve(model)
     d = result.points["tip"].displacement
-    size, component = check_requirements(model, result)
+    size, component = result.requirements
     assert size.measured == pytest.approx(float(np.linalg.norm(d)), abs=MM)
     assert size.passed and size.margin == pytest.approx(1.0 - size.measured, abs=MM)
     assert component.measured == pytest.approx(abs(float(d @ [0, 0.6, 0.8])), abs=MM)

@@ -25,7 +25,6 @@ from jointplay.result import (
     JointResult,
     RequirementResult,
     Result,
-    check_requirements,
 )
 from jointplay.settings import SolverSettings
 from jointplay.solver.batch import BatchSolution
@@ -97,7 +96,6 @@ __all__ = [
     "Vary",
     "Workspace",
     "__version__",
-    "check_requirements",
     "load",
     "model_from_dict",
     "solve",

@@ -161,7 +161,6 @@ def solve(
     """
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render
-    from jointplay.result import check_requirements
     from jointplay.solver.workspace import Workspace
 
     failed = False
@@ -181,11 +180,8 @@ def solve(
             name: ws.solve(loads=None if name is None else model.loads_of(name), exact=exact)
             for name in names
         }
-        docs = {}
-        for name, result in results.items():
-            checks = check_requirements(model, result)
-            failed = failed or not all(c.passed for c in checks)
-            docs[name] = {**result.to_dict(), "requirements": [c.to_dict() for c in checks]}
+        failed = any(not r.passed for result in results.values() for r in result.requirements)
+        docs = {name: result.to_dict() for name, result in results.items()}
         if as_json:
             doc = docs.get(None, {"status": "optimal", "cases": docs})
             typer.echo(json.dumps(doc, indent=2))

@@ -171,6 +171,8 @@ class Result:
     describe_free: Callable[[], tuple[str, ...]] = field(repr=False, compare=False)
     #: The exact-rotation check of this answer (see ``jointplay.finite``); called lazily.
     linearize: Callable[[], Linearization] | None = field(default=None, repr=False, compare=False)
+    #: The model's requirements checked on this answer's functional points.
+    requirements: tuple[RequirementResult, ...] = ()
 
     @property
     def linearization(self) -> Linearization:
@@ -217,6 +219,7 @@ class Result:
             "linearization_error": self.linearization_error,
             "warnings": list(self.warnings),
             "accuracy": self.accuracy(),
+            "requirements": [r.to_dict() for r in self.requirements],
         }
 
     def accuracy(self) -> dict[str, Any]:
@@ -375,6 +378,7 @@ def build_result(
         solve_time,
         describe_free,
         lambda: linearization(asm, x, reach_mm),
+        requirements_of(model, points),
     )
 
 
@@ -486,10 +490,10 @@ class RequirementResult:
         }
 
 
-def check_requirements(model: Model, result: Result) -> tuple[RequirementResult, ...]:
-    """Each of the model's requirements on ``result``'s functional points."""
+def requirements_of(model: Model, points: dict[str, PointResult]) -> tuple[RequirementResult, ...]:
+    """Each of the model's requirements on these functional points."""
     return tuple(
-        RequirementResult(req, float(req.measure(result.points[req.point].displacement)))
+        RequirementResult(req, float(req.measure(points[req.point].displacement)))
         for req in model.requirements
     )
 

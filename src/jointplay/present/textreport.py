@@ -13,7 +13,7 @@ from rich.text import Text
 
 from jointplay.geometry import FloatArray, fmt_point
 from jointplay.model.mechanism import Model
-from jointplay.result import Result, check_requirements
+from jointplay.result import Result
 
 if TYPE_CHECKING:  # the studies bring SciPy's statistics: a solve does not need them
     from jointplay.studies.contributions import ContributionsResult
@@ -131,7 +131,7 @@ def render(
                 pr.name, pr.body, *(_num(v, 6) for v in d), _num(float(np.linalg.norm(d)), 6)
             )
         parts.append(point_table)
-    checks = check_requirements(model, result)
+    checks = result.requirements
     if checks:
         req_table = Table(
             title="requirements on this solution (mm)", title_justify="left", show_edge=False

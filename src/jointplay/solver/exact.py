@@ -46,6 +46,7 @@ from jointplay.result import (
     _clean,
     equilibrium_residual,
     points_of,
+    requirements_of,
 )
 from jointplay.solver import conic
 
@@ -349,4 +350,5 @@ def _build(
         equilibrium_residual(asm, joints, loads, place),
         0.0,
         ws.free_motions,
+        requirements=requirements_of(model, points),
     )
