@@ -323,3 +323,77 @@ def test_a_generated_model_with_too_many_entries_is_refused_before_validation() 
         jointplay.model_from_dict(data)
     message = str(info.value)
     assert "bodies" in message and "100,001 entries" in message
+
+
+_SHAFT_YAML = """bodies:
+  - {{name: S0, ground: true}}
+  - {{name: S1}}
+joints:
+  - {{name: l1, type: spherical, between: [S0, S1], at: [0, 0, 0], clearance: {play}}}
+  - {{name: l2, type: cylindrical, between: [S0, S1], at: [200, 0, 0], length: 40, clearance: 0.2}}
+loads:
+  - {{body: S1, at: [300, 0, 0], force: [1, 1, 1]}}
+"""
+
+
+@pytest.mark.parametrize(
+    ("play", "message"),
+    [
+        ("0x10", "'0x10' is a YAML 1.1 numeral"),  # YAML 1.1: 16
+        ("1_0", "'1_0' is a YAML 1.1 numeral"),  # YAML 1.1: 10
+        ("017", "'017' is a YAML 1.1 numeral"),  # YAML 1.1: 15 (octal)
+        ("1:30", "'1:30' is a YAML 1.1 numeral"),  # YAML 1.1: 90 (sexagesimal)
+        ("1_0.5", "'1_0.5' is a YAML 1.1 numeral"),
+        ("0o17", "'0o17'"),  # text in YAML 1.1, and no unit
+        ("1e-400", "too small for double precision and would read as 0"),
+        ("1.0e-400", "too small for double precision and would read as 0"),
+        ("'1e-400 mm'", "too small for double precision and would read as 0"),
+    ],
+)
+def test_numbers_that_read_otherwise_are_refused(tmp_path: Path, play: str, message: str) -> None:
+    """A number that YAML 1.1 reads otherwise than YAML 1.2 and JSON, or that
+    underflows to 0 (which would make the joint ideal), is refused where a
+    number is expected, naming the entry, with exit 2."""
+    path = tmp_path / "model.yaml"
+    path.write_text(_SHAFT_YAML.format(play=play))
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith(f"jointplay: invalid model: {path}: ")
+    assert message in proc.stderr and "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("play", ["0.2", ".2", "2e-1", "0", "-0.0", "'200 um'", "'1e-300 km'"])
+def test_plain_decimal_numbers_still_read(tmp_path: Path, play: str) -> None:
+    path = tmp_path / "model.yaml"
+    path.write_text(_SHAFT_YAML.format(play=play))
+    jointplay.load(path)
+
+
+_SHAFT_TOML = """
+bodies = [{name = "S0", ground = true}, {name = "S1"}]
+joints = [
+  {name = "l1", type = "spherical", between = ["S0", "S1"], at = [0, 0, 0], clearance = 1e-400},
+  {name = "l2", type = "cylindrical", between = ["S0", "S1"], at = [200, 0, 0], length = 40,
+   clearance = 0.2},
+]
+loads = [{body = "S1", at = [300, 0, 0], force = [1, 1, 1]}]
+"""
+
+
+@pytest.mark.parametrize("suffix", [".json", ".toml"])
+def test_json_and_toml_refuse_an_underflow_too(tmp_path: Path, suffix: str) -> None:
+    if suffix == ".json":
+        data = yaml.safe_load(_SHAFT_YAML.format(play="0.2"))
+        body = json.dumps(data).replace('"clearance": 0.2', '"clearance": 1e-400', 1)
+    else:
+        body = _SHAFT_TOML
+    path = tmp_path / f"model{suffix}"
+    path.write_text(body)
+    assert "1e-400" in path.read_text()
+    with pytest.raises(ModelError, match="too small for double precision"):
+        jointplay.load(path)

@@ -215,3 +215,31 @@ def test_the_help_examples_run_when_copied(command: str, tmp_path: Path) -> None
     proc = run("sweep", str(path), "--vary", examples[1], "--json")
     assert proc.returncode == 0, proc.stderr
     assert len(json.loads(proc.stdout)["steps"]) == 5
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("solve", str(PAPER / "6.1.6.1.yaml"), "--bogus"), "No such option: --bogus"),
+        (("montecarlo", str(PAPER / "6.1.6.1.yaml"), "-n", "0"), "'--samples' / '-n'"),
+        (("solve",), "Missing argument 'MODEL'"),
+        (
+            ("solve", str(ROOT / "examples" / "studies" / "shaft_cases.yaml"), "--case", "x"),
+            "--case",
+        ),
+        (("envelope", str(PAPER / "6.1.6.1.yaml"), "--point", "tip"), "--point: unknown point"),
+    ],
+    ids=["unknown", "out-of-range", "missing", "unknown-case", "unknown-point"],
+)
+def test_an_option_error_says_invalid_option(args: tuple[str, ...], message: str) -> None:
+    """What is wrong on the command line is labelled as such (not "invalid
+    model", not Click's usage block): one line on stderr, exit 2."""
+    proc = run(*args)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("jointplay: invalid option: ") and message in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and "Traceback" not in proc.stderr
+
+
+def test_no_command_prints_the_help() -> None:
+    proc = run()
+    assert proc.returncode == 0 and "Commands" in proc.stdout and proc.stderr == ""

@@ -140,6 +140,12 @@ def test_load_cases_add_to_the_common_loads() -> None:
     [
         ({"bodies": [{"name": "S0", "ground": True}, {"name": "S1", "mass": 2}]}, "center_of_mass"),
         ({"gravity": [0, 0, "9.81 kg"]}, "acceleration"),
+        # a plain number would be mm/s^2: -9.81 would be a thousandth of g
+        (
+            {"gravity": [0, 0, -9.81]},
+            r'component z: .* write the unit, e.g. \[0, 0, "-9.81 m/s\^2"\]',
+        ),
+        ({"gravity": [0, "-9810", 0]}, "component y: a plain number"),
         ({"points": [{"name": "p", "body": "S2", "at": [0, 0, 0]}]}, "Did you mean 'S1'"),
         (
             {"load_cases": {"a": [{"body": "S9", "torque": [1, 0, 0]}]}},

@@ -194,6 +194,16 @@ def solve(
         raise typer.Exit(REQUIREMENT_FAILED)
 
 
+@app.command(short_help="The model file's JSON Schema, for editors and checks.")
+def schema() -> None:
+    """Print the JSON Schema of the model file (draft 2020-12), generated from
+    the validated model. Save it and point an editor at it: in a YAML file,
+    the first line '# yaml-language-server: $schema=jointplay.schema.json'."""
+    from jointplay.io.modelfile import json_schema
+
+    typer.echo(json.dumps(json_schema(), indent=2))
+
+
 @app.command(short_help="Monte Carlo over real parts drawn from their tolerances.")
 def montecarlo(
     model_path: ModelPath,
@@ -705,7 +715,28 @@ def _guarded(run: Any, as_json: bool) -> None:
 
 
 def main() -> None:
-    sys.exit(app())  # pragma: no cover
+    """The command line: a usage error (an unknown option, a value out of
+    range) is reported in jointplay's words, as "invalid option", exit 2."""
+    try:
+        code = app(standalone_mode=False)
+    except Exception as exc:
+        # by name: newer Typer releases raise these from their own copy of Click
+        kinds = {cls.__name__ for cls in type(exc).__mro__}
+        if "NoArgsIsHelpError" in kinds:  # plain 'jointplay': the help
+            typer.echo(exc.format_message())  # type: ignore[attr-defined]
+            sys.exit(0)
+        if "UsageError" in kinds:
+            ctx = getattr(exc, "ctx", None)
+            hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+            Console(stderr=True, highlight=False, soft_wrap=True).print(
+                f"jointplay: invalid option: {exc.format_message()}{hint}",  # type: ignore[attr-defined]
+                markup=False,
+            )
+            sys.exit(2)
+        if "Abort" in kinds:  # Ctrl-C at a prompt
+            sys.exit(1)
+        raise
+    sys.exit(code if isinstance(code, int) else 0)
 
 
 if __name__ == "__main__":  # pragma: no cover

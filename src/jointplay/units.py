@@ -137,6 +137,27 @@ def to_base(value: Any, dimension: str) -> float:
 
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+class UnderflowError(ValueError):
+    """A number's text that double precision reads as 0 though it is not."""
+
+
+def read_number(text: str) -> float:
+    """The float of a number's text, refusing one that underflows to 0 (a
+    zero play would silently make its joint ideal)."""
+    value = float(text)
+    if value == 0.0 and any(c in "123456789" for c in text.lower().split("e")[0]):
+        raise UnderflowError(
+            f"{shown(text)} is too small for double precision and would read as 0; write 0 "
+            "if you mean none, or a value of at least 1e-300"
+        )
+    return value
+
+
+#: What a quantity written as text looks like (the model file's JSON Schema):
+#: a number first, then its unit (or nothing: the base unit).
+NUMBER_FIRST = r"^\s*" + _NUMBER.pattern
 _NOT_FINITE = re.compile(r"[+-]?\.?(?:inf|infinity|nan)\b", re.IGNORECASE)
 _TOKEN = re.compile(r"\s*(\*\*|[*/^()·]|[^\W\d]\w*|\d+(?:\.\d+)?|-|\S)")
 #: Longest unit expression read; longer is not a unit.
@@ -147,7 +168,7 @@ def _parse(text: str, dimension: str) -> float:
     stripped = text.strip()
     number = _NUMBER.match(stripped)
     if number is not None and number.end() == len(stripped):
-        return float(stripped)  # "0.2": a plain number in the base unit
+        return read_number(stripped)  # "0.2": a plain number in the base unit
     if _NOT_FINITE.match(stripped):
         return math.inf
     if number is None:
@@ -160,7 +181,13 @@ def _parse(text: str, dimension: str) -> float:
     if isinstance(factor, tuple):
         before, after = factor
         raise ValueError(f"{before}{shown(text)}{after}")
-    return float(number.group()) * factor
+    value = read_number(number.group()) * factor
+    if value == 0.0 and float(number.group()) != 0.0:
+        raise ValueError(
+            f"{shown(text)} is too small for double precision in "
+            f"{BASE_UNITS[dimension]} and would read as 0; write 0 if you mean none"
+        )
+    return value
 
 
 @lru_cache(maxsize=1024)

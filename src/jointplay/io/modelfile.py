@@ -9,6 +9,7 @@ Hostile files are bounded before they are read in full: see ``MAX_FILE_BYTES``,
 from __future__ import annotations
 
 import json
+import re
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,7 @@ from jointplay.model.mechanism import (
     Requirement,
     suggest,
 )
-from jointplay.units import shown
+from jointplay.units import UnderflowError, read_number, shown
 
 #: Largest model file read, in bytes. A hand-written model of a thousand
 #: joints is about 100 kB, and the solver takes minutes long before a model
@@ -132,6 +133,44 @@ def _scalar(kind: str) -> Any:
     return guarded
 
 
+#: YAML 1.1 reads these as numbers, YAML 1.2 and JSON do not (0x10 is 16, 1_0 is 10,
+#: 017 is 15, 1:30 is 90): a model's number is plain decimal.
+_PLAIN_INT = re.compile(r"[-+]?(0|[1-9][0-9]*)")
+_PLAIN_FLOAT = re.compile(
+    r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?|[-+]?\.(inf|Inf|INF)|\.(nan|NaN|NAN)"
+)
+
+
+def _number(kind: str) -> Any:
+    """``_scalar(kind)`` for a number, refusing YAML 1.1's other numerals
+    and a float that underflows to 0."""
+    construct = _scalar(kind)
+    plain = _PLAIN_INT if kind == "int" else _PLAIN_FLOAT
+
+    def checked(loader: Any, node: yaml.ScalarNode) -> Any:
+        text = str(node.value)
+        if node.tag.endswith(f":{kind}") and plain.fullmatch(text) is None and len(text) <= 1000:
+            raise yaml.constructor.ConstructorError(
+                None,
+                None,
+                f"{shown(text)} is a YAML 1.1 numeral (hexadecimal, octal, sexagesimal or "
+                "with '_'), which YAML 1.2 and JSON read otherwise; write the number in "
+                "plain decimal",
+                node.start_mark,
+            )
+        value = construct(loader, node)
+        if kind == "float" and value == 0.0:
+            try:
+                read_number(text)
+            except UnderflowError as exc:
+                raise yaml.constructor.ConstructorError(
+                    None, None, str(exc), node.start_mark
+                ) from None
+        return value
+
+    return checked
+
+
 def _text(loader: Any, node: yaml.ScalarNode) -> Any:
     # a date (2001-12-14) stays text: a model has no dates, and an impossible
     # date (2001-13-45) would otherwise stop the reading
@@ -139,9 +178,32 @@ def _text(loader: Any, node: yaml.ScalarNode) -> Any:
 
 
 _StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _mapping)
-for _kind_name in ("bool", "int", "float"):
-    _StrictLoader.add_constructor(f"tag:yaml.org,2002:{_kind_name}", _scalar(_kind_name))
+_StrictLoader.add_constructor("tag:yaml.org,2002:bool", _scalar("bool"))
+for _kind_name in ("int", "float"):
+    _StrictLoader.add_constructor(f"tag:yaml.org,2002:{_kind_name}", _number(_kind_name))
 _StrictLoader.add_constructor("tag:yaml.org,2002:timestamp", _text)
+
+
+#: Where the schema says it lives (the YAML language server reads ``$schema``).
+SCHEMA_DIALECT = "https://json-schema.org/draft/2020-12/schema"
+
+
+def json_schema() -> dict[str, Any]:
+    """The model file's JSON Schema, generated from the validated model: the
+    keys, shapes and types a file may hold (``jointplay schema``). Values with
+    units are numbers (base unit) or strings that start with a number; what a
+    unit means, and the checks across entries (names, topology), are made
+    when the file is read."""
+    schema = Model.model_json_schema(by_alias=True)
+    return {
+        "$schema": SCHEMA_DIALECT,
+        "title": "jointplay model file",
+        "description": (
+            "A mechanism with clearances: bodies, joints with their plays, loads, "
+            "functional points and requirements (docs/conventions.md)."
+        ),
+        **{k: v for k, v in schema.items() if k not in ("title", "description")},
+    }
 
 
 def load(path: str | Path) -> Model:
@@ -223,9 +285,9 @@ def parse_text(text: str, suffix: str, source: str) -> Any:
         )
     try:
         if suffix == ".json":
-            data = json.loads(text, object_pairs_hook=_json_object)
+            data = json.loads(text, object_pairs_hook=_json_object, parse_float=read_number)
         elif suffix == ".toml":
-            data = tomllib.loads(text)
+            data = tomllib.loads(text, parse_float=read_number)
         else:
             data = _parse_yaml(text, source)
     except json.JSONDecodeError as exc:
@@ -257,6 +319,8 @@ def parse_text(text: str, suffix: str, source: str) -> Any:
             f"not valid JSON: duplicate key {shown(exc.args[0])} in an object; give each key once",
             source=source,
         ) from None
+    except UnderflowError as exc:  # JSON or TOML: a number that reads as 0
+        raise ModelError(str(exc), source=source) from None
     except ValueError as exc:  # JSON or TOML: an integer of thousands of digits
         problem = (
             "a number in the file has thousands of digits"

@@ -9,10 +9,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Annotated, Any
 
-from pydantic import AfterValidator, BeforeValidator, PlainValidator, StringConstraints
+from pydantic import (
+    AfterValidator,
+    BeforeValidator,
+    PlainValidator,
+    StringConstraints,
+    WithJsonSchema,
+)
 
 from jointplay.model.tolerance import parse_play, parse_scattered
-from jointplay.units import shown, to_base
+from jointplay.units import BASE_UNITS, NUMBER_FIRST, UNIT_EXAMPLES, shown, to_base
 
 Vec3 = tuple[float, float, float]
 
@@ -96,29 +102,133 @@ def _plain_name(value: str) -> str:
     return value
 
 
+# -- JSON Schema of the model file (``jointplay schema``): what a file may
+# hold, as the validators above read it. The schema checks shapes and keys; a
+# unit's meaning is checked when the file is read.
+
+
+def _quantity_schema(dimension: str) -> dict[str, Any]:
+    unit = BASE_UNITS[dimension]
+    return {
+        "anyOf": [{"type": "number"}, {"type": "string", "pattern": NUMBER_FIRST}],
+        "description": f"a {dimension}: a number in {unit}, or with its unit: "
+        f"{UNIT_EXAMPLES[dimension]}",
+    }
+
+
+def _range_schema(dimension: str) -> dict[str, Any]:
+    return {
+        "type": "object",
+        "properties": {
+            "min": _quantity_schema(dimension),
+            "max": _quantity_schema(dimension),
+            "distribution": {"enum": ["uniform", "normal"]},
+        },
+        "required": ["min", "max"],
+        "additionalProperties": False,
+        "description": f"a {dimension} that varies from part to part: its limits",
+    }
+
+
+def _vector_schema(item: dict[str, Any]) -> dict[str, Any]:
+    return {"type": "array", "items": item, "minItems": 3, "maxItems": 3}
+
+
+def _quantity(dimension: str) -> WithJsonSchema:
+    return WithJsonSchema(_quantity_schema(dimension))
+
+
+def _vector_of(dimension: str, scatter: bool = False) -> WithJsonSchema:
+    item = _quantity_schema(dimension)
+    if scatter:
+        item = {"anyOf": [item, _range_schema(dimension)]}
+    return WithJsonSchema(_vector_schema(item))
+
+
+_FIT_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "properties": {
+        "fit": {"type": "string", "description": "an ISO 286 fit, e.g. 'H7/g6'"},
+        "diameter": _quantity_schema("length"),
+        "distribution": {"enum": ["uniform", "normal"]},
+    },
+    "required": ["fit", "diameter"],
+    "additionalProperties": False,
+}
+_PLAY_SCHEMA = WithJsonSchema(
+    {"anyOf": [_quantity_schema("length"), _range_schema("length"), _FIT_SCHEMA]}
+)
+
+
 #: Names appear in every message and report: one printable line, at most 100 characters.
 Name = Annotated[
     str,
     StringConstraints(strict=True, min_length=1, max_length=100, strip_whitespace=True),
     AfterValidator(_plain_name),
 ]
-Length = Annotated[float, BeforeValidator(_scalar("length"))]
+Length = Annotated[float, BeforeValidator(_scalar("length")), _quantity("length")]
 NonNegativeLength = Annotated[
-    float, BeforeValidator(_scalar("length")), AfterValidator(_non_negative)
+    float, BeforeValidator(_scalar("length")), AfterValidator(_non_negative), _quantity("length")
 ]
 #: A joint's play: a length, or limits / an ISO fit (``tolerance.Toleranced``,
 #: a float equal to the mean play that also knows its spread).
-Play = Annotated[float, PlainValidator(parse_play), AfterValidator(_non_negative)]
-PositiveLength = Annotated[float, BeforeValidator(_scalar("length")), AfterValidator(_positive)]
-Point = Annotated[Vec3, BeforeValidator(_vector("length"))]
-Direction = Annotated[Vec3, BeforeValidator(_vector("length")), AfterValidator(_nonzero_vector)]
+Play = Annotated[float, PlainValidator(parse_play), AfterValidator(_non_negative), _PLAY_SCHEMA]
+PositiveLength = Annotated[
+    float, BeforeValidator(_scalar("length")), AfterValidator(_positive), _quantity("length")
+]
+Point = Annotated[Vec3, BeforeValidator(_vector("length")), _vector_of("length")]
+Direction = Annotated[
+    Vec3,
+    BeforeValidator(_vector("length")),
+    AfterValidator(_nonzero_vector),
+    _vector_of("length"),
+]
 #: A load's vectors: a component may vary in Monte Carlo studies (kept as a
 #: ``Toleranced``, hence a plain validator: a before-validator's float
 #: subclass would be turned into a float).
-ForceVector = Annotated[Vec3, PlainValidator(_vector("force", scatter=True))]
-TorqueVector = Annotated[Vec3, PlainValidator(_vector("torque", scatter=True))]
-NonNegativeMass = Annotated[float, BeforeValidator(_scalar("mass")), AfterValidator(_non_negative)]
-AccelerationVector = Annotated[Vec3, BeforeValidator(_vector("acceleration"))]
+ForceVector = Annotated[
+    Vec3, PlainValidator(_vector("force", scatter=True)), _vector_of("force", scatter=True)
+]
+TorqueVector = Annotated[
+    Vec3, PlainValidator(_vector("torque", scatter=True)), _vector_of("torque", scatter=True)
+]
+NonNegativeMass = Annotated[
+    float, BeforeValidator(_scalar("mass")), AfterValidator(_non_negative), _quantity("mass")
+]
+
+
+def _with_units(value: Any) -> Any:
+    """Gravity's components carry their unit: a plain number would be mm/s^2,
+    so the -9.81 everyone writes would be a thousandth of the weight."""
+    if isinstance(value, list | tuple):
+        for i, component in enumerate(value):
+            plain = isinstance(component, int | float) and not isinstance(component, bool)
+            if isinstance(component, str):
+                try:
+                    float(component)
+                except ValueError:
+                    pass
+                else:
+                    plain = True
+            if plain and float(component) != 0.0:
+                raise ValueError(
+                    f"component {'xyz'[i] if i < 3 else i}: a plain number ({shown(component)}) "
+                    'would be mm/s^2; write the unit, e.g. [0, 0, "-9.81 m/s^2"] '
+                    "(0 may stay a plain number)"
+                )
+    return value
+
+
+#: Gravity: each nonzero component with its unit (see ``_with_units``).
+AccelerationVector = Annotated[
+    Vec3,
+    BeforeValidator(_vector("acceleration")),
+    BeforeValidator(_with_units),
+    _vector_of("acceleration"),
+]
 PositiveStiffness = Annotated[
-    float, BeforeValidator(_scalar("stiffness")), AfterValidator(_stiff_enough)
+    float,
+    BeforeValidator(_scalar("stiffness")),
+    AfterValidator(_stiff_enough),
+    _quantity("stiffness"),
 ]

@@ -302,15 +302,15 @@ class Model(BaseModel):
 
 
 def check_case(model: Model, case: str | None, source: str) -> None:
-    """A ``ModelError`` naming the cases unless ``case`` is None or one of them."""
+    """An ``OptionError`` naming the cases unless ``case`` is None or one of them."""
     if case is None:
         return
     try:
         model.loads_of(case)
     except KeyError as exc:
-        from jointplay.errors import ModelError
+        from jointplay.errors import OptionError
 
-        raise ModelError(f"--case: {exc.args[0]}", source=source) from None
+        raise OptionError(f"--case: {exc.args[0]}", source=source) from None
 
 
 def _check_unique(names: list[str], section: str, what: str) -> None:

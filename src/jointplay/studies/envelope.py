@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from jointplay.assembly import assemble
-from jointplay.errors import ModelError, UnboundedMechanismError
+from jointplay.errors import OptionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
 from jointplay.solver.workspace import Workspace
@@ -66,7 +66,7 @@ class Envelope:
         names = [p.name for p in model.points]
         if self.point not in names:
             known = ", ".join(names) if names else "none; add a 'points' section"
-            raise ModelError(
+            raise OptionError(
                 f"--point: unknown point '{self.point}'; the points are: {known}", source=source
             )
         point = model.points[names.index(self.point)]
