@@ -173,6 +173,8 @@ class Result:
     linearize: Callable[[], Linearization] | None = field(default=None, repr=False, compare=False)
     #: The model's requirements checked on this answer's functional points.
     requirements: tuple[RequirementResult, ...] = ()
+    #: What the model says that is legal but likely a slip (``Model.warnings``).
+    model_warnings: tuple[str, ...] = ()
 
     @property
     def linearization(self) -> Linearization:
@@ -192,7 +194,7 @@ class Result:
 
     @property
     def warnings(self) -> tuple[str, ...]:
-        return self.linearization.warnings
+        return self.model_warnings + self.linearization.warnings
 
     @property
     def free_motions(self) -> tuple[str, ...]:
@@ -379,6 +381,7 @@ def build_result(
         describe_free,
         lambda: linearization(asm, x, reach_mm),
         requirements_of(model, points),
+        model.warnings,
     )
 
 

@@ -71,6 +71,11 @@ def _schema_one(value: Any) -> Any:
     return value
 
 
+#: A play at least this share of its joint's size is warned about: real plays
+#: are below a few percent of it, and "200" meant as 200 um reads as 200 mm.
+LARGE_PLAY_SHARE = 0.1
+
+
 class Body(BaseModel):
     """A rigid body. Ground bodies do not move; every other body gets a torsor."""
 
@@ -281,6 +286,43 @@ class Model(BaseModel):
                 )
             own = (self.load_cases or {})[case]
         return self.loads + self.weights() + own
+
+    @cached_property
+    def warnings(self) -> tuple[str, ...]:
+        """What the model says that is legal but likely a slip: no loads at all
+        (everything stays at 0), or a play large against its joint (a value
+        meant in um, written as mm)."""
+        out = []
+        if not any(self.loads_of(case) for case in (self.case_names or (None,))):
+            out.append(
+                "the model has no loads (no 'loads', no load cases, no weight): nothing "
+                "pushes the parts, so every displacement and force is 0"
+            )
+        for joint in self.joints:
+            size, what = self._joint_size(joint)
+            if size <= 0.0:
+                continue
+            for field in sorted(type(joint).model_fields):
+                play = getattr(joint, field) if "clearance" in field else None
+                if play and play >= LARGE_PLAY_SHARE * size:
+                    out.append(
+                        f"joint '{joint.name}': {field} {play:g} mm is {play / size:.3g} times "
+                        f"{what} ({size:g} mm); a play is usually a small part of it: if "
+                        f"{play:g} was meant in um, write '{play:g} um'"
+                    )
+        return tuple(out)
+
+    def _joint_size(self, joint: Joint) -> tuple[float, str]:
+        """A length that a joint's play should be small against: the joint's own
+        size (a bore's length, a face's width), else the mechanism's extent."""
+        if joint.size > 0.0:
+            return joint.size, "its size"
+        return self._extent, "the distance between the farthest joints"
+
+    @cached_property
+    def _extent(self) -> float:
+        centres = np.array([j.at for j in self.joints], dtype=float)
+        return float(np.max(np.linalg.norm(centres[:, None] - centres[None], axis=2)))
 
     def body(self, name: str) -> Body:
         for b in self.bodies:

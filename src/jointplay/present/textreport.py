@@ -57,7 +57,8 @@ def render(
         f"equilibrium of every body (loads + contact forces): residual "
         f"{result.equilibrium_residual:.1e} of the largest force\n"
     )
-    header.append(f"potential energy of the loads: {result.potential_energy:.9g} N*mm\n")
+    energy = result.potential_energy + 0.0  # no "-0" when nothing moves
+    header.append(f"potential energy of the loads: {energy:.9g} N*mm\n")
     header.append(
         f"linearization error (contacts placed with exact rotations, past their play): "
         f"{result.linearization_error:.2e} mm"

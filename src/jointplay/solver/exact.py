@@ -351,4 +351,5 @@ def _build(
         0.0,
         ws.free_motions,
         requirements=requirements_of(model, points),
+        model_warnings=model.warnings,
     )
