@@ -397,3 +397,44 @@ def test_json_and_toml_refuse_an_underflow_too(tmp_path: Path, suffix: str) -> N
     assert "1e-400" in path.read_text()
     with pytest.raises(ModelError, match="too small for double precision"):
         jointplay.load(path)
+
+
+def test_every_problem_of_a_file_is_listed_at_once(tmp_path: Path) -> None:
+    """One run lists them all (issue 19): the first in the message's first line,
+    then one line per other problem, each naming its entry. A key missing beside
+    a misspelt one, and an empty section whose entries all failed, follow from
+    other problems and are not listed again."""
+    data = spherical_shaft()
+    data["bodies"][1]["mass"] = -2  # type: ignore[index]
+    data["joints"][0]["at"] = [0, 0]  # type: ignore[index]
+    bore = data["joints"][1]  # type: ignore[index]
+    bore["lenght"] = bore.pop("length")
+    bore["clearance"] = "2 N"
+    with pytest.raises(ModelError) as caught:
+        model_from_dict_at(tmp_path, data)
+    first, count, *others = str(caught.value).split("\n")
+    assert first.endswith("model.yaml: bodies[1] 'S1': mass: expected a value >= 0, got -2")
+    assert count == "3 more problem(s) in this file:"
+    assert [line.split(":")[0:2] for line in others] == [
+        ["  joints[0] 'l1'", " at"],
+        ["  joints[1] 'l2'", " clearance"],
+        ["  joints[1] 'l2'", " lenght"],
+    ]
+    assert "Did you mean 'length'?" in others[2]
+
+
+def test_a_long_list_of_problems_is_cut_saying_how_many(tmp_path: Path) -> None:
+    from jointplay.io.modelfile import MOST_PROBLEMS
+
+    data = spherical_shaft()
+    ball = data["joints"][0]  # type: ignore[index]
+    data["joints"] = [{**ball, "name": f"j{i}", "clearance": "x"} for i in range(MOST_PROBLEMS + 6)]
+    with pytest.raises(ModelError) as caught:
+        model_from_dict_at(tmp_path, data)
+    lines = str(caught.value).split("\n")
+    assert lines[1] == f"{MOST_PROBLEMS + 5} more problem(s) in this file:"
+    assert len(lines) == 2 + MOST_PROBLEMS + 1 and lines[-1] == "  ... and 5 more"
+
+
+def model_from_dict_at(tmp_path: Path, data: dict[str, Any]) -> Any:
+    return jointplay.load(write(tmp_path, data))

@@ -31,7 +31,7 @@ CORPUS = Path(__file__).parent / "fuzz_corpus"
 EXPECTED: dict[str, dict[str, Any]] = yaml.safe_load((CORPUS / "expected.yaml").read_text())
 #: No case may take longer (the loader bounds sizes, aliases and nesting).
 SECONDS = 10.0
-#: A message is one paragraph: one line, at most this long.
+#: A problem is one paragraph: one line, at most this long.
 LONGEST_MESSAGE = 700
 
 runner = CliRunner()
@@ -73,13 +73,28 @@ def _run(args: list[str]) -> tuple[int, str, str, float]:
 
 
 def _check_one_message(err: str, path: Path, kind: str) -> str:
+    """One message: its first line the first problem, naming the file; an
+    invalid model may list its other problems after it (issue 19), under a
+    count, one indented line each, each naming its entry."""
     assert "Traceback" not in err
-    assert err.endswith("\n") and "\n" not in err[:-1], f"not one line: {err!r}"
-    assert len(err) <= LONGEST_MESSAGE, f"{len(err)} characters: {err}"
+    assert err.endswith("\n"), f"not ended: {err!r}"
+    first, *others = err[:-1].split("\n")
+    assert len(first) <= LONGEST_MESSAGE, f"{len(first)} characters: {first}"
     prefix = f"jointplay: {kind}: "
-    assert err.startswith(prefix), err
+    assert first.startswith(prefix), err
     if kind == "invalid model":
-        assert err.startswith(f"{prefix}{path}: "), err
+        assert first.startswith(f"{prefix}{path}: "), err
+    if others:
+        assert kind == "invalid model", f"not one line: {err!r}"
+        count, *problems = others
+        assert count.endswith(" more problem(s) in this file:"), err
+        total = int(count.split()[0])
+        if problems[-1].startswith("  ... and "):  # a long list is cut, saying how much
+            assert total == len(problems) - 1 + int(problems[-1].split()[2]), err
+        else:
+            assert total == len(problems), err
+        for line in problems:
+            assert line.startswith("  ") and len(line) <= LONGEST_MESSAGE, f"{line!r} in {err!r}"
     return err
 
 

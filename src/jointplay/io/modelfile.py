@@ -524,22 +524,53 @@ def _check_sizes(data: dict[str, Any], source: str) -> None:
             )
 
 
+#: Problems listed in one message at the most; a file with more is far off.
+MOST_PROBLEMS = 20
+
+
 def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> ModelError:
-    errors = exc.errors(include_url=False)
-    # Report the first problem only: one clear paragraph beats a wall of text.
-    err = _first(errors)
+    """Every problem of the file, the likeliest first (``_first``): its entry
+    and fix in the message's first line, then one line per other problem."""
+    errors = _consequences_left_out(exc.errors(include_url=False))
+    first = _first(errors)
+    ordered = [first, *(e for e in errors if e is not first)]
+    described = [_described(err, data) for err in ordered]
+    entry, problem = described[0]
+    others = [f"  {where}: {what}" if where else f"  {what}" for where, what in described[1:]]
+    if len(others) > MOST_PROBLEMS:
+        others = [*others[:MOST_PROBLEMS], f"  ... and {len(others) - MOST_PROBLEMS} more"]
+    if others:
+        problem += f"\n{len(described) - 1} more problem(s) in this file:\n" + "\n".join(others)
+    return ModelError(problem, source=source, entry=entry or None)
+
+
+def _described(err: Any, data: dict[str, Any]) -> tuple[str, str]:
+    """(where, what) of one validation error: the entry and field, and the
+    problem with its fix."""
     original = (err.get("ctx") or {}).get("error")
     if isinstance(original, EntryError):
         problem = original.problem
         if not problem.endswith((".", "?")):
             problem += "."
-        return ModelError(problem, source=source, entry=original.entry)
+        return original.entry, problem
     loc = list(err["loc"])
     entry, field_path = _entry(loc, data)
-    problem = _problem(err, loc, data)
-    more = f" ({len(errors) - 1} more problem(s) after this one)" if len(errors) > 1 else ""
-    where = ": ".join(p for p in (entry, field_path) if p)
-    return ModelError(problem + more, source=source, entry=where or None)
+    return ": ".join(p for p in (entry, field_path) if p), _problem(err, loc, data)
+
+
+def _consequences_left_out(errors: list[Any]) -> list[Any]:
+    """The problems less those that only follow from others: a required key
+    missing beside an unknown one (most likely it, misspelt: the unknown key's
+    message names it), and a section "too short" because its entries failed."""
+    extra = {tuple(e["loc"][:-1]) for e in errors if e["type"] == "extra_forbidden"}
+    failed_items = {tuple(e["loc"][:1]) for e in errors if len(e["loc"]) > 1}
+    kept = [
+        e
+        for e in errors
+        if not (e["type"] == "missing" and tuple(e["loc"][:-1]) in extra)
+        and not (e["type"] == "too_short" and tuple(e["loc"]) in failed_items)
+    ]
+    return kept or errors
 
 
 def _first(errors: list[Any]) -> Any:
