@@ -438,3 +438,44 @@ def test_a_long_list_of_problems_is_cut_saying_how_many(tmp_path: Path) -> None:
 
 def model_from_dict_at(tmp_path: Path, data: dict[str, Any]) -> Any:
     return jointplay.load(write(tmp_path, data))
+
+
+def test_gravity_survives_its_own_round_trip(tmp_path: Path) -> None:
+    """A nonzero plain number is refused in gravity, so a model writes its
+    gravity back with the unit: sweeps and ``Model.replace`` rebuild models
+    from their dump (a sweep on a model with gravity once failed there)."""
+    model = jointplay.load(Path(__file__).parents[1] / "examples" / "studies" / "shaft_cases.yaml")
+    again = jointplay.model_from_dict(model.model_dump(by_alias=True, exclude_none=True))
+    assert again.gravity == model.gravity and model.gravity is not None
+    assert model.replace(name="renamed").gravity == model.gravity
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "jointplay.cli",
+            "sweep",
+            str(Path(__file__).parents[1] / "examples" / "studies" / "shaft_cases.yaml"),
+            "--vary",
+            "joints[l2].clearance=0.1:0.3:3",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_a_huge_integer_in_gravity_is_a_model_error(tmp_path: Path) -> None:
+    data = spherical_shaft(gravity=[0, 0, int("9" * 400)])
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ModelError, match="gravity"):
+        jointplay.load(path)
+
+
+def test_a_long_yaml_1_1_numeral_is_refused_too(tmp_path: Path) -> None:
+    path = tmp_path / "model.yaml"
+    path.write_text(_SHAFT_YAML.format(play="0x" + "0" * 1000 + "10"))
+    with pytest.raises(ModelError, match=r"YAML 1\.1 numeral"):
+        jointplay.load(path)

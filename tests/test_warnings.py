@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[1]
     ("joint", "expected"),
     [
         (1, "joint 'l2': clearance 200 mm is 5 times its size (40 mm)"),  # a bore of length 40
-        (0, "joint 'l1': clearance 200 mm is 1 times the distance between the farthest joints"),
+        (0, "joint 'l1': clearance 200 mm is 1 times the diagonal of the box around the joints"),
     ],
 )
 def test_a_play_large_against_its_joint_warns_it_may_be_in_um(
@@ -71,3 +71,9 @@ def test_a_weight_or_a_load_case_is_a_load() -> None:
     assert jointplay.model_from_dict(weighed).warnings == ()
     cased = spherical_shaft(loads=[], load_cases={"a": [{"body": "S1", "torque": [0, 1, 0]}]})
     assert jointplay.model_from_dict(cased).warnings == ()
+
+
+def test_warnings_follow_a_copied_model() -> None:
+    model = jointplay.model_from_dict(spherical_shaft())
+    assert model.warnings == ()
+    assert len(model.model_copy(update={"loads": ()}).warnings) == 1  # not cached

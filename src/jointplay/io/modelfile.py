@@ -149,7 +149,7 @@ def _number(kind: str) -> Any:
 
     def checked(loader: Any, node: yaml.ScalarNode) -> Any:
         text = str(node.value)
-        if node.tag.endswith(f":{kind}") and plain.fullmatch(text) is None and len(text) <= 1000:
+        if node.tag.endswith(f":{kind}") and plain.fullmatch(text) is None:
             raise yaml.constructor.ConstructorError(
                 None,
                 None,

@@ -6,6 +6,7 @@ string with units, and fails with an "expected ..., got ..." message.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from typing import Annotated, Any
 
@@ -197,20 +198,22 @@ NonNegativeMass = Annotated[
 ]
 
 
+_NUMBER_ONLY = re.compile(NUMBER_FIRST.removeprefix(r"^\s*"))
+
+
 def _with_units(value: Any) -> Any:
     """Gravity's components carry their unit: a plain number would be mm/s^2,
     so the -9.81 everyone writes would be a thousandth of the weight."""
     if isinstance(value, list | tuple):
         for i, component in enumerate(value):
-            plain = isinstance(component, int | float) and not isinstance(component, bool)
-            if isinstance(component, str):
-                try:
-                    float(component)
-                except ValueError:
-                    pass
-                else:
-                    plain = True
-            if plain and float(component) != 0.0:
+            nonzero_number = (
+                isinstance(component, int | float)
+                and not isinstance(component, bool)
+                and component != 0  # an int of any size: no conversion to float
+            )
+            if isinstance(component, str) and _NUMBER_ONLY.fullmatch(component.strip()):
+                nonzero_number = float(component) != 0.0  # a number written as text
+            if nonzero_number:
                 raise ValueError(
                     f"component {'xyz'[i] if i < 3 else i}: a plain number ({shown(component)}) "
                     'would be mm/s^2; write the unit, e.g. [0, 0, "-9.81 m/s^2"] '
@@ -220,11 +223,15 @@ def _with_units(value: Any) -> Any:
 
 
 #: Gravity: each nonzero component with its unit (see ``_with_units``).
+_GRAVITY_COMPONENT: dict[str, Any] = {
+    "anyOf": [{"const": 0}, {"type": "string", "pattern": NUMBER_FIRST}],
+    "description": "an acceleration with its unit, e.g. '-9.81 m/s^2' (0 may be a plain number)",
+}
 AccelerationVector = Annotated[
     Vec3,
     BeforeValidator(_vector("acceleration")),
     BeforeValidator(_with_units),
-    _vector_of("acceleration"),
+    WithJsonSchema(_vector_schema(_GRAVITY_COMPONENT)),
 ]
 PositiveStiffness = Annotated[
     float,

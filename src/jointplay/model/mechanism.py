@@ -13,7 +13,15 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    StrictBool,
+    field_serializer,
+    model_validator,
+)
 
 from jointplay.model.fields import (
     AccelerationVector,
@@ -167,6 +175,13 @@ class Model(BaseModel):
     points: tuple[FunctionalPoint, ...] = ()
     requirements: tuple[Requirement, ...] = ()
 
+    @field_serializer("gravity")
+    def _gravity_with_its_unit(self, gravity: tuple[float, float, float] | None) -> Any:
+        """Written back with its unit, as a file must give it (``fields._with_units``)."""
+        if gravity is None:
+            return None
+        return [c if c == 0 else f"{c!r} mm/s^2" for c in gravity]
+
     @model_validator(mode="after")
     def _check_topology(self) -> Model:
         names = [b.name for b in self.bodies]
@@ -287,7 +302,7 @@ class Model(BaseModel):
             own = (self.load_cases or {})[case]
         return self.loads + self.weights() + own
 
-    @cached_property
+    @property
     def warnings(self) -> tuple[str, ...]:
         """What the model says that is legal but likely a slip: no loads at all
         (everything stays at 0), or a play large against its joint (a value
@@ -317,12 +332,9 @@ class Model(BaseModel):
         size (a bore's length, a face's width), else the mechanism's extent."""
         if joint.size > 0.0:
             return joint.size, "its size"
-        return self._extent, "the distance between the farthest joints"
-
-    @cached_property
-    def _extent(self) -> float:
         centres = np.array([j.at for j in self.joints], dtype=float)
-        return float(np.max(np.linalg.norm(centres[:, None] - centres[None], axis=2)))
+        extent = float(np.linalg.norm(centres.max(axis=0) - centres.min(axis=0)))
+        return extent, "the diagonal of the box around the joints"
 
     def body(self, name: str) -> Body:
         for b in self.bodies:
