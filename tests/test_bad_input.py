@@ -4,6 +4,7 @@ and exit code 2 from the CLI; never a traceback."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -236,7 +237,12 @@ def test_bad_model_raises_one_clear_model_error(
         jointplay.load(path)
     text = str(info.value)
     assert text.startswith(str(path) + ": ")
-    assert "\n" not in text
+    first, *others = text.split("\n")  # a file's other problems, listed after the first
+    assert re.search(message, first), first
+    if others:
+        count, *problems = others
+        assert count == f"{len(problems)} more problem(s) in this file:", text
+        assert all(line.startswith("  ") and "\n" not in line for line in problems), text
     assert "Traceback" not in text
 
 
@@ -479,3 +485,30 @@ def test_a_long_yaml_1_1_numeral_is_refused_too(tmp_path: Path) -> None:
     path.write_text(_SHAFT_YAML.format(play="0x" + "0" * 1000 + "10"))
     with pytest.raises(ModelError, match=r"YAML 1\.1 numeral"):
         jointplay.load(path)
+
+
+def test_problems_across_entries_are_listed_together(tmp_path: Path) -> None:
+    """Names that point nowhere, in joints, loads and requirements, come in one
+    run; a connection check that would only repeat them is left out."""
+    data = spherical_shaft(
+        points=[{"name": "tip", "body": "S1", "at": [300, 0, 0]}],
+        requirements=[{"point": "tap", "max_displacement": 0.1}],
+    )
+    data["joints"][0]["between"] = ["S0", "S2"]  # type: ignore[index]
+    data["loads"] = [  # type: ignore[index]
+        {"body": "S3", "at": [300, 0, 0], "force": [1, 1, 1]},
+        {"body": "S0", "at": [300, 0, 0], "force": [1, 1, 1]},
+    ]
+    with pytest.raises(ModelError) as caught:
+        model_from_dict_at(tmp_path, data)
+    first, count, *others = str(caught.value).split("\n")
+    assert first.endswith(
+        "joints[0] 'l1': between: unknown body 'S2'; bodies are: S0, S1. Did you mean 'S1'?"
+    )
+    assert count == "3 more problem(s) in this file:"
+    assert [line.split(":")[0] for line in others] == [
+        "  loads[0]",
+        "  loads[1]",
+        "  requirements[0]",
+    ]
+    assert "no chain of joints" not in str(caught.value)

@@ -22,6 +22,7 @@ from jointplay.model.joints import JOINT_TYPES
 from jointplay.model.mechanism import (
     Body,
     EntryError,
+    EntryProblemsError,
     FunctionalPoint,
     Load,
     Model,
@@ -534,7 +535,7 @@ def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> 
     errors = _consequences_left_out(exc.errors(include_url=False))
     first = _first(errors)
     ordered = [first, *(e for e in errors if e is not first)]
-    described = [_described(err, data) for err in ordered]
+    described = [d for err in ordered for d in _described(err, data)]
     entry, problem = described[0]
     others = [f"  {where}: {what}" if where else f"  {what}" for where, what in described[1:]]
     if len(others) > MOST_PROBLEMS:
@@ -544,18 +545,19 @@ def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> 
     return ModelError(problem, source=source, entry=entry or None)
 
 
-def _described(err: Any, data: dict[str, Any]) -> tuple[str, str]:
+def _described(err: Any, data: dict[str, Any]) -> list[tuple[str, str]]:
     """(where, what) of one validation error: the entry and field, and the
-    problem with its fix."""
+    problem with its fix; a model-level error may hold several."""
     original = (err.get("ctx") or {}).get("error")
-    if isinstance(original, EntryError):
-        problem = original.problem
-        if not problem.endswith((".", "?")):
-            problem += "."
-        return original.entry, problem
+    if isinstance(original, EntryProblemsError | EntryError):
+        found = original.errors if isinstance(original, EntryProblemsError) else [original]
+        return [
+            (e.entry, e.problem if e.problem.endswith((".", "?")) else e.problem + ".")
+            for e in found
+        ]
     loc = list(err["loc"])
     entry, field_path = _entry(loc, data)
-    return ": ".join(p for p in (entry, field_path) if p), _problem(err, loc, data)
+    return [(": ".join(p for p in (entry, field_path) if p), _problem(err, loc, data))]
 
 
 def _consequences_left_out(errors: list[Any]) -> list[Any]:

@@ -56,6 +56,14 @@ class EntryError(ValueError):
         super().__init__(f"{entry}: {problem}")
 
 
+class EntryProblemsError(ValueError):
+    """Several model-level problems, each belonging to one entry."""
+
+    def __init__(self, errors: list[EntryError]):
+        self.errors = errors
+        super().__init__("; ".join(str(e) for e in errors))
+
+
 def suggest(word: str, candidates: Iterable[str]) -> str:
     """' Did you mean 'x'?' for a likely typo, else ''."""
     if len(word) > 100:  # not a typo, and difflib is slow on long words
@@ -184,63 +192,79 @@ class Model(BaseModel):
 
     @model_validator(mode="after")
     def _check_topology(self) -> Model:
+        """Every problem across entries, listed together (``EntryProblemsError``)."""
+        found: list[EntryError] = []
         names = [b.name for b in self.bodies]
         _check_unique(names, "bodies", "body")
         _check_unique([j.name for j in self.joints], "joints", "joint")
         grounds = {b.name for b in self.bodies if b.ground}
         if not grounds:
-            raise EntryError(
-                "bodies",
-                "no ground body; mark the fixed body with 'ground: true' "
-                f"(bodies are: {listing(names)})",
+            found.append(
+                EntryError(
+                    "bodies",
+                    "no ground body; mark the fixed body with 'ground: true' "
+                    f"(bodies are: {listing(names)})",
+                )
             )
         for i, joint in enumerate(self.joints):
             entry = f"joints[{i}] '{joint.name}'"
             a, b = joint.between
             for body in (a, b):
                 if body not in names:
-                    raise EntryError(
-                        entry,
-                        f"between: unknown body '{body}'; bodies are: {listing(names)}."
-                        + suggest(body, names),
+                    found.append(
+                        EntryError(
+                            entry,
+                            f"between: unknown body '{body}'; bodies are: {listing(names)}."
+                            + suggest(body, names),
+                        )
                     )
             if a == b:
-                raise EntryError(
-                    entry, f"between: the joint goes from body '{a}' to itself; name two bodies"
+                found.append(
+                    EntryError(
+                        entry, f"between: the joint goes from body '{a}' to itself; name two bodies"
+                    )
                 )
             if a in grounds and b in grounds:
-                raise EntryError(
-                    entry,
-                    f"between: both '{a}' and '{b}' are ground bodies, so the joint "
-                    "constrains nothing; connect a moving body",
+                found.append(
+                    EntryError(
+                        entry,
+                        f"between: both '{a}' and '{b}' are ground bodies, so the joint "
+                        "constrains nothing; connect a moving body",
+                    )
                 )
         sections = [(f"loads[{i}]", load) for i, load in enumerate(self.loads)]
         for case, loads in (self.load_cases or {}).items():
             sections += [(f"load_cases.{case}[{i}]", load) for i, load in enumerate(loads)]
         for entry, load in sections:
             if load.body not in names:
-                raise EntryError(
-                    entry,
-                    f"body: unknown body '{load.body}'; bodies are: {listing(names)}."
-                    + suggest(load.body, names),
+                found.append(
+                    EntryError(
+                        entry,
+                        f"body: unknown body '{load.body}'; bodies are: {listing(names)}."
+                        + suggest(load.body, names),
+                    )
                 )
             if load.body in grounds:
-                raise EntryError(
-                    entry,
-                    f"body: '{load.body}' is a ground body, which does not move, so the load "
-                    "does nothing; put it on a moving body",
+                found.append(
+                    EntryError(
+                        entry,
+                        f"body: '{load.body}' is a ground body, which does not move, so the load "
+                        "does nothing; put it on a moving body",
+                    )
                 )
         if self.load_cases is not None and not self.load_cases:
-            raise EntryError(
-                "load_cases", "no cases given; name at least one case, or leave it out"
+            found.append(
+                EntryError("load_cases", "no cases given; name at least one case, or leave it out")
             )
         _check_unique([p.name for p in self.points], "points", "point")
         for i, point in enumerate(self.points):
             if point.body not in names:
-                raise EntryError(
-                    f"points[{i}] '{point.name}'",
-                    f"body: unknown body '{point.body}'; bodies are: {listing(names)}."
-                    + suggest(point.body, names),
+                found.append(
+                    EntryError(
+                        f"points[{i}] '{point.name}'",
+                        f"body: unknown body '{point.body}'; bodies are: {listing(names)}."
+                        + suggest(point.body, names),
+                    )
                 )
         point_names = [p.name for p in self.points]
         for i, req in enumerate(self.requirements):
@@ -250,19 +274,33 @@ class Model(BaseModel):
                     if point_names
                     else "the model has no 'points' section; add the point there"
                 )
-                raise EntryError(
-                    f"requirements[{i}]",
-                    f"point: unknown point '{req.point}'; {known}."
-                    + suggest(req.point, point_names),
+                found.append(
+                    EntryError(
+                        f"requirements[{i}]",
+                        f"point: unknown point '{req.point}'; {known}."
+                        + suggest(req.point, point_names),
+                    )
                 )
-        unreached = _unreached_from_ground(names, grounds, [j.between for j in self.joints])
+        joints_read = not any(e.entry.startswith("joints[") for e in found)
+        # with no ground, or a joint between unknown bodies, it would only repeat those
+        unreached = (
+            _unreached_from_ground(names, grounds, [j.between for j in self.joints])
+            if grounds and joints_read
+            else []
+        )
         if unreached:
-            raise EntryError(
-                "bodies",
-                "no chain of joints connects "
-                + listing(f"'{n}'" for n in unreached)
-                + " to a ground body; add a joint, or mark the body 'ground: true'",
+            found.append(
+                EntryError(
+                    "bodies",
+                    "no chain of joints connects "
+                    + listing(f"'{n}'" for n in unreached)
+                    + " to a ground body; add a joint, or mark the body 'ground: true'",
+                )
             )
+        if len(found) == 1:
+            raise found[0]
+        if found:
+            raise EntryProblemsError(found)
         return self
 
     @cached_property
