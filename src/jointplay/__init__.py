@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from jointplay.studies.envelope import Envelope, EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
     from jointplay.studies.sweep import RotateLoad, Sweep, SweepResult, Vary
+    from jointplay.studies.tolerances import Tolerances, TolerancesResult
 
 from jointplay.version import __version__
 
@@ -53,6 +54,8 @@ _STUDIES = {
     "Contributions": "studies.contributions",
     "ContributionsResult": "studies.contributions",
     "Report": "present.report",
+    "Tolerances": "studies.tolerances",
+    "TolerancesResult": "studies.tolerances",
 }
 
 
@@ -92,6 +95,8 @@ __all__ = [
     "SolverSettings",
     "Sweep",
     "SweepResult",
+    "Tolerances",
+    "TolerancesResult",
     "UnboundedMechanismError",
     "Vary",
     "Workspace",

@@ -445,6 +445,56 @@ def contributions(
     _guarded(run, as_json)
 
 
+@app.command(short_help="Each requirement: worst case, RSS and Monte Carlo side by side.")
+def tolerances(
+    model_path: ModelPath,
+    samples: Annotated[
+        int, typer.Option("--samples", "-n", min=2, help="Monte Carlo samples.")
+    ] = 100_000,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Random seed.")] = 0,
+    confidence: Annotated[
+        float,
+        typer.Option("--confidence", help="Confidence level of the Monte Carlo ppm interval."),
+    ] = 0.95,
+    case: CaseOption = None,
+    workers: Annotated[
+        int | None,
+        typer.Option("--workers", min=1, help="Local processes (default: one per core)."),
+    ] = None,
+    csv: Annotated[
+        Path | None,
+        typer.Option("--csv", metavar="FILE", help="Write the table (one row per requirement)."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the study as JSON.")] = False,
+) -> None:
+    """Each requirement three ways, side by side: the worst case (linear stack of
+    the plays' tolerances), RSS with Cp/Cpk and ppm, and Monte Carlo with Pp/Ppk
+    and ppm (docs/conventions.md, "Tolerance results side by side")."""
+    from jointplay.io.modelfile import load
+    from jointplay.present.textreport import render_tolerances
+    from jointplay.studies.tolerances import Tolerances
+
+    def run() -> None:
+        source = str(model_path)
+        if not 0 < confidence < 1:
+            raise OptionError("--confidence: between 0 and 1 (0.95 is 95 %)", source=source)
+        _check_outputs(csv, None)
+        model = load(model_path)
+        result = Tolerances(samples, seed, confidence, case).run(
+            model, workers=workers, source=source
+        )
+        _finish_study(
+            result,
+            csv,
+            None,
+            lambda: None,
+            as_json,
+            lambda: render_tolerances(result, source, _console()),
+        )
+
+    _guarded(run, as_json)
+
+
 @app.command(short_help="Draw the solved mechanism and its joints (PNG, SVG, PDF).")
 def plot(
     model_path: ModelPath,

@@ -20,6 +20,7 @@ if TYPE_CHECKING:  # the studies bring SciPy's statistics: a solve does not need
     from jointplay.studies.envelope import EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarloResult
     from jointplay.studies.sweep import SweepResult
+    from jointplay.studies.tolerances import TolerancesResult
 
 
 def _num(v: float, digits: int = 8) -> str:
@@ -362,3 +363,46 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         if notes:
             parts.append(notes)
     console.print(Group(*parts))
+
+
+def render_tolerances(result: TolerancesResult, source: str, console: Console) -> None:
+    """The report of ``jointplay tolerances``: per requirement, worst case,
+    RSS and Monte Carlo side by side (mm; ppm out of the limits)."""
+    mc = result.montecarlo
+    head = Text()
+    head.append(f"{result.model_name or source}: tolerance results side by side\n", style="bold")
+    for play, words in result.linear.plays_described.items():
+        head.append(f"  {play}: {words}\n")
+    head.append(
+        "worst case: the linear stack y0 -/+ sum |s| T / 2; RSS: sigma = sqrt(sum (s sigma)^2), "
+        f"normal law; Monte Carlo: {mc.samples:,} sets of parts (seed {result.settings.seed}), "
+        f"ppm with its {result.settings.confidence:.0%} interval. Cp/Pp only for a two-sided "
+        "requirement (a component along a direction)"
+    )
+    parts: list[Table | Text] = [head]
+    for r in result.requirements:
+        low, high = r.limits
+        span = f"{low:g} to {high:g}" if low is not None else f"at most {high:g}"
+        note = " (contacts change at the nominal)" if r.kink else ""
+        table = Table(
+            title=f"{r.requirement.describe()}; nominal {r.nominal:.6g} mm{note}",
+            title_justify="left",
+            show_edge=False,
+        )
+        for name in ("", "worst case", "RSS", "Monte Carlo"):
+            table.add_column(name, justify="left" if not name else "right")
+        verdict = "pass" if r.worst_case_passes else "FAIL"
+        table.add_row("mm", f"{r.worst_low:.5g} to {r.worst_high:.5g}", "", "")
+        table.add_row("mean (mm)", "", f"{r.nominal:.6g}", f"{r.mc_mean:.6g}")
+        table.add_row("sigma (mm)", "", f"{r.rss_sigma:.4g}", f"{r.mc_sigma:.4g}")
+        table.add_row("Cp, Pp", "", _cap(r.cp), _cap(r.pp))
+        table.add_row("Cpk, Ppk", "", _cap(r.cpk), _cap(r.ppk))
+        lo, hi = r.mc_interval_ppm
+        table.add_row("ppm out", verdict, f"{r.rss_ppm:.4g}", f"{r.mc_ppm:.4g}")
+        table.add_row("", f"(limits {span})", "(normal law)", f"[{lo:.4g}, {hi:.4g}]")
+        parts.append(table)
+    console.print(Group(*parts))
+
+
+def _cap(value: float) -> str:
+    return "-" if value != value else f"{value:.3g}"  # NaN: not defined (one-sided)

@@ -1,0 +1,122 @@
+"""Each requirement three ways, side by side (issue 19): worst case, RSS with
+Cp/Cpk, Monte Carlo with Pp/Ppk and ppm. Each figure is checked against its
+documented formula computed here from the underlying numbers (the Monte
+Carlo samples themselves, the contributions' slopes), and against SciPy's
+normal law for the RSS ppm."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from scipy import stats
+
+import jointplay
+from jointplay.studies.tolerances import Tolerances
+from test_cli import run
+
+ROOT = Path(__file__).resolve().parents[1]
+FITS = ROOT / "examples" / "studies" / "shaft_fits.yaml"
+SAMPLES = 20_000
+
+
+@pytest.fixture(scope="module")
+def two_requirements() -> tuple[jointplay.Model, object]:
+    """shaft_fits with its |d| requirement and a two-sided one along y."""
+    data = yaml.safe_load(FITS.read_text())
+    data["requirements"].append({"point": "B", "max_displacement": "20 um", "along": [0, 1, 0]})
+    model = jointplay.model_from_dict(data)
+    return model, Tolerances(samples=SAMPLES, seed=3).run(model)
+
+
+def test_each_figure_follows_its_formula(two_requirements: tuple[jointplay.Model, object]) -> None:
+    _, result = two_requirements
+    linear, mc = result.linear, result.montecarlo  # type: ignore[attr-defined]
+    size, along = result.requirements  # type: ignore[attr-defined]
+    d = mc.displacement[:, mc.point_names.index("B")]
+    for r, y, k in (
+        (size, np.linalg.norm(d, axis=1), linear.measures.index("|d B|")),
+        (along, d[:, 1], linear.measures.index("d B along [0, 1, 0]")),
+    ):
+        high = r.requirement.max_displacement
+        low = -high if r.two_sided else None
+        # worst case: the linear stack of the tolerances around the nominal
+        half = float(np.sum(np.abs(linear.sensitivity[k]) * linear.width)) / 2
+        assert r.nominal == linear.nominal[k]
+        assert (r.worst_low, r.worst_high) == pytest.approx((r.nominal - half, r.nominal + half))
+        # RSS: sigma from the slopes and the plays' sigmas, a normal law
+        sigma = float(np.sqrt(np.sum((linear.sensitivity[k] * linear.sigma) ** 2)))
+        assert r.rss_sigma == pytest.approx(sigma, rel=1e-12)
+        tail = stats.norm.sf((high - r.nominal) / sigma)
+        if low is not None:
+            tail += stats.norm.cdf((low - r.nominal) / sigma)
+        assert r.rss_ppm == pytest.approx(1e6 * tail, rel=1e-9)
+        # Monte Carlo: the samples' own mean, sigma and share outside
+        assert r.mc_mean == pytest.approx(float(np.mean(y)), rel=1e-12)
+        assert r.mc_sigma == pytest.approx(float(np.std(y, ddof=1)), rel=1e-12)
+        outside = np.abs(y) > high if r.two_sided else y > high
+        assert r.mc_ppm == pytest.approx(1e6 * float(np.mean(outside)), rel=1e-12)
+        lo, hi = r.mc_interval_ppm
+        assert lo <= r.mc_ppm <= hi
+        # capability: two-sided Cp, Cpk = nearest limit over 3 sigma
+        if r.two_sided:
+            assert r.cp == pytest.approx(2 * high / (6 * sigma))
+            assert r.pp == pytest.approx(2 * high / (6 * r.mc_sigma))
+            near = min(high - r.nominal, r.nominal + high)
+            near_mc = min(high - r.mc_mean, r.mc_mean + high)
+        else:
+            assert np.isnan(r.cp) and np.isnan(r.pp)
+            near, near_mc = high - r.nominal, high - r.mc_mean
+        assert r.cpk == pytest.approx(near / (3 * sigma))
+        assert r.ppk == pytest.approx(near_mc / (3 * r.mc_sigma))
+
+
+def test_rss_and_monte_carlo_agree_where_the_stack_is_nearly_linear(
+    two_requirements: tuple[jointplay.Model, object],
+) -> None:
+    """The two spreads come from different computations (slopes at the nominal;
+    20,000 solved parts): within 3 % (sampling error about 0.5 %, the rest the
+    stack's curvature over the plays' ranges)."""
+    _, result = two_requirements
+    for r in result.requirements:  # type: ignore[attr-defined]
+        assert r.mc_sigma == pytest.approx(r.rss_sigma, rel=0.03)
+        assert r.mc_mean == pytest.approx(r.nominal, abs=0.1 * r.rss_sigma)
+
+
+def test_the_worst_case_holds_the_monte_carlo_parts_of_a_linear_measure(
+    two_requirements: tuple[jointplay.Model, object],
+) -> None:
+    """For the component along y, every sampled part lies within the linear
+    worst-case range (the sampled extremes stay about 11 % of the range inside
+    it: random parts seldom reach the corners, and the stack's curvature over
+    the plays' ranges is smaller than that)."""
+    _, result = two_requirements
+    along = result.requirements[1]  # type: ignore[attr-defined]
+    mc = result.montecarlo  # type: ignore[attr-defined]
+    y = mc.displacement[:, mc.point_names.index("B"), 1]
+    assert not along.kink
+    assert along.worst_low <= y.min() and y.max() <= along.worst_high
+
+
+def test_the_command_prints_json_csv_and_the_table(tmp_path: Path) -> None:
+    proc = run("tolerances", str(FITS), "-n", "2000", "--json")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["study"] == "tolerances" and doc["samples"] == 2000
+    (req,) = doc["requirements"]
+    assert set(req) >= {"worst_case", "rss", "monte_carlo", "nominal", "two_sided"}
+    assert req["rss"]["cp"] is None and req["rss"]["cpk"] > 0  # one-sided: no Cp
+    csv = tmp_path / "t.csv"
+    text = run("tolerances", str(FITS), "-n", "2000", "--csv", str(csv))
+    assert text.returncode == 0, text.stderr
+    assert "worst case" in text.stdout and "Monte Carlo" in text.stdout and "Cpk" in text.stdout
+    assert csv.read_text().splitlines()[0].startswith("requirement,nominal,worst_low")
+
+
+def test_a_model_without_requirements_is_told_what_to_add() -> None:
+    proc = run("tolerances", str(ROOT / "examples" / "paper" / "6.1.6.1.yaml"))
+    assert proc.returncode == 2
+    assert "requirements" in proc.stderr and "max_displacement" in proc.stderr
