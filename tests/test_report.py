@@ -182,3 +182,16 @@ def test_a_page_that_cannot_be_written_exits_2(tmp_path: Path) -> None:
     )
     assert run.exit_code == 2 and "cannot write it" in run.output
     assert "Traceback" not in run.output
+
+
+def test_the_report_puts_each_requirement_side_by_side() -> None:
+    """With plays that vary and requirements, the page carries the worst case,
+    RSS and Monte Carlo figures of each requirement, the same numbers as
+    ``jointplay tolerances`` on the same samples."""
+    from jointplay.studies.tolerances import Tolerances
+
+    model = jointplay.load(STUDIES / "shaft_fits.yaml")
+    html = Report(samples=2000, seed=0).render(model, "shaft_fits.yaml")
+    assert "Requirements: worst case, RSS and Monte Carlo side by side" in html
+    (row,) = Tolerances(samples=2000, seed=0).run(model).requirements
+    assert f"{row.rss_ppm:.4g}" in html and f"{row.mc_ppm:.4g}" in html

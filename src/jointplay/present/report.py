@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from jointplay.studies.envelope import EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarloResult
     from jointplay.studies.sweep import Sweep, SweepResult
+    from jointplay.studies.tolerances import RequirementTolerances
 
 
 #: Above this many moving bodies the 3D view draws them as one trace.
@@ -115,6 +116,7 @@ class Report:
         from jointplay.studies.contributions import Contributions
         from jointplay.studies.envelope import point_envelopes
         from jointplay.studies.montecarlo import MonteCarlo
+        from jointplay.studies.tolerances import side_by_side
 
         if not model.points:
             page.paragraph(
@@ -143,7 +145,10 @@ class Report:
         )
         page.montecarlo(mc)
         say("contributions")
-        page.contributions(Contributions(case=self.case).run(model, source=source))
+        linear = Contributions(case=self.case).run(model, source=source)
+        page.contributions(linear)
+        if model.requirements:
+            page.tolerances(side_by_side(linear, mc), mc.settings.confidence)
 
 
 def _varies(model: Model, case: str | None, source: str) -> bool:
@@ -290,6 +295,10 @@ def _svg(fig: Figure, vector: bool = True) -> str:
         plt.close(fig)
     data = base64.b64encode(buf.getvalue()).decode("ascii")
     return f'<img class="figure" alt="figure" src="data:{mime};base64,{data}">'
+
+
+def _capability(v: float) -> str:
+    return "–" if v != v else f"{v:.3g}"  # NaN: not defined for a one-sided limit
 
 
 def _num(v: float, digits: int = 6) -> str:
@@ -600,6 +609,44 @@ class _Page:
             )
         )
         self.parts.append(_svg(contributions_figure(co)))
+
+    def tolerances(self, rows: Sequence[RequirementTolerances], confidence: float) -> None:
+        self.subsection("Requirements: worst case, RSS and Monte Carlo side by side")
+        self.parts.append(
+            _table(
+                [
+                    "requirement",
+                    "worst case (mm)",
+                    "RSS σ (mm)",
+                    "Cp",
+                    "Cpk",
+                    "ppm (RSS)",
+                    "MC σ (mm)",
+                    "Pp",
+                    "Ppk",
+                    "ppm (MC)",
+                ],
+                [
+                    (
+                        r.requirement.describe(),
+                        f"{_num(r.worst_low, 5)} .. {_num(r.worst_high, 5)} "
+                        + ("pass" if r.worst_case_passes else "FAIL"),
+                        _num(r.rss_sigma, 4),
+                        _capability(r.cp),
+                        _capability(r.cpk),
+                        f"{r.rss_ppm:.4g}",
+                        _num(r.mc_sigma, 4),
+                        _capability(r.pp),
+                        _capability(r.ppk),
+                        f"{r.mc_ppm:.4g} [{r.mc_interval_ppm[0]:.3g}, {r.mc_interval_ppm[1]:.3g}]",
+                    )
+                    for r in rows
+                ],
+                "Worst case: the linear stack of the tolerances; RSS: a normal law of the "
+                f"contributions' sigma; Monte Carlo: the sampled parts ({100 * confidence:g} % "
+                "interval). Formulas: docs/conventions.md.",
+            )
+        )
 
     def sweep(self, model: Model, sw: SweepResult, source: str) -> None:
         from jointplay.present.plot import sweep_figure

@@ -152,11 +152,15 @@ class Tolerances:
         mc = MonteCarlo(
             samples=self.samples, seed=self.seed, confidence=self.confidence, case=self.case
         ).run(model, workers=workers, source=source)
-        rows = tuple(
-            _one(req, stats.interval, linear, mc)
-            for req, stats in zip(model.requirements, mc.requirements, strict=True)
-        )
-        return TolerancesResult(self, model.name, rows, linear, mc)
+        return TolerancesResult(self, model.name, side_by_side(linear, mc), linear, mc)
+
+
+def side_by_side(
+    linear: ContributionsResult, mc: MonteCarloResult
+) -> tuple[RequirementTolerances, ...]:
+    """Each requirement's figures from a contribution study and a Monte Carlo
+    study of the same model and load case (the HTML report has both)."""
+    return tuple(_one(stats.requirement, stats.interval, linear, mc) for stats in mc.requirements)
 
 
 def _one(
