@@ -195,3 +195,23 @@ def test_the_report_puts_each_requirement_side_by_side() -> None:
     assert "Requirements: worst case, RSS and Monte Carlo side by side" in html
     (row,) = Tolerances(samples=2000, seed=0).run(model).requirements
     assert f"{row.rss_ppm:.4g}" in html and f"{row.mc_ppm:.4g}" in html
+
+
+def test_the_report_opens_with_a_summary_and_the_plays_used() -> None:
+    """A summary first (status, the play used most, the requirements' verdict,
+    the points' displacements), then the plays the nominal solve used: a
+    toleranced play at its mean, with where it comes from."""
+    model = jointplay.load(STUDIES / "shaft_fits.yaml")
+    html = Report(studies=False).render(model, "shaft_fits.yaml")
+    summary = (
+        html.index("<h2>Summary</h2>") if "<h2>Summary</h2>" in html else html.index("Summary")
+    )
+    assert summary < html.index("Model</h2>")
+    result = jointplay.solve(model)
+    used = max(c.gap_used for j in result.joints.values() for c in j.contacts)
+    assert f"{100 * used:.1f} % (touching)" in html
+    assert "all pass" in html
+    assert "Plays the nominal solve used" in html
+    for joint in model.joints:
+        assert f"<td>{joint.name}</td><td>clearance</td><td>{float(joint.clearance):g}</td>" in html
+    assert "H7/g6 at 25 mm: 0.007 to 0.041 mm (normal)" in html

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.geometry import FloatArray
+from jointplay.model.tolerance import Toleranced
 from jointplay.present.scene import Scene, mechanism_scene
 from jointplay.version import __version__
 
@@ -98,6 +99,7 @@ class Report:
         }
         page = _Page(model.name or source)
         page.header(model, source)
+        page.summary(model, results)
         page.model_tables(model)
         for case, result in results.items():
             say(f"drawing {'the solution' if case is None else repr(case)}")
@@ -348,6 +350,79 @@ class _Page:
             "Contact forces are those of body a on body b for each joint "
             "<code>between: [a, b]</code>, in the joint frame.</p>" + desc
         )
+
+    def summary(self, model: Model, results: dict[str | None, Result]) -> None:
+        """What a reader needs first: per load case the status, the play used
+        most, the requirements' verdicts and the key numbers; then the plays
+        the nominal solve used (a toleranced play: its mean)."""
+        self.section("Summary")
+        rows = []
+        for case, result in results.items():
+            contact = max(
+                ((j, c) for j in result.joints.values() for c in j.contacts),
+                key=lambda jc: jc[1].gap_used,
+                default=None,
+            )
+            most = (
+                f"{contact[0].name}.{contact[1].name}: {100 * contact[1].gap_used:.1f} %"
+                + (" (touching)" if contact[1].in_contact else "")
+                if contact is not None
+                else "–"
+            )
+            failed = [r for r in result.requirements if not r.passed]
+            verdict = (
+                "–"
+                if not result.requirements
+                else "all pass"
+                if not failed
+                else f"{len(failed)} of {len(result.requirements)} FAIL"
+            )
+            largest = ", ".join(
+                f"{p.name} {_num(float(np.linalg.norm(p.displacement)), 4)} mm"
+                for p in result.points.values()
+            )
+            status = result.status + ("" if result.certificate.certified else " (not certified)")
+            rows.append(
+                (
+                    "(model's loads)" if case is None else case,
+                    status,
+                    most,
+                    verdict,
+                    largest or "–",
+                    len(result.warnings),
+                )
+            )
+        self.parts.append(
+            _table(
+                [
+                    "load case",
+                    "status",
+                    "play used most",
+                    "requirements",
+                    "|d| of the points",
+                    "warnings",
+                ],
+                rows,
+                "At a glance (the sections below give every number)",
+            )
+        )
+        plays = []
+        for joint in model.joints:
+            for field in sorted(type(joint).model_fields):
+                value = getattr(joint, field) if "clearance" in field else None
+                if value is None:
+                    continue
+                origin = value.describe() if isinstance(value, Toleranced) else "as given"
+                used = "its mean" if isinstance(value, Toleranced) else "as given"
+                plays.append((joint.name, field, _num(float(value)), used, origin))
+        if plays:
+            self.parts.append(
+                _table(
+                    ["joint", "play", "used (mm)", "", "from"],
+                    [(j, f, v, u, o if o != "as given" else "") for j, f, v, u, o in plays],
+                    "Plays the nominal solve used (a toleranced play at its mean)",
+                )
+            )
 
     def model_tables(self, model: Model) -> None:
         self.section("Model")
