@@ -215,3 +215,20 @@ def test_the_report_opens_with_a_summary_and_the_plays_used() -> None:
     for joint in model.joints:
         assert f"<td>{joint.name}</td><td>clearance</td><td>{float(joint.clearance):g}</td>" in html
     assert "H7/g6 at 25 mm: 0.007 to 0.041 mm (normal)" in html
+
+
+def test_the_report_draws_each_joint_view_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The joints seen along their axes appear in the clearance figure only;
+    the mechanism figure above it leaves its joint panels out."""
+    from jointplay.present import plot
+
+    calls: list[dict[str, Any]] = []
+    real = plot.mechanism_figure
+
+    def spy(*args: Any, **kwargs: Any) -> Any:
+        calls.append(kwargs)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(plot, "mechanism_figure", spy)
+    Report(studies=False).render(jointplay.load(PAPER / "6.1.6.1.yaml"), "6.1.6.1.yaml")
+    assert [c.get("joints") for c in calls] == [False]

@@ -256,7 +256,8 @@ def scene_figure(scene: Scene, title: str = "") -> go.Figure:
             "xaxis": {"title": {"text": "X (mm)"}},
             "yaxis": {"title": {"text": "Y (mm)"}},
             "zaxis": {"title": {"text": "Z (mm)"}},
-            "camera": {"eye": {"x": 1.7, "y": -1.9, "z": 1.2}},
+            # far enough that the whole scene, stretched to its data's aspect, stays in view
+            "camera": {"eye": {"x": 2.0, "y": -2.3, "z": 1.5}},
         },
         margin={"l": 0, "r": 0, "t": 40, "b": 0},
         height=620,
@@ -582,7 +583,8 @@ class _Page:
         self.view(scene_figure(scene, "drag to turn, scroll to zoom, hover for names"))
         self.subsection("Figures")
         vector = len(scene.lines) <= VECTOR_LINES
-        figure = mechanism_figure(model, result, magnify=magnify, case=case)
+        # the joints' views once: in the clearance figure, every joint
+        figure = mechanism_figure(model, result, magnify=magnify, case=case, joints=False)
         self.parts.append(_svg(figure, vector))
         self.parts.append(_svg(clearance_figure(model, result)))
 
