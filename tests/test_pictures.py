@@ -24,6 +24,7 @@ from jointplay.present.plot import (
     envelope_figure,
     mechanism_figure,
     montecarlo_figure,
+    most_loaded_joints,
     save,
     sweep_figure,
 )
@@ -310,3 +311,24 @@ def test_a_figure_that_cannot_be_written_exits_2(tmp_path: Path) -> None:
     )
     assert run.exit_code == 2 and "cannot write it" in run.output
     assert "Traceback" not in run.output
+
+
+def test_joint_views_name_their_axes_globally_and_leave_out_rigid_joints(tmp_path: Path) -> None:
+    """A joint seen along its axis says which global direction each of its
+    axes is; a rigid joint has no play to show and gets no panel."""
+    model = jointplay.load(ROOT / "examples" / "gallery" / "lathe_slide.yaml")
+    result = jointplay.solve(model)
+    bearing = joint_view(model.joint("bearing"), result.joints["bearing"])
+    R = result.joints["bearing"].R_world_joint
+    expected = []
+    for i in range(3):
+        (k,) = np.flatnonzero(np.abs(R[:, i]) > 0.5)
+        expected.append(f"global {'+' if R[k, i] > 0 else '-'}{'XYZ'[k]}")
+    assert bearing.axes == tuple(expected)
+    fig = clearance_figure(model, result)
+    labels = [ax.get_xlabel() for ax in fig.axes] + [ax.get_ylabel() for ax in fig.axes]
+    assert f"y (mm): {expected[1]}" in labels and f"z (mm): {expected[2]}" in labels
+    titles = [ax.get_title() for ax in fig.axes]
+    assert "holder (rigid)" not in titles and len(titles) == len(model.joints) - 1
+    assert "holder" not in most_loaded_joints(model, result, 100)
+    _not_blank(save(fig, tmp_path / "joints.png"))

@@ -111,8 +111,8 @@ def mechanism_figure(
     what = model.name or "mechanism"
     if case is not None:
         what += f", case '{case}'"
-    if len(chosen) < len(model.joints) and joints:
-        what += f" (the views of the {len(chosen)} most loaded of {len(model.joints)} joints)"
+    if len(chosen) < len(with_play(model)) and joints:
+        what += f" (the views of the {len(chosen)} most loaded of {len(with_play(model))} joints)"
     fig.suptitle(
         f"{what}: displacements and plays ×{scene.magnify:g} "
         f"(largest {scene.largest_displacement:.4g} mm); arrows {1 / scene.force_scale:.3g} N "
@@ -125,10 +125,15 @@ def mechanism_figure(
     return fig
 
 
+def with_play(model: Model) -> list[str]:
+    """The joints that have play (a rigid joint's view would be an empty panel)."""
+    return [j.name for j in model.joints if any(c.kind != "fixed" for c in j.cones)]
+
+
 def most_loaded_joints(model: Model, result: Result, most: int) -> list[str]:
-    """All the joints' names when there are at most ``most``; else the ``most``
+    """The joints with play when there are at most ``most``; else the ``most``
     that carry the largest reaction forces, in the model's order."""
-    names = [j.name for j in model.joints]
+    names = with_play(model)
     if len(names) <= most:
         return names
     force = {n: float(np.linalg.norm(result.joints[n].reaction_force)) for n in names}
@@ -144,6 +149,11 @@ def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None 
         list(joints) if joints is not None else most_loaded_joints(model, result, JOINT_PANELS_MOST)
     )
     views = [joint_view(model.joint(name), result.joints[name]) for name in chosen]
+    if not views:
+        fig, ax = plt.subplots(figsize=(4, 1.5))
+        ax.text(0.5, 0.5, "no joint has play", ha="center", va="center")
+        ax.set_axis_off()
+        return fig
     cols = min(len(views), JOINTS_PER_ROW)
     rows = math.ceil(len(views) / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.6 * rows), squeeze=False)
@@ -152,7 +162,8 @@ def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None 
         draw_joint_view(ax, view, reach)
     for ax in axes.flat[len(views) :]:
         ax.set_axis_off()
-    some = "" if len(chosen) == len(model.joints) else f" ({len(chosen)} of {len(model.joints)})"
+    played = with_play(model)
+    some = "" if len(chosen) == len(played) else f" ({len(chosen)} of {len(played)} with play)"
     fig.suptitle(
         f"{model.name or 'mechanism'}: each joint at true size (mm), b relative to a{some}"
     )
@@ -340,8 +351,8 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
         ax.set_xlim(-reach, reach)
         ax.set_ylim(-reach, reach)
         ax.set_aspect("equal")
-        ax.set_xlabel("y (mm, joint frame)")
-        ax.set_ylabel("z (mm)")
+        ax.set_xlabel(f"y (mm): {view.axes[1]}", fontsize=8)
+        ax.set_ylabel(f"z (mm): {view.axes[2]}", fontsize=8)
     else:
         for wall in view.walls:  # the side beyond a wall is solid
             ax.axvline(wall, color=DOMAIN, linewidth=1.2)
@@ -351,8 +362,8 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
             P = np.array(view.outline)
             ax.plot(P[:, 0], P[:, 1], color=BODY_COLOURS[0], linewidth=2)
         ax.set_xlim(-reach, reach)
-        ax.set_xlabel("x, the normal (mm)")
-        ax.set_ylabel("across the face (mm)")
+        ax.set_xlabel(f"x, the normal (mm): {view.axes[0]}", fontsize=8)
+        ax.set_ylabel("across the face (mm)", fontsize=8)
     ax.axhline(0, color=INITIAL, linewidth=0.4)
     ax.axvline(0, color=INITIAL, linewidth=0.4)
     for p in view.points:

@@ -22,12 +22,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from jointplay.geometry import FloatArray
+from jointplay.geometry import FloatArray, describe_direction
 
 if TYPE_CHECKING:
     from jointplay.model.joints.base import Contact, Joint
@@ -311,6 +311,8 @@ class JointView:
     points: tuple[ViewPoint, ...]
     outline: tuple[tuple[float, float], ...]
     note: str
+    #: The joint frame's x, y, z in global words ('global +Z', or a vector).
+    axes: tuple[str, str, str] = ("x", "y", "z")
 
     @property
     def reach(self) -> float:
@@ -327,7 +329,12 @@ class JointView:
 def joint_view(joint: Joint, jr: JointResult) -> JointView:
     """The picture of one joint at true size: its clearance domain seen along
     its axis (or across it, for a face or a plane) and where b's contact
-    points went."""
+    points went, with the joint frame's axes named in global terms."""
+    axes = tuple(describe_direction(jr.R_world_joint[:, i], signed=True) for i in range(3))
+    return replace(_joint_view(joint, jr), axes=(axes[0], axes[1], axes[2]))
+
+
+def _joint_view(joint: Joint, jr: JointResult) -> JointView:
     t, w = np.asarray(jr.translation), np.asarray(jr.rotation)
 
     def delta(p: FloatArray) -> FloatArray:
