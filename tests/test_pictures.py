@@ -332,3 +332,31 @@ def test_joint_views_name_their_axes_globally_and_leave_out_rigid_joints(tmp_pat
     assert "holder (rigid)" not in titles and len(titles) == len(model.joints) - 1
     assert "holder" not in most_loaded_joints(model, result, 100)
     _not_blank(save(fig, tmp_path / "joints.png"))
+
+
+@pytest.mark.parametrize(
+    ("largest", "expected"), [(37.0, 20.0), (0.26, 0.2), (5.0, 5.0), (9.99, 5.0)]
+)
+def test_the_reference_arrow_is_a_round_force(largest: float, expected: float) -> None:
+    from jointplay.present.plot import round_force
+
+    assert round_force(largest) == pytest.approx(expected)
+
+
+def test_the_mechanism_figure_carries_a_reference_arrow() -> None:
+    """One black arrow of a round force, in the XY view, as long as that force
+    at the arrows' scale."""
+    from jointplay.present.plot import round_force
+
+    model = jointplay.load(PAPER / "6.1.6.1.yaml")
+    result = jointplay.solve(model)
+    scene = mechanism_scene(model, result)
+    fig = mechanism_figure(model, result)
+    xy = next(ax for ax in fig.axes if ax.get_title() == "XY (along Z)")
+    arrows = [t for t in xy.texts if t.arrow_patch is not None]
+    assert len(arrows) == 1
+    (x1, y1), (x0, y0) = arrows[0].xy, arrows[0].xyann
+    label = next(t.get_text() for t in xy.texts if t.get_text().endswith(" N"))
+    force = float(label.split()[0])
+    assert force == round_force(force * 1.000001)  # a round value
+    assert x1 - x0 == pytest.approx(force * scene.force_scale) and y1 == y0

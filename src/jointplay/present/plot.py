@@ -103,7 +103,7 @@ def mechanism_figure(
     draw_scene_3d(ax3d, scene)
     slots = (grid[1, :2], grid[1, 2:], grid[0, 2:])
     for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
-        draw_scene_view(fig.add_subplot(slot), scene, h, v, title)
+        draw_scene_view(fig.add_subplot(slot), scene, h, v, title, reference=slot is slots[0])
     reach = _common_reach(views)
     for i, view in enumerate(views):
         ax = fig.add_subplot(grid[2 + i // JOINTS_PER_ROW, i % JOINTS_PER_ROW])
@@ -115,8 +115,8 @@ def mechanism_figure(
         what += f" (the views of the {len(chosen)} most loaded of {len(with_play(model))} joints)"
     fig.suptitle(
         f"{what}: displacements and plays ×{scene.magnify:g} "
-        f"(largest {scene.largest_displacement:.4g} mm); arrows {1 / scene.force_scale:.3g} N "
-        "per mm"
+        f"(largest {scene.largest_displacement:.4g} mm); force arrows to the scale of the "
+        "black one"
         if scene.force_scale > 0
         else f"{what}: displacements and plays ×{scene.magnify:g}",
         fontsize=12,
@@ -243,8 +243,11 @@ def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
     ax.set_title("3D")
 
 
-def draw_scene_view(ax: Axes, scene: Scene, h: int, v: int, title: str) -> None:
-    """The scene projected on the plane of global axes ``h`` (across) and ``v`` (up)."""
+def draw_scene_view(
+    ax: Axes, scene: Scene, h: int, v: int, title: str, reference: bool = False
+) -> None:
+    """The scene projected on the plane of global axes ``h`` (across) and ``v`` (up);
+    ``reference``: with an arrow of a round force, for the arrows' scale."""
     from matplotlib.collections import LineCollection
 
     for lines, style in _line_groups(scene):
@@ -279,6 +282,30 @@ def draw_scene_view(ax: Axes, scene: Scene, h: int, v: int, title: str) -> None:
     ax.set_ylabel(f"{'XYZ'[v]} (mm)")
     ax.set_title(title)
     ax.grid(True, linewidth=0.3)
+    if reference and scene.force_scale > 0:
+        _reference_arrow(ax, scene.force_scale, hi[h] - lo[h], (lo[h], lo[v]), hi[v] - lo[v])
+
+
+def round_force(largest: float) -> float:
+    """The largest of 1, 2, 5 x 10^k (N) not above ``largest``."""
+    power = 10.0 ** math.floor(math.log10(largest))
+    return next(s * power for s in (5.0, 2.0, 1.0) if s * power <= largest * (1 + 1e-12))
+
+
+def _reference_arrow(
+    ax: Axes, mm_per_n: float, width: float, corner: tuple[float, float], height: float
+) -> None:
+    """A black arrow of a round force near the panel's lower left corner,
+    about a fifth of the panel wide, labelled with its size."""
+    force = round_force(0.2 * width / mm_per_n)
+    x0, y0 = corner[0] + 0.04 * width, corner[1] + 0.06 * height
+    ax.annotate(
+        "",
+        xy=(x0 + force * mm_per_n, y0),
+        xytext=(x0, y0),
+        arrowprops={"arrowstyle": "-|>", "color": "black", "linewidth": 1.2},
+    )
+    ax.annotate(f"{force:g} N", (x0, y0), xytext=(0, 4), **_small)
 
 
 _small: dict[str, Any] = {"textcoords": "offset points", "fontsize": 8}
