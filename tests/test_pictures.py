@@ -137,7 +137,11 @@ def test_arrows_are_the_forces_at_one_scale() -> None:
 def test_joint_views_at_true_size() -> None:
     model, result = _paper()
     l1, l2 = (joint_view(j, result.joints[j.name]) for j in model.joints)
-    assert l1.plane == "yz" and l1.circles == ((0.1, True),)  # a sphere's section
+    # a sphere is cut at the contact point's dx: the touching ball lies on that section
+    (ball,) = l1.points
+    dx = float((result.joints["l1"].translation)[0])
+    assert l1.plane == "yz" and l1.circles == (pytest.approx((np.sqrt(0.1**2 - dx**2), True)),)
+    assert ball.touching and np.hypot(*ball.at) == pytest.approx(l1.circles[0][0], abs=MM)
     assert l2.circles == ((0.1, False),)
     end_minus, end_plus = l2.points
     assert end_plus.touching and not end_minus.touching

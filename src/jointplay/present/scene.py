@@ -295,9 +295,9 @@ class JointView:
     """One joint at true size, in its own frame.
 
     ``plane == "yz"``: seen along the joint axis (the paper's figure 6):
-    ``circles`` are clearance circles (radius, mm; ``sphere`` marks a sphere's
-    section), ``rectangle`` the half plays (y, z) of a slot. ``plane ==
-    "x-across"``: seen across the axis, for a face or a plane: ``walls`` are
+    ``circles`` are clearance circles (radius, mm; ``sphere`` marks a
+    sphere's section, cut at the contact point's x), ``rectangle`` the half
+    plays (y, z) of a slot. ``plane == "x-across"``: seen across the axis, for a face or a plane: ``walls`` are
     the positions along x that b may not pass; ``outline`` is b's face. ``note``
     says what the view cannot show (a revolute joint's axial play).
     """
@@ -364,7 +364,12 @@ def _joint_view(joint: Joint, jr: JointResult) -> JointView:
             )
             continue
         if dirs in ("xyz", "yz"):
-            entry = (cone.radius, dirs == "xyz")
+            # a sphere is cut where the contact point is (x = dx): a touching
+            # point lies on that section, not on the sphere's equator
+            radius = (
+                math.sqrt(max(cone.radius**2 - d[0] ** 2, 0.0)) if dirs == "xyz" else cone.radius
+            )
+            entry = (radius, dirs == "xyz")
             if entry not in circles:
                 circles.append(entry)
         elif dirs == "y":
