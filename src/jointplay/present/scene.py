@@ -297,9 +297,10 @@ class JointView:
     ``plane == "yz"``: seen along the joint axis (the paper's figure 6):
     ``circles`` are clearance circles (radius, mm; ``sphere`` marks a
     sphere's section, cut at the contact point's x), ``rectangle`` the half
-    plays (y, z) of a slot. ``plane == "x-across"``: seen across the axis, for a face or a plane: ``walls`` are
-    the positions along x that b may not pass; ``outline`` is b's face. ``note``
-    says what the view cannot show (a revolute joint's axial play).
+    plays (y, z) of a slot. ``plane == "x-across"``: seen across the axis,
+    for a face or a plane: ``walls`` are the positions along x that b may not
+    pass; ``outline`` is b's face. ``note`` says what the view cannot show (a
+    revolute joint's axial play).
     """
 
     joint: str
