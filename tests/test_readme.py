@@ -62,3 +62,27 @@ def test_readme_pictures_example_runs(tmp_path: Path) -> None:
     assert (tmp_path / "shaft.svg").read_text().count("<svg") == 1
     assert (tmp_path / "joints.png").read_bytes().startswith(b"\x89PNG")
     assert "jp-view-0" in (tmp_path / "shaft.html").read_text(encoding="utf-8")
+
+
+def test_readme_multi_body_figure_is_drawn_by_jointplay(tmp_path: Path) -> None:
+    """The README's figure of a mechanism of several bodies exists and is what
+    its command draws (same size, within font metrics)."""
+    from PIL import Image
+    from typer.testing import CliRunner
+
+    from jointplay.cli import app
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert (
+        "![A lathe slide of four bodies drawn by jointplay](docs/figures/lathe-slide.png)" in text
+    )
+    assert "jointplay plot examples/gallery/lathe_slide.yaml -o slide.png" in text
+    committed = Image.open(ROOT / "docs" / "figures" / "lathe-slide.png")
+    out = tmp_path / "slide.png"
+    run = CliRunner().invoke(
+        app, ["plot", str(ROOT / "examples/gallery/lathe_slide.yaml"), "-o", str(out)]
+    )
+    assert run.exit_code == 0, run.output
+    drawn = Image.open(out)
+    assert abs(drawn.width - committed.width) <= 0.02 * committed.width
+    assert abs(drawn.height - committed.height) <= 0.02 * committed.height

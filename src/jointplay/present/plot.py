@@ -52,6 +52,9 @@ BODY_COLOURS = ("#1f4e79", "#8c564b", "#9467bd", "#17becf", "#bcbd22", "#e377c2"
 #: The three orthographic views: (name, horizontal axis, vertical axis).
 VIEWS = (("XY (along Z)", 0, 1), ("XZ (along -Y)", 0, 2), ("YZ (along X)", 1, 2))
 JOINTS_PER_ROW = 4
+#: In the 3D panel a direction spans at least this share of the longest (its
+#: ticks need room); the 2D views keep true scale.
+THIN_3D = 0.3
 #: Joint views under the mechanism figure, and in the joints figure, at most:
 #: a larger mechanism shows its most loaded joints.
 JOINT_VIEWS_SHOWN = 8
@@ -235,12 +238,19 @@ def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect(tuple(hi - lo))
-    ax.set_xlabel("X (mm)")
-    ax.set_ylabel("Y (mm)")
-    ax.set_zlabel("Z (mm)")
+    # true scale, except that a thin direction gets room for its ticks (the
+    # three views beside it are at true scale)
+    span = hi - lo
+    ax.set_box_aspect(tuple(np.maximum(span, THIN_3D * float(np.max(span)))))
+    from matplotlib.ticker import MaxNLocator
+
+    for axis, span_i in zip((ax.xaxis, ax.yaxis, ax.zaxis), span, strict=True):
+        axis.set_major_locator(MaxNLocator(5 if span_i >= 0.5 * np.max(span) else 3))
+    ax.set_xlabel("X (mm)", labelpad=8)
+    ax.set_ylabel("Y (mm)", labelpad=8)
+    ax.set_zlabel("Z (mm)", labelpad=6)
     ax.tick_params(labelsize=7)
-    ax.set_title("3D")
+    ax.set_title("3D", loc="left", fontsize=10)
 
 
 def draw_scene_view(
