@@ -512,3 +512,44 @@ def test_problems_across_entries_are_listed_together(tmp_path: Path) -> None:
         "  requirements[0]",
     ]
     assert "no chain of joints" not in str(caught.value)
+
+
+def test_a_duplicate_name_does_not_hide_the_other_problems(tmp_path: Path) -> None:
+    data = spherical_shaft(
+        points=[
+            {"name": "B", "body": "S1", "at": [0, 0, 0]},
+            {"name": "B", "body": "S1", "at": [1, 0, 0]},
+        ]
+    )
+    data["joints"][0]["between"] = ["S0", "S9"]  # type: ignore[index]
+    with pytest.raises(ModelError) as caught:
+        model_from_dict_at(tmp_path, data)
+    text = str(caught.value)
+    assert "joints[0] 'l1': between: unknown body 'S9'" in text.split("\n")[0]
+    assert "  points[1]: duplicate point name 'B'" in text
+
+
+def test_an_unconnected_body_is_reported_beside_a_joint_between_grounds(tmp_path: Path) -> None:
+    """Only a joint to an unknown body makes the connection check moot."""
+    data = spherical_shaft(
+        bodies=[
+            {"name": "S0", "ground": True},
+            {"name": "S1"},
+            {"name": "S2"},
+            {"name": "G", "ground": True},
+        ]
+    )
+    data["joints"].append(  # type: ignore[union-attr]
+        {
+            "name": "gg",
+            "type": "spherical",
+            "between": ["S0", "G"],
+            "at": [0, 0, 0],
+            "clearance": 0.2,
+        }
+    )
+    with pytest.raises(ModelError) as caught:
+        model_from_dict_at(tmp_path, data)
+    text = str(caught.value)
+    assert "joints[2] 'gg': between: both 'S0' and 'G' are ground bodies" in text
+    assert "no chain of joints connects 'S2'" in text

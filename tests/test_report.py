@@ -232,3 +232,22 @@ def test_the_report_draws_each_joint_view_once(monkeypatch: pytest.MonkeyPatch) 
     monkeypatch.setattr(plot, "mechanism_figure", spy)
     Report(studies=False).render(jointplay.load(PAPER / "6.1.6.1.yaml"), "6.1.6.1.yaml")
     assert [c.get("joints") for c in calls] == [False]
+
+
+def test_the_summary_reads_point_gaps_and_skips_plays_of_zero() -> None:
+    """A point joint's play is its gap; a contact with no play (always "full")
+    is not the play used most."""
+    model = jointplay.load(STUDIES / "wobbly_table.yaml")
+    html = Report(studies=False).render(model, "wobbly_table.yaml")
+    plays = html[html.index("Plays the nominal solve used") : html.index(">Model</h2>")]
+    points = [j for j in model.joints if j.type_name == "point"]
+    assert points and all(f"<td>{j.name}</td><td>gap</td>" in plays for j in points)
+    assert "<td>clearance</td><td>0</td>" not in plays
+    result = jointplay.solve(model)
+    with_play = [
+        c.gap_used
+        for j in model.joints
+        for cone, c in zip(j.cones, result.joints[j.name].contacts, strict=True)
+        if cone.kind == "ball" and cone.radius > 0
+    ]
+    assert f"{100 * max(with_play):.1f} %" in html[html.index(">Summary</h2>") :]

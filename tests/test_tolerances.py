@@ -120,3 +120,26 @@ def test_a_model_without_requirements_is_told_what_to_add() -> None:
     proc = run("tolerances", str(ROOT / "examples" / "paper" / "6.1.6.1.yaml"))
     assert proc.returncode == 2
     assert "requirements" in proc.stderr and "max_displacement" in proc.stderr
+
+
+def test_plays_that_do_not_vary_give_json_that_parses(tmp_path: Path) -> None:
+    """Zero-width tolerances: no spread at all, so the capability indices are
+    unbounded; the JSON says null (it has no infinity), and a round-off spread
+    of the samples counts as none rather than as an absurd Ppk."""
+    data = yaml.safe_load(FITS.read_text())
+    for joint in data["joints"]:
+        joint["clearance"] = {"min": "10 um", "max": "10 um"}
+    data["requirements"].append({"point": "B", "max_displacement": 1.0, "along": [0, 1, 0]})
+    path = tmp_path / "zero.yaml"
+    path.write_text(yaml.safe_dump(data))
+    proc = run("tolerances", str(path), "-n", "200", "--json")
+    assert proc.returncode == 0, proc.stderr
+
+    def refuse(name: str) -> None:
+        raise AssertionError(f"not JSON: {name}")
+
+    doc = json.loads(proc.stdout, parse_constant=refuse)
+    for req in doc["requirements"]:
+        assert req["rss"]["sigma"] == 0.0 and req["monte_carlo"]["sigma"] == 0.0
+        assert req["rss"]["cpk"] is None and req["monte_carlo"]["ppk"] is None
+        assert req["worst_case"]["low"] == req["worst_case"]["high"] == req["nominal"]

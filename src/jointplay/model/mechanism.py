@@ -34,6 +34,7 @@ from jointplay.model.fields import (
     TorqueVector,
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
+from jointplay.model.tolerance import PLAY_FIELDS
 from jointplay.units import shown
 
 if TYPE_CHECKING:
@@ -195,8 +196,9 @@ class Model(BaseModel):
         """Every problem across entries, listed together (``EntryProblemsError``)."""
         found: list[EntryError] = []
         names = [b.name for b in self.bodies]
-        _check_unique(names, "bodies", "body")
-        _check_unique([j.name for j in self.joints], "joints", "joint")
+        found += _check_unique(names, "bodies", "body")
+        found += _check_unique([j.name for j in self.joints], "joints", "joint")
+        unknown_between = False
         grounds = {b.name for b in self.bodies if b.ground}
         if not grounds:
             found.append(
@@ -211,6 +213,7 @@ class Model(BaseModel):
             a, b = joint.between
             for body in (a, b):
                 if body not in names:
+                    unknown_between = True
                     found.append(
                         EntryError(
                             entry,
@@ -256,7 +259,7 @@ class Model(BaseModel):
             found.append(
                 EntryError("load_cases", "no cases given; name at least one case, or leave it out")
             )
-        _check_unique([p.name for p in self.points], "points", "point")
+        found += _check_unique([p.name for p in self.points], "points", "point")
         for i, point in enumerate(self.points):
             if point.body not in names:
                 found.append(
@@ -281,11 +284,10 @@ class Model(BaseModel):
                         + suggest(req.point, point_names),
                     )
                 )
-        joints_read = not any(e.entry.startswith("joints[") for e in found)
-        # with no ground, or a joint between unknown bodies, it would only repeat those
+        # with no ground, or a joint to an unknown body, it would only repeat those
         unreached = (
             _unreached_from_ground(names, grounds, [j.between for j in self.joints])
-            if grounds and joints_read
+            if grounds and not unknown_between
             else []
         )
         if unreached:
@@ -355,8 +357,8 @@ class Model(BaseModel):
             size, what = self._joint_size(joint)
             if size <= 0.0:
                 continue
-            for field in sorted(type(joint).model_fields):
-                play = getattr(joint, field) if "clearance" in field else None
+            for field in PLAY_FIELDS:
+                play = getattr(joint, field, None)
                 if play and play >= LARGE_PLAY_SHARE * size:
                     out.append(
                         f"joint '{joint.name}': {field} {play:g} mm is {play / size:.3g} times "
@@ -405,16 +407,21 @@ def check_case(model: Model, case: str | None, source: str) -> None:
         raise OptionError(f"--case: {exc.args[0]}", source=source) from None
 
 
-def _check_unique(names: list[str], section: str, what: str) -> None:
+def _check_unique(names: list[str], section: str, what: str) -> list[EntryError]:
     seen: dict[str, int] = {}
+    out = []
     for i, n in enumerate(names):
         if n in seen:
-            raise EntryError(
-                f"{section}[{i}]",
-                f"duplicate {what} name '{n}' (also {section}[{seen[n]}]); give each {what} "
-                "its own name",
+            out.append(
+                EntryError(
+                    f"{section}[{i}]",
+                    f"duplicate {what} name '{n}' (also {section}[{seen[n]}]); give each "
+                    f"{what} its own name",
+                )
             )
-        seen[n] = i
+        else:
+            seen[n] = i
+    return out
 
 
 def _unreached_from_ground(

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.geometry import FloatArray
-from jointplay.model.tolerance import Toleranced
+from jointplay.model.tolerance import PLAY_FIELDS, Toleranced
 from jointplay.present.scene import Scene, mechanism_scene
 from jointplay.version import __version__
 
@@ -359,11 +359,13 @@ class _Page:
         self.section("Summary")
         rows = []
         for case, result in results.items():
-            contact = max(
-                ((j, c) for j in result.joints.values() for c in j.contacts),
-                key=lambda jc: jc[1].gap_used,
-                default=None,
+            played = (  # contacts with play: a rigid or zero-play one is always "full"
+                (result.joints[joint.name], c)
+                for joint in model.joints
+                for cone, c in zip(joint.cones, result.joints[joint.name].contacts, strict=True)
+                if cone.kind == "ball" and cone.radius > 0
             )
+            contact = max(played, key=lambda jc: jc[1].gap_used, default=None)
             most = (
                 f"{contact[0].name}.{contact[1].name}: {100 * contact[1].gap_used:.1f} %"
                 + (" (touching)" if contact[1].in_contact else "")
@@ -409,10 +411,10 @@ class _Page:
         )
         plays = []
         for joint in model.joints:
-            for field in sorted(type(joint).model_fields):
-                value = getattr(joint, field) if "clearance" in field else None
-                if value is None:
-                    continue
+            for field in PLAY_FIELDS:
+                value = getattr(joint, field, None)
+                if value is None or (field == "clearance" and joint.type_name == "point"):
+                    continue  # a point joint's play is its gap
                 origin = value.describe() if isinstance(value, Toleranced) else "as given"
                 used = "its mean" if isinstance(value, Toleranced) else "as given"
                 plays.append((joint.name, field, _num(float(value)), used, origin))

@@ -8,7 +8,8 @@ results side by side"), for each requirement's measure y: |d| of its point
 - *Worst case* (arithmetic stack): y0 -/+ sum_i |s_i| T_i / 2, from the
   contributions' sensitivities s_i at the nominal plays and the tolerance
   widths T_i (each play from its mean to either limit). Linear at the
-  nominal: exact while the contacts stay the same (a kink is flagged there).
+  nominal: exact while the contacts stay the same; where they change at the
+  nominal (a kink), each side's own slope.
 - *RSS*: sigma = sqrt(sum_i (s_i sigma_i)^2); Cp = (USL - LSL) / (6 sigma)
   (two-sided only), Cpk = min(USL - y0, y0 - LSL) / (3 sigma) (one-sided:
   (USL - y0) / (3 sigma)); ppm from the normal law of that mean and sigma.
@@ -37,6 +38,15 @@ if TYPE_CHECKING:
 def _normal_tail(z: float) -> float:
     """P(Z > z) for a standard normal Z."""
     return 0.5 * math.erfc(z / math.sqrt(2.0))
+
+
+#: A spread below this share of the measure's scale (its mean or its limit) is
+#: round-off of a measure that does not vary: it counts as 0.
+ROUND_OFF_SPREAD = 1e-12
+
+
+def _spread(sigma: float, mean: float, limit: float) -> float:
+    return 0.0 if sigma <= ROUND_OFF_SPREAD * max(abs(mean), limit) else sigma
 
 
 def _capability(low: float | None, high: float, mean: float, sigma: float) -> tuple[float, float]:
@@ -93,7 +103,7 @@ class RequirementTolerances:
 
     def to_dict(self) -> dict[str, Any]:
         def num(v: float) -> float | None:
-            return None if math.isnan(v) else v  # JSON has no NaN
+            return v if math.isfinite(v) else None  # JSON has no NaN nor infinity
 
         req = self.requirement
         return {
@@ -111,14 +121,14 @@ class RequirementTolerances:
             "rss": {
                 "sigma": self.rss_sigma,
                 "cp": num(self.cp),
-                "cpk": self.cpk,
+                "cpk": num(self.cpk),
                 "ppm": self.rss_ppm,
             },
             "monte_carlo": {
                 "mean": self.mc_mean,
                 "sigma": self.mc_sigma,
                 "pp": num(self.pp),
-                "ppk": self.ppk,
+                "ppk": num(self.ppk),
                 "ppm": self.mc_ppm,
                 "interval_ppm": list(self.mc_interval_ppm),
             },
@@ -178,23 +188,30 @@ def _one(
         measure = Measure(req.point)
     k = linear.measures.index(measure.label)
     y0 = float(linear.nominal[k])
-    half = float(linear.worst_case_range[k]) / 2.0
-    sigma = float(linear.rss_sigma[k])
+    # each play to either limit: the slope's change there, one-sided where the
+    # contacts change at the nominal (a kink: the two sides differ)
+    half_t = linear.width / 2.0
+    kink = linear.kink[k]
+    up = np.where(kink, linear.slope_up[k], linear.sensitivity[k]) * half_t
+    down = -np.where(kink, linear.slope_down[k], linear.sensitivity[k]) * half_t
+    rise = float(np.sum(np.maximum(np.maximum(up, down), 0.0)))
+    fall = float(np.sum(np.minimum(np.minimum(up, down), 0.0)))
     high = req.max_displacement
     low = -high if two_sided else None
+    sigma = _spread(float(linear.rss_sigma[k]), y0, high)
     cp, cpk = _capability(low, high, y0, sigma)
     y = measure.of(mc.displacement[:, mc.point_names.index(req.point)])
     mean = float(np.mean(y))
-    spread = float(np.std(y, ddof=1)) if len(y) > 1 else 0.0
+    spread = _spread(float(np.std(y, ddof=1)) if len(y) > 1 else 0.0, mean, high)
     pp, ppk = _capability(low, high, mean, spread)
     outside = (np.abs(y) > high) if two_sided else (y > high)
     return RequirementTolerances(
         req,
         two_sided,
         y0,
-        bool(np.any(linear.kink[k])),
-        y0 - half,
-        y0 + half,
+        bool(np.any(kink)),
+        y0 + fall,
+        y0 + rise,
         sigma,
         cp,
         cpk,
