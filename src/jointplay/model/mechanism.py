@@ -353,12 +353,20 @@ class Model(BaseModel):
                 "the model has no loads (no 'loads', no load cases, no weight): nothing "
                 "pushes the parts, so every displacement and force is 0"
             )
+        centres = np.array([j.at for j in self.joints], dtype=float)
+        extent = float(np.linalg.norm(centres.max(axis=0) - centres.min(axis=0)))
         for joint in self.joints:
-            size, what = self._joint_size(joint)
+            # its own size (a bore's length, a face's width), else the mechanism's extent
+            size, what = (
+                (joint.size, "its size")
+                if joint.size > 0.0
+                else (extent, "the diagonal of the box around the joints")
+            )
             if size <= 0.0:
                 continue
+            fields = type(joint).model_fields
             for field in PLAY_FIELDS:
-                play = getattr(joint, field, None)
+                play = getattr(joint, field) if field in fields else None
                 if play and play >= LARGE_PLAY_SHARE * size:
                     out.append(
                         f"joint '{joint.name}': {field} {play:g} mm is {play / size:.3g} times "
@@ -366,15 +374,6 @@ class Model(BaseModel):
                         f"{play:g} was meant in um, write '{play:g} um'"
                     )
         return tuple(out)
-
-    def _joint_size(self, joint: Joint) -> tuple[float, str]:
-        """A length that a joint's play should be small against: the joint's own
-        size (a bore's length, a face's width), else the mechanism's extent."""
-        if joint.size > 0.0:
-            return joint.size, "its size"
-        centres = np.array([j.at for j in self.joints], dtype=float)
-        extent = float(np.linalg.norm(centres.max(axis=0) - centres.min(axis=0)))
-        return extent, "the diagonal of the box around the joints"
 
     def body(self, name: str) -> Body:
         for b in self.bodies:

@@ -412,7 +412,7 @@ class _Page:
         plays = []
         for joint in model.joints:
             for field in PLAY_FIELDS:
-                value = getattr(joint, field, None)
+                value = getattr(joint, field) if field in type(joint).model_fields else None
                 if value is None or (field == "clearance" and joint.type_name == "point"):
                     continue  # a point joint's play is its gap
                 origin = value.describe() if isinstance(value, Toleranced) else "as given"
