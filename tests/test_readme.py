@@ -6,6 +6,8 @@ import os
 import re
 from pathlib import Path
 
+import pytest
+
 from conftest import ROOT
 
 
@@ -24,25 +26,43 @@ def test_readme_python_example_runs() -> None:
     assert len(batch) == 2  # type: ignore[arg-type]
 
 
-def test_readme_figure_is_drawn_by_jointplay(tmp_path: Path) -> None:
-    """The README's 6.1.6.1 figure exists and is what its command draws (same
-    size; matplotlib's name in the PNG's metadata)."""
+@pytest.mark.parametrize(
+    ("alt", "figure", "model", "out"),
+    [
+        (
+            "The paper's 6.1.6.1 shaft drawn by jointplay",
+            "paper-6.1.6.1.png",
+            "examples/paper/6.1.6.1.yaml",
+            "shaft.png",
+        ),
+        (
+            "A lathe slide of four bodies drawn by jointplay",
+            "lathe-slide.png",
+            "examples/gallery/lathe_slide.yaml",
+            "slide.png",
+        ),
+    ],
+    ids=["paper", "multi-body"],
+)
+def test_readme_figure_is_drawn_by_jointplay(
+    alt: str, figure: str, model: str, out: str, tmp_path: Path
+) -> None:
+    """Each README figure exists and is what its command draws (same size, within
+    font metrics; matplotlib's name in the PNG's metadata)."""
     from PIL import Image
     from typer.testing import CliRunner
 
     from jointplay.cli import app
 
     text = (ROOT / "README.md").read_text(encoding="utf-8")
-    assert "![The paper's 6.1.6.1 shaft drawn by jointplay](docs/figures/paper-6.1.6.1.png)" in text
-    assert "jointplay plot examples/paper/6.1.6.1.yaml -o shaft.png" in text
-    committed = Image.open(ROOT / "docs" / "figures" / "paper-6.1.6.1.png")
+    assert f"![{alt}](docs/figures/{figure})" in text
+    assert f"jointplay plot {model} -o {out}" in text
+    committed = Image.open(ROOT / "docs" / "figures" / figure)
     assert "Matplotlib" in committed.info.get("Software", "")
-    out = tmp_path / "shaft.png"
-    run = CliRunner().invoke(
-        app, ["plot", str(ROOT / "examples/paper/6.1.6.1.yaml"), "-o", str(out)]
-    )
+    drawn_path = tmp_path / out
+    run = CliRunner().invoke(app, ["plot", str(ROOT / model), "-o", str(drawn_path)])
     assert run.exit_code == 0, run.output
-    drawn = Image.open(out)
+    drawn = Image.open(drawn_path)
     # the same figure; a few pixels of slack for font metrics of other versions
     assert abs(drawn.width - committed.width) <= 0.02 * committed.width
     assert abs(drawn.height - committed.height) <= 0.02 * committed.height
@@ -62,27 +82,3 @@ def test_readme_pictures_example_runs(tmp_path: Path) -> None:
     assert (tmp_path / "shaft.svg").read_text().count("<svg") == 1
     assert (tmp_path / "joints.png").read_bytes().startswith(b"\x89PNG")
     assert "jp-view-0" in (tmp_path / "shaft.html").read_text(encoding="utf-8")
-
-
-def test_readme_multi_body_figure_is_drawn_by_jointplay(tmp_path: Path) -> None:
-    """The README's figure of a mechanism of several bodies exists and is what
-    its command draws (same size, within font metrics)."""
-    from PIL import Image
-    from typer.testing import CliRunner
-
-    from jointplay.cli import app
-
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    assert (
-        "![A lathe slide of four bodies drawn by jointplay](docs/figures/lathe-slide.png)" in text
-    )
-    assert "jointplay plot examples/gallery/lathe_slide.yaml -o slide.png" in text
-    committed = Image.open(ROOT / "docs" / "figures" / "lathe-slide.png")
-    out = tmp_path / "slide.png"
-    run = CliRunner().invoke(
-        app, ["plot", str(ROOT / "examples/gallery/lathe_slide.yaml"), "-o", str(out)]
-    )
-    assert run.exit_code == 0, run.output
-    drawn = Image.open(out)
-    assert abs(drawn.width - committed.width) <= 0.02 * committed.width
-    assert abs(drawn.height - committed.height) <= 0.02 * committed.height

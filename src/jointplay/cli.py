@@ -46,6 +46,10 @@ SchedulerOption = Annotated[
 ]
 
 
+WorkersOption = Annotated[
+    int | None,
+    typer.Option("--workers", min=1, help="Local processes (default: one per core)."),
+]
 PlotOption = Annotated[
     Path | None,
     typer.Option("--plot", metavar="FILE", help="Draw the study's figure (.png, .svg or .pdf)."),
@@ -230,10 +234,7 @@ def montecarlo(
         ),
     ] = 0.95,
     case: CaseOption = None,
-    workers: Annotated[
-        int | None,
-        typer.Option("--workers", min=1, help="Local processes (default: one per core)."),
-    ] = None,
+    workers: WorkersOption = None,
     scheduler: SchedulerOption = None,
     chunk: Annotated[
         int, typer.Option("--chunk", min=1, help="Samples per chunk (fixes the random streams).")
@@ -457,10 +458,7 @@ def tolerances(
         typer.Option("--confidence", help="Confidence level of the Monte Carlo ppm interval."),
     ] = 0.95,
     case: CaseOption = None,
-    workers: Annotated[
-        int | None,
-        typer.Option("--workers", min=1, help="Local processes (default: one per core)."),
-    ] = None,
+    workers: WorkersOption = None,
     csv: Annotated[
         Path | None,
         typer.Option("--csv", metavar="FILE", help="Write the table (one row per requirement)."),
