@@ -553,3 +553,19 @@ def test_an_unconnected_body_is_reported_beside_a_joint_between_grounds(tmp_path
     text = str(caught.value)
     assert "joints[2] 'gg': between: both 'S0' and 'G' are ground bodies" in text
     assert "no chain of joints connects 'S2'" in text
+
+
+@pytest.mark.parametrize("depth", [65, 1001, 5000])
+@pytest.mark.parametrize("style", ["flow", "block"])
+def test_deep_nesting_is_one_message_whichever_layer_meets_it(
+    tmp_path: Path, depth: int, style: str
+) -> None:
+    # 65 meets our own check on the nodes; past 1000 levels libyaml (PyYAML >= 6.0.4)
+    # stops the scanner first: both must read the same.
+    if style == "flow":
+        nested = "  " + "[" * depth + "]" * depth
+    else:
+        nested = "  " + "- " * depth + "1"
+    path = write(tmp_path, f"bodies: []\nextra:\n{nested}\n")
+    with pytest.raises(ModelError, match=rf"nests lists or mappings more than \d+ deep"):
+        jointplay.load(path)

@@ -427,6 +427,10 @@ def _too_deep() -> str:
 def _yaml_problem(exc: yaml.YAMLError, text: str) -> str:
     mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
     problem = getattr(exc, "problem", None)
+    if "nesting depth" in str(problem):
+        # libyaml (from PyYAML 6.0.4) stops at 1000 levels, before our own check
+        # on the nodes can see them: the same problem, in our words.
+        return _too_deep()
     if isinstance(exc, yaml.reader.ReaderError):
         position = int(getattr(exc, "position", 0))
         line = text.count("\n", 0, position) + 1
