@@ -562,10 +562,7 @@ def test_deep_nesting_is_one_message_whichever_layer_meets_it(
 ) -> None:
     # 65 meets our own check on the nodes; past 1000 levels libyaml (PyYAML >= 6.0.4)
     # stops the scanner first: both must read the same.
-    if style == "flow":
-        nested = "  " + "[" * depth + "]" * depth
-    else:
-        nested = "  " + "- " * depth + "1"
+    nested = "  " + "[" * depth + "]" * depth if style == "flow" else "  " + "- " * depth + "1"
     path = write(tmp_path, f"bodies: []\nextra:\n{nested}\n")
-    with pytest.raises(ModelError, match=rf"nests lists or mappings more than \d+ deep"):
+    with pytest.raises(ModelError, match=r"nests lists or mappings more than \d+ deep"):
         jointplay.load(path)

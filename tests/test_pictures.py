@@ -364,3 +364,71 @@ def test_the_mechanism_figure_carries_a_reference_arrow() -> None:
     force = float(label.split()[0])
     assert force == round_force(force * 1.000001)  # a round value
     assert x1 - x0 == pytest.approx(force * scene.force_scale) and y1 == y0
+
+
+def test_a_body_with_an_outline_is_drawn_as_that_closed_outline() -> None:
+    model = jointplay.load(STUDIES / "wobbly_table.yaml")
+    result = jointplay.solve(model, case="leaning on foot4")
+    m = 200.0
+    scene = mechanism_scene(model, result, magnify=m, case="leaning on foot4")
+    corners = np.array(model.body("table").outline)
+    initial = [ln.points for ln in scene.lines if ln.role == "initial" and ln.label == "table"]
+    displaced = [ln.points for ln in scene.lines if ln.role == "displaced" and ln.label == "table"]
+    assert len(initial) == len(displaced) == 1  # one line, not a tree through the joints
+    np.testing.assert_allclose(initial[0], np.vstack([corners, corners[:1]]), atol=MM)
+    d = result.bodies["table"].displacement_of
+    for P, Q in zip(initial[0], displaced[0], strict=True):
+        np.testing.assert_allclose(Q, P + m * d(P), atol=MM)
+    low, high = scene.bounds()
+    assert np.all(low <= corners.min(axis=0)) and np.all(high >= corners.max(axis=0))
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"outline": [[0, 0, 0]]}, "'outline' needs at least two points"),
+        ({"outline": [[0, 0, 0], [1, 0, 0]], "ground": True}, "a ground body is not drawn"),
+        ({"outline": [[0, 0, 0], [1, 0]]}, "outline"),
+    ],
+)
+def test_a_bad_outline_is_refused(changes: dict[str, object], message: str, tmp_path: Path) -> None:
+    import yaml
+
+    data = yaml.safe_load((PAPER / "6.1.6.1.yaml").read_text())
+    data["bodies"][1].update(changes)
+    path = tmp_path / "outline.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(jointplay.ModelError, match=message):
+        jointplay.load(path)
+
+
+def test_an_outline_reads_lengths_with_units(tmp_path: Path) -> None:
+    import yaml
+
+    data = yaml.safe_load((PAPER / "6.1.6.1.yaml").read_text())
+    data["bodies"][1]["outline"] = [[0, 0, 0], ["0.3 m", 0, "5 cm"]]
+    path = tmp_path / "outline.yaml"
+    path.write_text(yaml.safe_dump(data))
+    body = jointplay.load(path).body(data["bodies"][1]["name"])
+    assert body.outline is not None
+    np.testing.assert_allclose(np.array(body.outline), [[0, 0, 0], [300, 0, 50]], atol=MM)
+
+
+@pytest.mark.parametrize(
+    ("names", "label"),
+    [
+        (
+            "y x- z-|y x- z+|y x+ z-|y x+ z+|z x- y-|z x- y+|z x+ y-|z x+ y+".split("|"),
+            "y x± z±, z x± y±",
+        ),
+        (["end-", "end+"], "end±"),
+        (["face x-", "radial"], "face x-, radial"),
+        (["y x- z-", "y x+ z+"], "y x- z-, y x+ z+"),  # two words differ: both named
+    ],
+)
+def test_contacts_at_one_place_get_one_short_label(names: list[str], label: str) -> None:
+    from jointplay.present.scene import ViewPoint, _merged
+
+    points = [ViewPoint((0.01, -0.02), name, i == 0) for i, name in enumerate(names)]
+    (merged,) = _merged(points, 1e-9)
+    assert merged.label == label and merged.touching and merged.at == (0.01, -0.02)

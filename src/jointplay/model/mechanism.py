@@ -104,6 +104,10 @@ class Body(BaseModel):
         None  # kg; with the model's gravity, a weight at the centre of mass
     )
     center_of_mass: Point | None = None  # mm, global
+    #: Corners drawn for the body in figures (mm, global, at rest), joined in
+    #: order and closed; two points draw a bar. Without it the body is drawn
+    #: as the shortest tree through its joints and points.
+    outline: tuple[Point, ...] | None = None
 
     @model_validator(mode="after")
     def _check_mass(self) -> Body:
@@ -111,6 +115,15 @@ class Body(BaseModel):
             raise ValueError("a body with a 'mass' needs its 'center_of_mass: [x, y, z]' (mm)")
         if self.center_of_mass is not None and self.mass is None:
             raise ValueError("'center_of_mass' is given without a 'mass'; add 'mass' (kg)")
+        if self.outline is not None:
+            if self.ground:
+                raise ValueError(
+                    "a ground body is not drawn, so its 'outline' would be ignored; remove it"
+                )
+            if len(self.outline) < 2:
+                raise ValueError(
+                    "'outline' needs at least two points, [[x, y, z], [x, y, z], ...] (mm)"
+                )
         return self
 
 

@@ -11,6 +11,7 @@ PNG, SVG or PDF. The geometry comes from ``scene.py``.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -62,6 +63,8 @@ JOINT_PANELS_MOST = 48
 #: Bodies named in the legend, at most.
 LEGEND_BODIES = 6
 ARROW = r"$\rightarrow$"  # a legend marker
+#: Characters per line of a joint panel's note (a panel is about this wide).
+NOTE_WIDTH = 34
 
 
 def save(fig: Figure, path: Path | str) -> Path:
@@ -361,6 +364,8 @@ def _common_reach(views: Sequence[JointView]) -> float:
 def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> None:
     """One joint at true size: seen along its axis (y, z of the joint frame),
     or across it for a face or a plane (x the normal)."""
+    from matplotlib.ticker import MaxNLocator
+
     ax.set_title(f"{view.joint} ({view.type})", fontsize=10)
     if view.plane == "none":
         ax.text(0.5, 0.5, view.note, ha="center", va="center", transform=ax.transAxes)
@@ -399,6 +404,7 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
             P = np.array(view.outline)
             ax.plot(P[:, 0], P[:, 1], color=BODY_COLOURS[0], linewidth=2)
         ax.set_xlim(-reach, reach)
+        ax.xaxis.set_major_locator(MaxNLocator(4, symmetric=True))  # a narrow panel
         ax.set_xlabel(f"x, the normal (mm): {view.axes[0]}", fontsize=8)
         ax.set_ylabel("across the face (mm)", fontsize=8)
     ax.axhline(0, color=INITIAL, linewidth=0.4)
@@ -406,10 +412,14 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
     for p in view.points:
         style = _marker_style("touching" if p.touching else "free")
         ax.scatter(*p.at, **style)
-        ax.annotate(p.label, p.at, xytext=(4, 4), **_small)
+        # written toward the middle, so that it stays inside the panel
+        inward = p.at[0] > 0 if view.plane == "yz" else p.at[0] > 0.5 * reach
+        side = {"xytext": (-4, 4), "ha": "right"} if inward else {"xytext": (4, 4), "ha": "left"}
+        ax.annotate(p.label, p.at, **side, **_small)
     ax.tick_params(labelsize=7)
     if view.note:
-        ax.text(0.02, 0.02, view.note, transform=ax.transAxes, fontsize=7, va="bottom")
+        note = "\n".join(textwrap.wrap(view.note, NOTE_WIDTH))
+        ax.text(0.02, 0.02, note, transform=ax.transAxes, fontsize=7, va="bottom")
 
 
 # -- the studies ---------------------------------------------------------------------

@@ -31,7 +31,7 @@ from jointplay.geometry import FloatArray, describe_direction
 
 if TYPE_CHECKING:
     from jointplay.model.joints.base import Contact, Joint
-    from jointplay.model.mechanism import Load, Model
+    from jointplay.model.mechanism import Body, Load, Model
     from jointplay.result import JointResult, Result
 
 #: The largest displacement of the picture, as a fraction of the mechanism's size.
@@ -125,6 +125,7 @@ def mechanism_scene(
     loads = model.loads_of(case)
     nodes = {b.name: _body_nodes(model, loads, b.name) for b in model.moving_bodies}
     every = [n for pts in nodes.values() for n in pts] + [j.centre for j in model.joints]
+    every += [np.asarray(P) for b in model.moving_bodies for P in b.outline or ()]
     size = _size(np.array(every), model)
 
     def moved(body: str, P: FloatArray) -> FloatArray:
@@ -141,14 +142,10 @@ def mechanism_scene(
     lines: list[Polyline] = []
     markers: list[Marker] = []
     for body, pts in nodes.items():
-        for i, k in _tree_edges(pts):
-            a, b = pts[i], pts[k]
-            lines.append(Polyline(np.vstack([a, b]), "initial", body))
-            lines.append(
-                Polyline(
-                    np.vstack([a + m * moved(body, a), b + m * moved(body, b)]), "displaced", body
-                )
-            )
+        for path in _body_paths(model.body(body), pts):
+            lines.append(Polyline(path, "initial", body))
+            shifted = np.array([P + m * moved(body, P) for P in path])
+            lines.append(Polyline(shifted, "displaced", body))
 
     # the arrows: contact forces on b at its displaced acting points, and loads
     arrows: list[tuple[FloatArray, FloatArray, ArrowRole, str]] = []
@@ -216,6 +213,15 @@ def _body_nodes(model: Model, loads: tuple[Load, ...], body: str) -> list[FloatA
         if not any(np.allclose(p, q, rtol=0.0, atol=1e-9) for q in unique):
             unique.append(np.asarray(p, dtype=float))
     return unique
+
+
+def _body_paths(body: Body, nodes: list[FloatArray]) -> list[FloatArray]:
+    """The lines that draw ``body`` at rest: its outline, closed, if the model
+    gives one; else the edges of the shortest tree through its ``nodes``."""
+    if body.outline is not None:
+        corners = np.array(body.outline, dtype=float)
+        return [np.vstack([corners, corners[:1]]) if len(corners) > 2 else corners]
+    return [np.vstack([nodes[i], nodes[k]]) for i, k in _tree_edges(nodes)]
 
 
 def _tree_edges(points: list[FloatArray]) -> list[tuple[int, int]]:
@@ -398,16 +404,39 @@ def _joint_view(joint: Joint, jr: JointResult) -> JointView:
 
 def _merged(points: list[ViewPoint], tol: float) -> list[ViewPoint]:
     """One marker for the contacts that sit at the same place (a slider's
-    edges seen end on), their names joined."""
-    out: list[ViewPoint] = []
+    edges seen end on), their names joined in short (``_joined``)."""
+    groups: list[tuple[ViewPoint, list[str], bool]] = []
     for p in points:
-        for i, q in enumerate(out):
+        for i, (q, names, touching) in enumerate(groups):
             if math.dist(p.at, q.at) <= tol:
-                out[i] = ViewPoint(q.at, f"{q.label}, {p.label}", q.touching or p.touching)
+                groups[i] = (q, [*names, p.label], touching or p.touching)
                 break
         else:
-            out.append(p)
-    return out
+            groups.append((p, [p.label], p.touching))
+    return [ViewPoint(q.at, _joined(names), touching) for q, names, touching in groups]
+
+
+def _joined(names: list[str]) -> str:
+    """Contact names joined, those that differ only in one word's sign written
+    once with ±: a slider's eight edges seen end on read 'y x± z±, z x± y±'."""
+    words = [name.split(" ") for name in names]
+    merged = True
+    while merged:
+        merged = False
+        for i, a in enumerate(words):
+            for k in range(i + 1, len(words)):
+                b = words[k]
+                differ = [n for n in range(len(a)) if len(a) == len(b) and a[n] != b[n]]
+                if len(differ) == 1 and {a[differ[0]][-1:], b[differ[0]][-1:]} == {"-", "+"}:
+                    n = differ[0]
+                    if a[n][:-1] == b[n][:-1]:
+                        words[i] = [*a[:n], a[n][:-1] + "±", *a[n + 1 :]]
+                        del words[k]
+                        merged = True
+                        break
+            if merged:
+                break
+    return ", ".join(" ".join(w) for w in words)
 
 
 def _axis_name(row: FloatArray) -> str:
