@@ -418,7 +418,16 @@ def test_an_outline_reads_lengths_with_units(tmp_path: Path) -> None:
     ("names", "label"),
     [
         (
-            "y x- z-|y x- z+|y x+ z-|y x+ z+|z x- y-|z x- y+|z x+ y-|z x+ y+".split("|"),
+            [
+                "y x- z-",
+                "y x- z+",
+                "y x+ z-",
+                "y x+ z+",
+                "z x- y-",
+                "z x- y+",
+                "z x+ y-",
+                "z x+ y+",
+            ],
             "y x± z±, z x± y±",
         ),
         (["end-", "end+"], "end±"),
