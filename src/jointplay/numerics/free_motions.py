@@ -26,6 +26,7 @@ orthonormal.
 
 from __future__ import annotations
 
+import functools
 import heapq
 from dataclasses import dataclass, field
 
@@ -142,9 +143,11 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
         R = np.zeros((sum(rows.shape[0] for _, rows in mine), 6 * (1 + len(others))))
         at = 0
         for bodies, rows in mine:
-            cols = [6 * where[body] + k for body in bodies for k in range(6)]
-            R[at : at + rows.shape[0], cols] = rows
-            at += rows.shape[0]
+            end = at + rows.shape[0]
+            for q, body in enumerate(bodies):
+                c = 6 * where[body]
+                R[at:end, c : c + 6] = rows[:, 6 * q : 6 * q + 6]
+            at = end
         for body in others:
             on[body] -= on[j]
             near[body].discard(j)
@@ -158,7 +161,7 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
             U, sv, Vt, info = lapack.dgesdd(R[:, :6], full_matrices=1)
             if info:  # pragma: no cover - LAPACK's SVD did not converge
                 U, sv, Vt = np.linalg.svd(R[:, :6], full_matrices=True)
-        rank = int(np.sum(sv > tol))
+        rank = sum(1 for value in sv.tolist() if value > tol)
         if rank < 6:
             out.free.append((j, Vt[rank:].T.copy()))
         if rank:
@@ -167,16 +170,22 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
         if others:
             rest = U[:, rank:].T @ R[:, 6:]
             if rest.shape[0] > rest.shape[1]:  # at most as many rows as columns
-                rest = np.triu(lapack.dgeqrf(rest)[0][: rest.shape[1]])
-            keep = np.max(np.abs(rest), axis=1, initial=0.0) > 0.0
-            if np.any(keep):
-                store[next_id] = (others, rest[keep])
+                rest = lapack.dgeqrf(rest)[0][: rest.shape[1]] * _upper(rest.shape[1])
+            keep = rest.any(axis=1)
+            if keep.any():
+                store[next_id] = (others, rest if keep.all() else rest[keep])
                 for body in others:
                     on[body].add(next_id)
                 next_id += 1
             for body in others:
                 heapq.heappush(heap, (len(near[body]), body))
     return out
+
+
+@functools.cache
+def _upper(n: int) -> FloatArray:
+    """(n, n) mask of the upper triangle: R of a QR from LAPACK's packed output."""
+    return np.triu(np.ones((n, n)))
 
 
 def _checked(C: sp.spmatrix, m: int) -> sp.csr_matrix:
