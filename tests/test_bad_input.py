@@ -350,7 +350,8 @@ loads:
         ("017", "'017' is a YAML 1.1 numeral"),  # YAML 1.1: 15 (octal)
         ("1:30", "'1:30' is a YAML 1.1 numeral"),  # YAML 1.1: 90 (sexagesimal)
         ("1_0.5", "'1_0.5' is a YAML 1.1 numeral"),
-        ("0o17", "'0o17'"),  # text in YAML 1.1, and no unit
+        ("0o17", "'0o17' is a hexadecimal, octal or binary numeral"),  # YAML 1.2: 15
+        ("'0x10'", "'0x10' is a hexadecimal, octal or binary numeral"),  # as text
         ("1e-400", "too small for double precision and would read as 0"),
         ("1.0e-400", "too small for double precision and would read as 0"),
         ("'1e-400 mm'", "too small for double precision and would read as 0"),
@@ -566,3 +567,24 @@ def test_deep_nesting_is_one_message_whichever_layer_meets_it(
     path = write(tmp_path, f"bodies: []\nextra:\n{nested}\n")
     with pytest.raises(ModelError, match=r"nests lists or mappings more than \d+ deep"):
         jointplay.load(path)
+
+
+@pytest.mark.parametrize("play", ["1e-310 mm", "1e-200 mm", "1e-13 mm"])
+def test_a_play_too_small_to_resolve_is_refused_for_every_joint(tmp_path: Path, play: str) -> None:
+    # against the paper's 300 mm shaft: below 1e-12 of it, a play cannot be
+    # told from 0 (and plays of 1e-200 mm overflowed the scaled program)
+    data = spherical_shaft()
+    for joint in data["joints"]:
+        joint["clearance"] = play
+    with pytest.raises(ModelError) as info:
+        jointplay.load(write(tmp_path, data))
+    text = str(info.value)
+    for entry in ("joints[0] 'l1': clearance", "joints[1] 'l2': clearance"):
+        assert entry in text and "too small to tell from 0" in text, text
+
+
+def test_a_small_real_play_still_solves(tmp_path: Path) -> None:
+    data = spherical_shaft()
+    data["joints"][0]["clearance"] = "1 nm"  # 3e-9 of the 300 mm shaft: allowed
+    result = jointplay.solve(jointplay.load(write(tmp_path, data)))
+    assert result.certificate.certified

@@ -158,6 +158,8 @@ def read_number(text: str) -> float:
 #: What a quantity written as text looks like (the model file's JSON Schema):
 #: a number first, then its unit (or nothing: the base unit).
 NUMBER_FIRST = r"^\s*" + _NUMBER.pattern
+#: 0x10, 0o17, 0b11: numerals with a base prefix, not a number and a unit.
+_PREFIXED = re.compile(r"[+-]?0[xXoObB][0-9a-fA-F_]+")
 _NOT_FINITE = re.compile(r"[+-]?\.?(?:inf|infinity|nan)\b", re.IGNORECASE)
 _TOKEN = re.compile(r"\s*(\*\*|[*/^()·]|[^\W\d]\w*|\d+(?:\.\d+)?|-|\S)")
 #: Longest unit expression read; longer is not a unit.
@@ -175,6 +177,11 @@ def _parse(text: str, dimension: str) -> float:
         raise ValueError(
             f"expected {_a(dimension)}, got {shown(text)}, which does not start with a number; "
             f"{_hint(dimension)}"
+        )
+    if _PREFIXED.fullmatch(stripped):
+        raise ValueError(
+            f"{shown(text)} is a hexadecimal, octal or binary numeral, which YAML 1.1, YAML "
+            "1.2 and JSON read differently; write the number in plain decimal"
         )
     expression = stripped[number.end() :].strip()
     factor = _factor(expression, dimension)

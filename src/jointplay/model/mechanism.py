@@ -91,6 +91,11 @@ def _schema_one(value: Any) -> Any:
 #: A play at least this share of its joint's size is warned about: real plays
 #: are below a few percent of it, and "200" meant as 200 um reads as 200 mm.
 LARGE_PLAY_SHARE = 0.1
+#: A play below this share of the model's size is refused: double precision
+#: carries 16 digits and the solver resolves a contact to about 1e-4 of its
+#: play, so a smaller play cannot be told from 0 next to the model's lengths
+#: (and a subnormal one overflows the scaled program). 0 means no play.
+SMALLEST_PLAY_SHARE = 1e-12
 
 
 class Body(BaseModel):
@@ -297,6 +302,7 @@ class Model(BaseModel):
                         + suggest(req.point, point_names),
                     )
                 )
+        found += _check_smallest_plays(self)
         # with no ground, or a joint to an unknown body, it would only repeat those
         unreached = (
             _unreached_from_ground(names, grounds, [j.between for j in self.joints])
@@ -417,6 +423,33 @@ def check_case(model: Model, case: str | None, source: str) -> None:
         from jointplay.errors import OptionError
 
         raise OptionError(f"--case: {exc.args[0]}", source=source) from None
+
+
+def _check_smallest_plays(model: Model) -> list[EntryError]:
+    """Plays too small to resolve against the model's size (``SMALLEST_PLAY_SHARE``)."""
+    spots = [j.at for j in model.joints]
+    loads = [*model.loads, *(ld for case in (model.load_cases or {}).values() for ld in case)]
+    spots += [ld.at for ld in loads if ld.at is not None]
+    spots += [p.at for p in model.points]
+    spots += [b.center_of_mass for b in model.bodies if b.center_of_mass is not None]
+    P = np.array(spots, dtype=float).reshape(-1, 3)
+    extent = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) if len(P) else 0.0
+    size = max([extent, *(j.size for j in model.joints)])
+    found = []
+    for i, joint in enumerate(model.joints):
+        fields = type(joint).model_fields
+        for field in PLAY_FIELDS:
+            play = getattr(joint, field) if field in fields else None
+            if play and play < SMALLEST_PLAY_SHARE * size:
+                found.append(
+                    EntryError(
+                        f"joints[{i}] '{joint.name}'",
+                        f"{field}: {play:g} mm is less than {SMALLEST_PLAY_SHARE:g} of the "
+                        f"model's size ({size:g} mm), too small to tell from 0 in double "
+                        "precision; write 0 for no play, or the real play ('2 um')",
+                    )
+                )
+    return found
 
 
 def _check_unique(names: list[str], section: str, what: str) -> list[EntryError]:
