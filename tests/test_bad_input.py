@@ -374,11 +374,19 @@ def test_numbers_that_read_otherwise_are_refused(tmp_path: Path, play: str, mess
     assert message in proc.stderr and "Traceback" not in proc.stderr
 
 
-@pytest.mark.parametrize("play", ["0.2", ".2", "2e-1", "0", "-0.0", "'200 um'", "'1e-300 km'"])
+@pytest.mark.parametrize("play", ["0.2", ".2", "2e-1", "0", "-0.0", "'200 um'", "'1e-9 km'"])
 def test_plain_decimal_numbers_still_read(tmp_path: Path, play: str) -> None:
     path = tmp_path / "model.yaml"
     path.write_text(_SHAFT_YAML.format(play=play))
     jointplay.load(path)
+
+
+def test_a_tiny_number_with_a_large_unit_is_read_not_called_an_underflow() -> None:
+    # 1e-300 is a double; in km it is 1e-294 mm (as a play, the model refuses it
+    # as too small against its size: test_a_play_too_small_to_resolve_...)
+    from jointplay.units import to_base
+
+    assert to_base("1e-300 km", "length") == pytest.approx(1e-294, rel=1e-12)
 
 
 _SHAFT_TOML = """
@@ -588,3 +596,16 @@ def test_a_small_real_play_still_solves(tmp_path: Path) -> None:
     data["joints"][0]["clearance"] = "1 nm"  # 3e-9 of the 300 mm shaft: allowed
     result = jointplay.solve(jointplay.load(write(tmp_path, data)))
     assert result.certificate.certified
+
+
+def test_a_joint_of_unknown_type_still_has_its_other_problems_listed(tmp_path: Path) -> None:
+    # pydantic stops at the unknown type; the keys every type shares are still checked
+    data = spherical_shaft()
+    data["joints"][0].update(type="sphericle", clearance=-0.2, colour="red")
+    with pytest.raises(ModelError) as info:
+        jointplay.load(write(tmp_path, data))
+    first, count, *others = str(info.value).split("\n")
+    assert "joints[0] 'l1': unknown joint type 'sphericle'. Did you mean 'spherical'?" in first
+    assert count == "2 more problem(s) in this file:"
+    assert others[0].startswith("  joints[0] 'l1': clearance: expected a value >= 0")
+    assert others[1].startswith("  joints[0] 'l1': colour: unknown key 'colour'")

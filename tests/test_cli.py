@@ -243,3 +243,24 @@ def test_an_option_error_says_invalid_option(args: tuple[str, ...], message: str
 def test_no_command_prints_the_help() -> None:
     proc = run()
     assert proc.returncode == 0 and "Commands" in proc.stdout and proc.stderr == ""
+
+
+@pytest.mark.parametrize("columns", ["80", "60"])
+def test_no_number_is_cut_short_on_a_narrow_terminal(columns: str) -> None:
+    """Rich's default cuts a cell that does not fit with '…'; a table wider
+    than the terminal closes up its padding, then wraps, and keeps every digit."""
+    import os
+
+    env = {**os.environ, "COLUMNS": columns}
+    for path in (ROOT / "examples" / "studies" / "carriage.yaml", PAPER / "6.1.6.1.yaml"):
+        proc = subprocess.run(
+            [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env=env,
+        )
+        assert proc.returncode == 0, proc.stderr
+        assert "…" not in proc.stdout, proc.stdout
+        if columns == "80":  # the carriage's tool point fits whole on one line
+            assert "2.025000e-02" in proc.stdout or path.name != "carriage.yaml"

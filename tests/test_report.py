@@ -195,6 +195,12 @@ def test_the_report_puts_each_requirement_side_by_side() -> None:
     assert "Requirements: worst case, RSS and Monte Carlo side by side" in html
     (row,) = Tolerances(samples=2000, seed=0).run(model).requirements
     assert f"{row.rss_ppm:.4g}" in html and f"{row.mc_ppm:.4g}" in html
+    # the summary says both verdicts: at the nominal plays, and over the toleranced ones
+    summary = html[html.index("<h2>Summary</h2>") : html.index("Model</h2>")]
+    assert "requirements (nominal plays)" in summary
+    worst = "all pass" if row.worst_case_passes else "1 of 1 FAIL"
+    assert f"Over the toleranced plays: worst case {worst}" in summary
+    assert f"at most {row.mc_ppm:.4g} ppm out of spec" in summary
 
 
 def test_the_report_opens_with_a_summary_and_the_plays_used() -> None:

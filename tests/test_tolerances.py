@@ -146,3 +146,18 @@ def test_plays_that_do_not_vary_give_json_that_parses(tmp_path: Path) -> None:
         assert req["rss"]["sigma"] == 0.0 and req["monte_carlo"]["sigma"] == 0.0
         assert req["rss"]["cpk"] is None and req["monte_carlo"]["ppk"] is None
         assert req["worst_case"]["low"] == req["worst_case"]["high"] == req["nominal"]
+
+
+def test_the_dataframe_carries_what_the_json_does(
+    two_requirements: tuple[jointplay.Model, object],
+) -> None:
+    _, result = two_requirements
+    frame = result.to_dataframe()  # type: ignore[attr-defined]
+    for row, r in zip(frame.itertuples(), result.requirements, strict=True):  # type: ignore[attr-defined]
+        as_json = r.to_dict()
+        assert (row.mc_ppm_low, row.mc_ppm_high) == tuple(as_json["monte_carlo"]["interval_ppm"])
+        assert (row.worst_low, row.worst_high) == (
+            as_json["worst_case"]["low"],
+            as_json["worst_case"]["high"],
+        )
+        assert row.rss_ppm == as_json["rss"]["ppm"] and row.mc_ppm == as_json["monte_carlo"]["ppm"]

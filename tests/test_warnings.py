@@ -4,6 +4,7 @@ joint (meant in um, written as mm) and a model with no loads at all."""
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -57,6 +58,8 @@ def test_a_model_with_no_loads_says_so(tmp_path: Path) -> None:
     out = run("solve", str(path)).stdout
     assert "warning: the model has no loads" in out
     assert "potential energy of the loads: 0 N*mm" in out  # not "-0"
+    energy = json.loads(run("solve", str(path), "--json").stdout)["potential_energy"]
+    assert energy == 0.0 and math.copysign(1.0, energy) == 1.0  # not -0.0 in the JSON either
 
 
 def test_a_weight_or_a_load_case_is_a_load() -> None:

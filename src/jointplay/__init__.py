@@ -15,34 +15,54 @@ from jointplay.errors import (
     SolverError,
     UnboundedMechanismError,
 )
-from jointplay.io.modelfile import load, model_from_dict
-from jointplay.model.joints import JOINT_TYPES, Joint
-from jointplay.model.mechanism import Body, Load, Model
-from jointplay.result import (
-    BodyResult,
-    Certificate,
-    ContactResult,
-    JointResult,
-    RequirementResult,
-    Result,
-)
-from jointplay.settings import SolverSettings
-from jointplay.solver.batch import BatchSolution
-from jointplay.solver.pipeline import solve, solve_cases
-from jointplay.solver.workspace import Workspace
+from jointplay.version import __version__
 
 if TYPE_CHECKING:
+    from jointplay.io.modelfile import load, model_from_dict
+    from jointplay.model.joints import JOINT_TYPES, Joint
+    from jointplay.model.mechanism import Body, Load, Model
     from jointplay.present.report import Report
+    from jointplay.result import (
+        BodyResult,
+        Certificate,
+        ContactResult,
+        JointResult,
+        RequirementResult,
+        Result,
+    )
+    from jointplay.settings import SolverSettings
+    from jointplay.solver.batch import BatchSolution
+    from jointplay.solver.pipeline import solve, solve_cases
+    from jointplay.solver.workspace import Workspace
     from jointplay.studies.contributions import Contributions, ContributionsResult
     from jointplay.studies.envelope import Envelope, EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
     from jointplay.studies.sweep import RotateLoad, Sweep, SweepResult, Vary
     from jointplay.studies.tolerances import Tolerances, TolerancesResult
 
-from jointplay.version import __version__
-
-#: The studies, imported on first use (they bring SciPy's statistics and pandas).
-_STUDIES = {
+#: Where each name of the API lives, imported on first use: ``import jointplay``
+#: (and so every command's start, ``--help`` included) loads only the errors;
+#: the solver brings NumPy, SciPy and Clarabel, the studies SciPy's statistics
+#: and pandas.
+_LAZY = {
+    "load": "io.modelfile",
+    "model_from_dict": "io.modelfile",
+    "JOINT_TYPES": "model.joints",
+    "Joint": "model.joints",
+    "Body": "model.mechanism",
+    "Load": "model.mechanism",
+    "Model": "model.mechanism",
+    "BodyResult": "result",
+    "Certificate": "result",
+    "ContactResult": "result",
+    "JointResult": "result",
+    "RequirementResult": "result",
+    "Result": "result",
+    "SolverSettings": "settings",
+    "BatchSolution": "solver.batch",
+    "solve": "solver.pipeline",
+    "solve_cases": "solver.pipeline",
+    "Workspace": "solver.workspace",
     "MonteCarlo": "studies.montecarlo",
     "MonteCarloResult": "studies.montecarlo",
     "Envelope": "studies.envelope",
@@ -60,11 +80,17 @@ _STUDIES = {
 
 
 def __getattr__(name: str) -> object:
-    if name in _STUDIES:
+    if name in _LAZY:
         import importlib
 
-        return getattr(importlib.import_module(f".{_STUDIES[name]}", __name__), name)
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value  # found once; later lookups are plain
+        return value
     raise AttributeError(f"module 'jointplay' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)
 
 
 __all__ = [

@@ -367,7 +367,7 @@ def build_result(
 
     points = points_of(model, bodies)
     residual = equilibrium_residual(asm, joints, loads)
-    energy = -float(g @ x)
+    energy = -float(g @ x) + 0.0  # no load: 0, not -0
     reach_mm = stack.r * asm.s + penetration
     return Result(
         "optimal",

@@ -15,10 +15,10 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from pydantic import ValidationError
+from pydantic import ConfigDict, ValidationError
 
 from jointplay.errors import ModelError
-from jointplay.model.joints import JOINT_TYPES
+from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import (
     Body,
     EntryError,
@@ -536,7 +536,9 @@ MOST_PROBLEMS = 20
 def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> ModelError:
     """Every problem of the file, the likeliest first (``_first``): its entry
     and fix in the message's first line, then one line per other problem."""
-    errors = _consequences_left_out(exc.errors(include_url=False))
+    errors = _consequences_left_out(
+        _with_common_joint_problems(exc.errors(include_url=False), data)
+    )
     first = _first(errors)
     ordered = [first, *(e for e in errors if e is not first)]
     described = [d for err in ordered for d in _described(err, data)]
@@ -547,6 +549,41 @@ def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> 
     if others:
         problem += f"\n{len(described) - 1} more problem(s) in this file:\n" + "\n".join(others)
     return ModelError(problem, source=source, entry=entry or None)
+
+
+class _AnyJoint(Joint):
+    """The fields every joint type has, other keys let through: what can be
+    checked of a joint whose type is unknown."""
+
+    model_config = ConfigDict(frozen=True, extra="ignore")
+
+
+#: Every key some joint type has.
+_JOINT_KEYS = {"type"}.union(*(cls.model_fields for cls in JOINT_TYPES.values()))
+
+
+def _with_common_joint_problems(errors: list[Any], data: dict[str, Any]) -> list[Any]:
+    """The errors, and for a joint of unknown type the problems of the keys
+    every type shares (pydantic stops at the type), and of keys no type has."""
+    out = list(errors)
+    for err in errors:
+        loc = tuple(err["loc"])
+        if err["type"] != "union_tag_invalid" or len(loc) != 2 or loc[0] != "joints":
+            continue
+        joints = data.get("joints")
+        item = joints[loc[1]] if isinstance(joints, list) and loc[1] < len(joints) else None
+        if not isinstance(item, dict):
+            continue
+        try:
+            _AnyJoint.model_validate({k: v for k, v in item.items() if k != "type"})
+        except ValidationError as exc:
+            out += [{**e, "loc": (*loc, *e["loc"])} for e in exc.errors(include_url=False)]
+        out += [
+            {"type": "extra_forbidden", "loc": (*loc, key), "msg": "", "input": value}
+            for key, value in item.items()
+            if isinstance(key, str) and key not in _JOINT_KEYS
+        ]
+    return out
 
 
 def _described(err: Any, data: dict[str, Any]) -> list[tuple[str, str]]:
@@ -727,6 +764,8 @@ def _allowed_keys(loc: list[Any], data: dict[str, Any]) -> set[str]:
         tag = loc[2] if isinstance(loc[2], str) and loc[2] in JOINT_TYPES else None
         if tag is not None:
             return set(JOINT_TYPES[tag].model_fields)
+        if len(loc) == 3:  # a joint of unknown type: the keys of any type
+            return _JOINT_KEYS
     if section in _SECTION_KEYS and len(loc) == 3:
         return _SECTION_KEYS[section]
     if section == "load_cases" and len(loc) == 4:

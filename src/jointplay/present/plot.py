@@ -104,15 +104,20 @@ def mechanism_figure(
     flat = float(np.clip(6.2 * max(span[1], span[2]) / span[0], 1.6, 6.0))
     heights = [4.6, flat] + [3.2] * joint_rows
     fig = plt.figure(figsize=(13, sum(heights) + 1.2), layout="constrained")
-    grid = fig.add_gridspec(2 + joint_rows, JOINTS_PER_ROW, height_ratios=heights)
-    ax3d: Axes3D = fig.add_subplot(grid[0, :2], projection="3d")
+    # 12 columns: halves for the views; the joint panels share each row evenly,
+    # so that two or three of them fill it (no empty quarter)
+    grid = fig.add_gridspec(2 + joint_rows, 12, height_ratios=heights)
+    ax3d: Axes3D = fig.add_subplot(grid[0, :6], projection="3d")
     draw_scene_3d(ax3d, scene)
-    slots = (grid[1, :2], grid[1, 2:], grid[0, 2:])
+    slots = (grid[1, :6], grid[1, 6:], grid[0, 6:])
     for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
         draw_scene_view(fig.add_subplot(slot), scene, h, v, title, reference=slot is slots[0])
     reach = _common_reach(views)
+    per_row = min(JOINTS_PER_ROW, len(views)) or 1
+    width = 12 // per_row
     for i, view in enumerate(views):
-        ax = fig.add_subplot(grid[2 + i // JOINTS_PER_ROW, i % JOINTS_PER_ROW])
+        column = (i % per_row) * width
+        ax = fig.add_subplot(grid[2 + i // per_row, column : column + width])
         draw_joint_view(ax, view, reach)
     what = model.name or "mechanism"
     if case is not None:
@@ -271,9 +276,19 @@ def draw_scene_view(
         if marks:
             P = np.array([m.at for m in marks])
             ax.scatter(P[:, h], P[:, v], **_marker_style(role))
+    lo, hi = _padded_bounds(scene)
     for mk in scene.markers:
-        if mk.role == "point":
-            ax.annotate(mk.label, (mk.at[h], mk.at[v]), xytext=(4, 4), **_small)
+        if mk.role == "point":  # written toward the middle, so that it stays inside
+            right = mk.at[h] > lo[h] + 0.7 * (hi[h] - lo[h])
+            top = mk.at[v] > lo[v] + 0.85 * (hi[v] - lo[v])
+            ax.annotate(
+                mk.label,
+                (mk.at[h], mk.at[v]),
+                xytext=(-4 if right else 4, -4 if top else 4),
+                ha="right" if right else "left",
+                va="top" if top else "bottom",
+                **_small,
+            )
     for start, vector, colour in _arrow_groups(scene):
         ax.quiver(
             start[:, h],
@@ -287,7 +302,6 @@ def draw_scene_view(
             width=0.004,
             zorder=6,
         )
-    lo, hi = _padded_bounds(scene)
     ax.set_xlim(lo[h], hi[h])
     ax.set_ylim(lo[v], hi[v])
     ax.set_aspect("equal", adjustable="box")
@@ -296,7 +310,7 @@ def draw_scene_view(
     ax.set_title(title)
     ax.grid(True, linewidth=0.3)
     if reference and scene.force_scale > 0:
-        _reference_arrow(ax, scene.force_scale, hi[h] - lo[h], (lo[h], lo[v]), hi[v] - lo[v])
+        _reference_arrow(ax, scene.force_scale, lo[h], hi[h] - lo[h])
 
 
 def round_force(largest: float) -> float:
@@ -305,20 +319,31 @@ def round_force(largest: float) -> float:
     return next(s * power for s in (5.0, 2.0, 1.0) if s * power <= largest * (1 + 1e-12))
 
 
-def _reference_arrow(
-    ax: Axes, mm_per_n: float, width: float, corner: tuple[float, float], height: float
-) -> None:
-    """A black arrow of a round force near the panel's lower left corner,
-    about a fifth of the panel wide, labelled with its size."""
+def _reference_arrow(ax: Axes, mm_per_n: float, left: float, width: float) -> None:
+    """A black arrow of a round force, about a fifth of the panel wide, just
+    above the panel's upper left corner (outside the drawing, where it can
+    cover nothing), labelled with its size."""
     force = round_force(0.2 * width / mm_per_n)
-    x0, y0 = corner[0] + 0.04 * width, corner[1] + 0.06 * height
+    x0, y0 = left, 1.03  # x in mm, y in the panel's height
+    where = ax.get_xaxis_transform()
     ax.annotate(
         "",
         xy=(x0 + force * mm_per_n, y0),
         xytext=(x0, y0),
+        xycoords=where,
+        textcoords=where,
+        annotation_clip=False,
         arrowprops={"arrowstyle": "-|>", "color": "black", "linewidth": 1.2},
     )
-    ax.annotate(f"{force:g} N", (x0, y0), xytext=(0, 4), **_small)
+    ax.annotate(
+        f"{force:g} N",
+        (x0 + force * mm_per_n, y0),
+        xycoords=where,
+        xytext=(4, 0),
+        va="center",
+        annotation_clip=False,
+        **_small,
+    )
 
 
 _small: dict[str, Any] = {"textcoords": "offset points", "fontsize": 8}
@@ -403,6 +428,9 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
         if view.outline:
             P = np.array(view.outline)
             ax.plot(P[:, 0], P[:, 1], color=BODY_COLOURS[0], linewidth=2)
+        across = [abs(y) for _, y in view.outline] + [abs(p.at[1]) for p in view.points]
+        if max(across, default=0.0) > 0.0:  # room for the end points and their labels
+            ax.set_ylim(-1.2 * max(across), 1.2 * max(across))
         ax.set_xlim(-reach, reach)
         ax.xaxis.set_major_locator(MaxNLocator(4, symmetric=True))  # a narrow panel
         ax.set_xlabel(f"x, the normal (mm): {view.axes[0]}", fontsize=8)
@@ -521,6 +549,10 @@ def envelope_figure(result: EnvelopeResult) -> Figure:
     for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
         setter(-reach, reach)
     ax3d.set_box_aspect((1, 1, 1))
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax3d.xaxis, ax3d.yaxis, ax3d.zaxis):  # long labels such as -0.04
+        axis.set_major_locator(MaxNLocator(4))
     ax3d.set_xlabel("dx (mm)")
     ax3d.set_ylabel("dy (mm)")
     ax3d.set_zlabel("dz (mm)")

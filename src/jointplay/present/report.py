@@ -249,13 +249,17 @@ def scene_figure(scene: Scene, title: str = "") -> go.Figure:
             [_arrow_lines(a.start, a.vector, scene.size) for a in arrows], name, colour, 4, "solid"
         )
     fig = go.Figure(traces)
+    lo, hi = scene.bounds()
+    span = hi - lo
+    # at the data's aspect a thin direction is short: a few ticks, or they pile up
+    ticks = [6 if s >= 0.3 * float(np.max(span)) else 3 for s in span]
     fig.update_layout(
         title={"text": title, "font": {"size": 14}},
         scene={
             "aspectmode": "data",
-            "xaxis": {"title": {"text": "X (mm)"}},
-            "yaxis": {"title": {"text": "Y (mm)"}},
-            "zaxis": {"title": {"text": "Z (mm)"}},
+            "xaxis": {"title": {"text": "X (mm)"}, "nticks": ticks[0]},
+            "yaxis": {"title": {"text": "Y (mm)"}, "nticks": ticks[1]},
+            "zaxis": {"title": {"text": "Z (mm)"}, "nticks": ticks[2]},
             # far enough that the whole scene, stretched to its data's aspect, stays in view
             "camera": {"eye": {"x": 2.0, "y": -2.3, "z": 1.5}},
         },
@@ -331,6 +335,8 @@ class _Page:
         self.title = title
         self.parts: list[str] = []
         self.views: list[dict[str, Any]] = []
+        #: Where the summary's verdict over the toleranced plays goes, once known.
+        self.summary_end = 0
 
     def section(self, title: str) -> None:
         self.parts.append(f"<h2>{html.escape(title)}</h2>")
@@ -401,7 +407,7 @@ class _Page:
                     "load case",
                     "status",
                     "play used most",
-                    "requirements",
+                    "requirements (nominal plays)",
                     "|d| of the points",
                     "warnings",
                 ],
@@ -409,6 +415,7 @@ class _Page:
                 "At a glance (the sections below give every number)",
             )
         )
+        self.summary_end = len(self.parts)
         plays = []
         for joint in model.joints:
             for field in PLAY_FIELDS:
@@ -690,6 +697,21 @@ class _Page:
         self.parts.append(_svg(contributions_figure(co)))
 
     def tolerances(self, rows: Sequence[RequirementTolerances], confidence: float) -> None:
+        failing = [r for r in rows if not r.worst_case_passes]
+        worst_ppm = max(rows, key=lambda r: r.mc_ppm, default=None)
+        if rows and worst_ppm is not None:
+            # the summary's verdict is for the nominal plays; say the toleranced one there too
+            self.parts.insert(
+                self.summary_end,
+                "<p>"
+                + html.escape(
+                    "Over the toleranced plays: worst case "
+                    + (f"{len(failing)} of {len(rows)} FAIL" if failing else "all pass")
+                    + f"; Monte Carlo: at most {worst_ppm.mc_ppm:.4g} ppm out of spec "
+                    f"({worst_ppm.requirement.describe()}). See the side-by-side table."
+                )
+                + "</p>",
+            )
         self.subsection("Requirements: worst case, RSS and Monte Carlo side by side")
         self.parts.append(
             _table(

@@ -4,7 +4,7 @@ vectorial sets per joint, and which contacts touch."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from rich.console import Console, Group
@@ -29,6 +29,19 @@ def _num(v: float, digits: int = 8) -> str:
 
 def _vec(v: FloatArray, digits: int = 4) -> str:
     return "[" + ", ".join(f"{float(c) + 0.0:.{digits}g}" for c in v) + "]"
+
+
+def _unclipped(console: Console, *parts: Any) -> Group:
+    """The parts as one group, no table cell cut short: a table wider than the
+    terminal closes up its padding, and a number that still does not fit
+    wraps onto a second line instead of ending in '…'."""
+    for part in parts:
+        wide = console.options.update_width(10_000)
+        if isinstance(part, Table) and console.measure(part, options=wide).maximum > console.width:
+            part.collapse_padding = True  # one space between columns, not two
+        for column in getattr(part, "columns", ()):
+            column.overflow = "fold"
+    return Group(*parts)
 
 
 def _xyz_table(title: str, leading: list[str]) -> Table:
@@ -159,7 +172,7 @@ def render(
                 + "\n".join(f"  {m}" for m in result.free_motions)
             )
         )
-    console.print(Group(*parts))
+    console.print(_unclipped(console, *parts))
 
 
 def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -> None:
@@ -230,7 +243,7 @@ def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -
                 f"worst estimate's relative error {worst:.3g}"
             )
         )
-    console.print(Group(*parts))
+    console.print(_unclipped(console, *parts))
 
 
 def render_envelope(
@@ -254,7 +267,7 @@ def render_envelope(
     for i, axis in enumerate("XYZ"):
         lo, hi = result.extent[i]
         table.add_row(axis, f"{lo + 0.0:.6g}", f"{hi + 0.0:.6g}")
-    console.print(Group(head, table))
+    console.print(_unclipped(console, head, table))
 
 
 #: Rows of a sweep printed to the terminal; the rest go to --csv.
@@ -310,7 +323,7 @@ def render_sweep(
         )
     if tail:
         parts.append(tail)
-    console.print(Group(*parts))
+    console.print(_unclipped(console, *parts))
 
 
 def _bar(percent: float, width: int = 10) -> str:
@@ -362,7 +375,7 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         parts.append(table)
         if notes:
             parts.append(notes)
-    console.print(Group(*parts))
+    console.print(_unclipped(console, *parts))
 
 
 def render_tolerances(result: TolerancesResult, source: str, console: Console) -> None:
@@ -401,7 +414,7 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
         table.add_row("ppm out", verdict, f"{r.rss_ppm:.4g}", f"{r.mc_ppm:.4g}")
         table.add_row("", f"(limits {span})", "(normal law)", f"[{lo:.4g}, {hi:.4g}]")
         parts.append(table)
-    console.print(Group(*parts))
+    console.print(_unclipped(console, *parts))
 
 
 def _cap(value: float) -> str:

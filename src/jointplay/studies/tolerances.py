@@ -269,6 +269,8 @@ class TolerancesResult:
                     "pp": r.pp,
                     "ppk": r.ppk,
                     "mc_ppm": r.mc_ppm,
+                    "mc_ppm_low": r.mc_interval_ppm[0],  # the Wilson interval of mc_ppm
+                    "mc_ppm_high": r.mc_interval_ppm[1],
                     "kink": r.kink,
                 }
             )
