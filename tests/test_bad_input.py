@@ -352,6 +352,7 @@ loads:
         ("1_0.5", "'1_0.5' is a YAML 1.1 numeral"),
         ("0o17", "'0o17' is a hexadecimal, octal or binary numeral"),  # YAML 1.2: 15
         ("'0x10'", "'0x10' is a hexadecimal, octal or binary numeral"),  # as text
+        ("'0x10 mm'", "'0x10 mm' is a hexadecimal, octal or binary numeral"),  # with a unit
         ("1e-400", "too small for double precision and would read as 0"),
         ("1.0e-400", "too small for double precision and would read as 0"),
         ("'1e-400 mm'", "too small for double precision and would read as 0"),
@@ -609,3 +610,37 @@ def test_a_joint_of_unknown_type_still_has_its_other_problems_listed(tmp_path: P
     assert count == "2 more problem(s) in this file:"
     assert others[0].startswith("  joints[0] 'l1': clearance: expected a value >= 0")
     assert others[1].startswith("  joints[0] 'l1': colour: unknown key 'colour'")
+    del data["joints"][0]["type"]  # no type at all: the same
+    with pytest.raises(ModelError) as info:
+        jointplay.load(write(tmp_path, data))
+    first, count, *others = str(info.value).split("\n")
+    assert "joints[0] 'l1': the joint needs a 'type'" in first
+    assert count == "2 more problem(s) in this file:"
+
+
+def test_the_package_still_reaches_its_modules_and_lists_its_names() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import jointplay; "
+        "assert jointplay.settings.DEFAULT is not None; "
+        "assert callable(jointplay.units.to_base); "
+        "assert '__file__' in dir(jointplay) and 'solve' in dir(jointplay); "
+        "assert 'numpy' not in __import__('sys').modules"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+
+
+def test_a_play_range_too_small_to_resolve_is_refused_by_its_largest_value(
+    tmp_path: Path,
+) -> None:
+    data = spherical_shaft()
+    for joint in data["joints"]:
+        joint["clearance"] = {"min": 0, "max": "2e-200 mm"}
+    with pytest.raises(ModelError, match=r"clearance: up to 2e-200 mm is less than 1e-12"):
+        jointplay.load(write(tmp_path, data))
+    data["joints"][0]["clearance"] = {"min": 0, "max": "0.02 mm"}  # reaches real plays: fine
+    data["joints"][1]["clearance"] = 0.2
+    jointplay.load(write(tmp_path, data))

@@ -200,7 +200,9 @@ def test_the_report_puts_each_requirement_side_by_side() -> None:
     assert "requirements (nominal plays)" in summary
     worst = "all pass" if row.worst_case_passes else "1 of 1 FAIL"
     assert f"Over the toleranced plays: worst case {worst}" in summary
-    assert f"at most {row.mc_ppm:.4g} ppm out of spec" in summary
+    low, high = row.mc_interval_ppm
+    assert f"Monte Carlo: {row.mc_ppm:.4g} ppm out of spec for" in summary
+    assert f"({low:.3g} to {high:.3g} ppm at the confidence of the table)" in summary
 
 
 def test_the_report_opens_with_a_summary_and_the_plays_used() -> None:

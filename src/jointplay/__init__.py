@@ -79,18 +79,38 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> object:
-    if name in _LAZY:
-        import importlib
+#: The package's modules, which ``jointplay.NAME`` reaches as before.
+_MODULES = (
+    "assembly",
+    "cli",
+    "finite",
+    "geometry",
+    "io",
+    "model",
+    "numerics",
+    "present",
+    "result",
+    "settings",
+    "solver",
+    "studies",
+    "units",
+)
 
+
+def __getattr__(name: str) -> object:
+    import importlib
+
+    if name in _LAZY:
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
         globals()[name] = value  # found once; later lookups are plain
         return value
+    if name in _MODULES:
+        return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'jointplay' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(__all__)
+    return sorted({*globals(), *__all__, *_MODULES})
 
 
 __all__ = [

@@ -159,7 +159,7 @@ def read_number(text: str) -> float:
 #: a number first, then its unit (or nothing: the base unit).
 NUMBER_FIRST = r"^\s*" + _NUMBER.pattern
 #: 0x10, 0o17, 0b11: numerals with a base prefix, not a number and a unit.
-_PREFIXED = re.compile(r"[+-]?0[xXoObB][0-9a-fA-F_]+")
+_PREFIXED = re.compile(r"[+-]?0[xXoObB][0-9a-fA-F_]+(?=\s|$)")
 _NOT_FINITE = re.compile(r"[+-]?\.?(?:inf|infinity|nan)\b", re.IGNORECASE)
 _TOKEN = re.compile(r"\s*(\*\*|[*/^()·]|[^\W\d]\w*|\d+(?:\.\d+)?|-|\S)")
 #: Longest unit expression read; longer is not a unit.
@@ -178,7 +178,7 @@ def _parse(text: str, dimension: str) -> float:
             f"expected {_a(dimension)}, got {shown(text)}, which does not start with a number; "
             f"{_hint(dimension)}"
         )
-    if _PREFIXED.fullmatch(stripped):
+    if _PREFIXED.match(stripped):
         raise ValueError(
             f"{shown(text)} is a hexadecimal, octal or binary numeral, which YAML 1.1, YAML "
             "1.2 and JSON read differently; write the number in plain decimal"

@@ -568,7 +568,8 @@ def _with_common_joint_problems(errors: list[Any], data: dict[str, Any]) -> list
     out = list(errors)
     for err in errors:
         loc = tuple(err["loc"])
-        if err["type"] != "union_tag_invalid" or len(loc) != 2 or loc[0] != "joints":
+        tag = err["type"] in ("union_tag_invalid", "union_tag_not_found")
+        if not tag or len(loc) != 2 or loc[0] != "joints":
             continue
         joints = data.get("joints")
         item = joints[loc[1]] if isinstance(joints, list) and loc[1] < len(joints) else None

@@ -34,7 +34,7 @@ from jointplay.model.fields import (
     TorqueVector,
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
-from jointplay.model.tolerance import PLAY_FIELDS
+from jointplay.model.tolerance import PLAY_FIELDS, Toleranced
 from jointplay.units import shown
 
 if TYPE_CHECKING:
@@ -440,11 +440,19 @@ def _check_smallest_plays(model: Model) -> list[EntryError]:
         fields = type(joint).model_fields
         for field in PLAY_FIELDS:
             play = getattr(joint, field) if field in fields else None
-            if play and play < SMALLEST_PLAY_SHARE * size:
+            if not play:
+                continue
+            # a play that varies: its largest value (a part may have any play in its range)
+            most, what = (
+                (play.high, f"up to {play.high:g} mm")
+                if isinstance(play, Toleranced)
+                else (play, f"{play:g} mm")
+            )
+            if most < SMALLEST_PLAY_SHARE * size:
                 found.append(
                     EntryError(
                         f"joints[{i}] '{joint.name}'",
-                        f"{field}: {play:g} mm is less than {SMALLEST_PLAY_SHARE:g} of the "
+                        f"{field}: {what} is less than {SMALLEST_PLAY_SHARE:g} of the "
                         f"model's size ({size:g} mm), too small to tell from 0 in double "
                         "precision; write 0 for no play, or the real play ('2 um')",
                     )

@@ -113,7 +113,8 @@ def mechanism_figure(
     for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
         draw_scene_view(fig.add_subplot(slot), scene, h, v, title, reference=slot is slots[0])
     reach = _common_reach(views)
-    per_row = min(JOINTS_PER_ROW, len(views)) or 1
+    # as even rows as can be: five panels as 3 + 2, not 4 + 1
+    per_row = math.ceil(len(views) / joint_rows) if views else 1
     width = 12 // per_row
     for i, view in enumerate(views):
         column = (i % per_row) * width
@@ -324,7 +325,7 @@ def _reference_arrow(ax: Axes, mm_per_n: float, left: float, width: float) -> No
     above the panel's upper left corner (outside the drawing, where it can
     cover nothing), labelled with its size."""
     force = round_force(0.2 * width / mm_per_n)
-    x0, y0 = left, 1.03  # x in mm, y in the panel's height
+    x0, y0 = left, 1.06  # x in mm, y in the panel's height: clear of its frame
     where = ax.get_xaxis_transform()
     ax.annotate(
         "",

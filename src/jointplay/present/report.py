@@ -707,8 +707,10 @@ class _Page:
                 + html.escape(
                     "Over the toleranced plays: worst case "
                     + (f"{len(failing)} of {len(rows)} FAIL" if failing else "all pass")
-                    + f"; Monte Carlo: at most {worst_ppm.mc_ppm:.4g} ppm out of spec "
-                    f"({worst_ppm.requirement.describe()}). See the side-by-side table."
+                    + f"; Monte Carlo: {worst_ppm.mc_ppm:.4g} ppm out of spec for "
+                    f"{worst_ppm.requirement.describe()}, the most of any requirement "
+                    f"({worst_ppm.mc_interval_ppm[0]:.3g} to {worst_ppm.mc_interval_ppm[1]:.3g} "
+                    "ppm at the confidence of the table). See the side-by-side table."
                 )
                 + "</p>",
             )
