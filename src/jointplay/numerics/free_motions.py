@@ -40,6 +40,11 @@ from jointplay.settings import DEFAULT
 
 IntArray = NDArray[np.intp]
 
+#: Bodies with at most this many neighbours are eliminated in the same round
+#: (when they share no rows). Two keeps a chain's and a tree's elimination free
+#: of fill, as one at a time in minimum-degree order would.
+ELIMINATED_TOGETHER_DEGREE = 2
+
 
 @dataclass
 class _Pivot:
@@ -111,9 +116,13 @@ def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
 
 
 def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimination:
+    """Bodies eliminated in rounds: each round takes bodies of least degree
+    (at most two neighbours, or the least there is) that share no rows, so
+    that their eliminations are independent, and does their SVDs and products
+    as stacks of equal shape (a chain is halved each round, as in cyclic
+    reduction: no fill, and a few rounds instead of one Python step per body)."""
     n = m // 6
-    blocks = _row_blocks(C)
-    store: dict[int, tuple[tuple[int, ...], FloatArray]] = dict(enumerate(blocks))
+    store: dict[int, tuple[tuple[int, ...], FloatArray]] = dict(enumerate(_row_blocks(C)))
     on: list[set[int]] = [set() for _ in range(n)]  # body -> ids of its row blocks
     near: list[set[int]] = [set() for _ in range(n)]  # body -> bodies its rows touch
     for b, (bodies, _rows) in store.items():
@@ -123,62 +132,79 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
     for body in range(n):
         near[body].discard(body)
     next_id = len(store)
-    heap = [(len(near[j]), j) for j in range(n)]
-    heapq.heapify(heap)
-    done = np.zeros(n, dtype=bool)
+    left = set(range(n))
     out = _Elimination()
     tol = rcond * s_max
-    while heap:
-        d, j = heapq.heappop(heap)
-        if done[j]:
-            continue
-        if d != len(near[j]):  # stale entry: its degree changed since
-            heapq.heappush(heap, (len(near[j]), j))
-            continue
-        done[j] = True
-        out.order.append(j)
-        others = tuple(sorted(near[j]))
-        where = {body: i for i, body in enumerate((j, *others))}
-        mine = [store.pop(b) for b in sorted(on[j])]
-        R = np.zeros((sum(rows.shape[0] for _, rows in mine), 6 * (1 + len(others))))
-        at = 0
-        for bodies, rows in mine:
-            end = at + rows.shape[0]
-            for q, body in enumerate(bodies):
-                c = 6 * where[body]
-                R[at:end, c : c + 6] = rows[:, 6 * q : 6 * q + 6]
-            at = end
-        for body in others:
-            on[body] -= on[j]
-            near[body].discard(j)
-            near[body].update(others)
-            near[body].discard(body)
-        on[j].clear()
-        near[j].clear()
-        if not R.shape[0]:  # no rows left on j (LAPACK, given 0 rows, prints on stdout)
-            U, sv, Vt = np.zeros((0, 0)), np.zeros(0), np.eye(6)
-        else:
-            U, sv, Vt, info = lapack.dgesdd(R[:, :6], full_matrices=1)
-            if info:  # pragma: no cover - LAPACK's SVD did not converge
-                U, sv, Vt = np.linalg.svd(R[:, :6], full_matrices=True)
-        rank = sum(1 for value in sv.tolist() if value > tol)
-        if rank < 6:
-            out.free.append((j, Vt[rank:].T.copy()))
-        if rank:
-            P = U[:, :rank].T @ R
-            out.pivots[j] = _Pivot(Vt[:rank].T.copy(), sv[:rank], others, P[:, 6:])
-        if others:
-            rest = U[:, rank:].T @ R[:, 6:]
-            if rest.shape[0] > rest.shape[1]:  # at most as many rows as columns
-                rest = lapack.dgeqrf(rest)[0][: rest.shape[1]] * _upper(rest.shape[1])
-            keep = rest.any(axis=1)
-            if keep.any():
-                store[next_id] = (others, rest if keep.all() else rest[keep])
-                for body in others:
-                    on[body].add(next_id)
-                next_id += 1
-            for body in others:
-                heapq.heappush(heap, (len(near[body]), body))
+    while left:
+        least = min(len(near[j]) for j in left)
+        bound = max(least, ELIMINATED_TOGETHER_DEGREE)
+        taken: list[int] = []
+        blocked: set[int] = set()
+        for j in sorted(left, key=lambda j: (len(near[j]), j)):
+            if len(near[j]) > bound:
+                break
+            if j in blocked:
+                continue
+            taken.append(j)
+            blocked.add(j)
+            blocked.update(near[j])
+        # each taken body's rows over (j, its neighbours), grouped by shape
+        groups: dict[tuple[int, int], list[tuple[int, tuple[int, ...], FloatArray]]] = {}
+        for j in taken:
+            others = tuple(sorted(near[j]))
+            where = {body: i for i, body in enumerate((j, *others))}
+            mine = [store.pop(b) for b in sorted(on[j])]
+            R = np.zeros((sum(rows.shape[0] for _, rows in mine), 6 * (1 + len(others))))
+            at = 0
+            for bodies, rows in mine:
+                end = at + rows.shape[0]
+                for q, body in enumerate(bodies):
+                    c = 6 * where[body]
+                    R[at:end, c : c + 6] = rows[:, 6 * q : 6 * q + 6]
+                at = end
+            groups.setdefault(R.shape, []).append((j, others, R))
+            left.discard(j)
+            out.order.append(j)
+        for members in groups.values():
+            stack = np.stack([R for _, _, R in members])
+            if stack.shape[1]:
+                U, sv, Vt = np.linalg.svd(stack[:, :, :6], full_matrices=True)
+                W = U.transpose(0, 2, 1) @ stack  # the rows rotated by each body's U
+                ranks = np.count_nonzero(sv > tol, axis=1).tolist()
+            else:  # no rows left on these bodies: every direction is free
+                Vt = np.broadcast_to(np.eye(6), (len(members), 6, 6))
+                W = stack
+                ranks = [0] * len(members)
+            V = Vt.transpose(0, 2, 1)
+            # the rows that still touch the others
+            nonzero: list[list[bool]] = np.asarray(W[:, :, 6:].any(axis=2)).tolist()
+            for g, (j, others, _R) in enumerate(members):
+                rank = ranks[g]
+                if rank < 6:
+                    out.free.append((j, V[g, :, rank:]))
+                if rank:
+                    out.pivots[j] = _Pivot(V[g, :, :rank], sv[g, :rank], others, W[g, :rank, 6:])
+                if not others:
+                    continue
+                rest = W[g, rank:, 6:]
+                keep = nonzero[g][rank:]
+                if rest.shape[0] > rest.shape[1]:  # at most as many rows as columns
+                    rest = lapack.dgeqrf(rest)[0][: rest.shape[1]] * _upper(rest.shape[1])
+                    keep = rest.any(axis=1).tolist()
+                if any(keep):
+                    store[next_id] = (others, rest if all(keep) else rest[np.asarray(keep)])
+                    for body in others:
+                        on[body].add(next_id)
+                    next_id += 1
+        for j in taken:
+            neighbours = near[j]
+            for body in neighbours:
+                on[body] -= on[j]
+                near[body].discard(j)
+                near[body].update(neighbours)
+                near[body].discard(body)
+            on[j].clear()
+            near[j] = set()
     return out
 
 
