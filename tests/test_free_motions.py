@@ -136,3 +136,25 @@ def test_columns_that_are_not_six_per_body_are_refused() -> None:
         null_basis(sp.csr_matrix(np.ones((1, 7))), 7)
     with pytest.raises(ValueError, match="6 columns per body"):
         column_rank_deficit(sp.csr_matrix(np.ones((1, 12))), 6)
+
+
+@pytest.mark.parametrize("closed", [False, True])
+def test_a_chain_is_eliminated_in_few_rounds_and_without_fill(closed: bool) -> None:
+    """Why bodies of up to ELIMINATED_TOGETHER_DEGREE (2) neighbours go in one
+    round: a chain then halves each round (about log2 N rounds, not N), and
+    every pivot still involves at most two other bodies (no fill, so the cost
+    stays linear). With 1, a chain would go two bodies a round."""
+    from jointplay.numerics.free_motions import (
+        ELIMINATED_TOGETHER_DEGREE,
+        _eliminate,
+        _largest_singular_value,
+    )
+
+    assert ELIMINATED_TOGETHER_DEGREE == 2
+    n = 256
+    C, m = constraint_rows(tube_string(n, closed=closed))
+    elim = _eliminate(C, m, 1e-9, _largest_singular_value(C))
+    assert sorted(elim.order) == list(range(n))
+    assert elim.rounds <= 2 * np.log2(n) + 2, elim.rounds
+    assert max(len(p.others) for p in elim.pivots.values()) <= 2
+    assert_same_null_space(*constraint_rows(tube_string(40, closed=closed)))

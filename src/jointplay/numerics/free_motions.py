@@ -61,6 +61,7 @@ class _Elimination:
     order: list[int] = field(default_factory=list)
     pivots: dict[int, _Pivot] = field(default_factory=dict)
     free: list[tuple[int, FloatArray]] = field(default_factory=list)  # (body, (6, q))
+    rounds: int = 0  # rounds of bodies eliminated together
 
 
 def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
@@ -136,6 +137,7 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
     out = _Elimination()
     tol = rcond * s_max
     while left:
+        out.rounds += 1
         least = min(len(near[j]) for j in left)
         bound = max(least, ELIMINATED_TOGETHER_DEGREE)
         taken: list[int] = []
