@@ -385,11 +385,20 @@ class Assembly:
             return self.metric
         w2 = self._metric_weights**2
         parts = []
-        for G in self.G:
-            wb = w2[:, None] * G.block
-            block = G.block.T @ wb
-            rows = np.repeat(G.cols, len(G.cols))
-            parts.append((rows, np.tile(G.cols, len(G.cols)), block.ravel()))
+        for width in sorted({len(G.cols) for G in self.G}):  # joints to ground, between bodies
+            same = [G for G in self.G if len(G.cols) == width]
+            blocks = np.stack([G.block for G in same])  # (J, 6, width)
+            cols = np.stack([G.cols for G in same])  # (J, width)
+            products = blocks.transpose(0, 2, 1) @ (w2[:, None] * blocks)  # (J, width, width)
+            parts.append(
+                (
+                    np.repeat(cols, width, axis=1).ravel(),
+                    np.tile(cols, (1, width)).ravel(),
+                    products.ravel(),
+                )
+            )
+        if not parts:
+            return sp.csr_matrix((self.m, self.m))
         rows, cols, vals = (np.concatenate(p) for p in zip(*parts, strict=True))
         return sp.csr_matrix((vals, (rows, cols)), shape=(self.m, self.m))
 

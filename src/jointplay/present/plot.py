@@ -552,11 +552,12 @@ def envelope_figure(result: EnvelopeResult) -> Figure:
     ax3d.set_box_aspect((1, 1, 1))
     from matplotlib.ticker import MaxNLocator
 
-    for axis in (ax3d.xaxis, ax3d.yaxis, ax3d.zaxis):  # long labels such as -0.04
+    for axis in (ax3d.xaxis, ax3d.yaxis, ax3d.zaxis):  # long labels such as -0.025
         axis.set_major_locator(MaxNLocator(4))
-    ax3d.set_xlabel("dx (mm)")
-    ax3d.set_ylabel("dy (mm)")
-    ax3d.set_zlabel("dz (mm)")
+    ax3d.tick_params(labelsize=8)
+    ax3d.set_xlabel("dx (mm)", labelpad=10)
+    ax3d.set_ylabel("dy (mm)", labelpad=10)
+    ax3d.set_zlabel("dz (mm)", labelpad=10)
     ax3d.set_title("envelope (3D)")
     slots = (grid[0, 1], grid[1, 0], grid[1, 1])
     ext = result.extent

@@ -299,9 +299,10 @@ def active_set_steps(
             trial.certificate = certificate.certify(ws, g_hat, sigma, trial)
             if trial.certificate.certified:
                 # a cone with no force (to round-off) does not bound the tie
+                unloaded = set(weak.tolist())
                 trial.active = (
-                    tuple(i for i in trial_key[0] if i not in weak),
-                    tuple(i for i in trial_key[1] if i not in weak),
+                    tuple(i for i in trial_key[0] if i not in unloaded),
+                    tuple(i for i in trial_key[1] if i not in unloaded),
                 )
                 return trial
             if not weak.size:
