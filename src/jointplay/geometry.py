@@ -7,6 +7,7 @@ axes, so ``R_world_joint @ v_joint`` gives a joint-frame vector in global axes.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,7 +58,9 @@ def is_parallel(a: FloatArray, b: FloatArray) -> bool:
     return math.sqrt(float(c @ c)) < PARALLEL_SINE
 
 
-def joint_frame(axis: FloatArray, up: FloatArray | None = None) -> FloatArray:
+def joint_frame(
+    axis: FloatArray | Sequence[float], up: FloatArray | Sequence[float] | None = None
+) -> FloatArray:
     """Return ``R_world_joint`` for a joint whose x axis is ``axis``.
 
     The rule (documented in docs/conventions.md): x = axis; z = the part of

@@ -3,7 +3,7 @@
 The free motions are the null space of the stacked constraint rows ``C``
 (every contact's rows, the faces' rows, the rigid joints' rows). Each row
 touches the six unknowns of one or two bodies, so ``C`` is block-sparse by
-bodies. We eliminate the bodies one at a time, as a multifrontal QR does:
+bodies. We eliminate the bodies as a multifrontal QR does:
 body j's rows (and the rows passed on to it) are rotated so that its own six
 columns are split by their singular values. The directions with a singular
 value above ``rcond`` times C's largest are pivots: their rows express them
@@ -18,8 +18,10 @@ to squaring. A block's singular value below the threshold is a motion that C
 moves less than that, so nothing held is called free; but a motion held only
 through many bodies together (a chain whose links each halve a motion holds
 it 2^-n) may be held far less than any one block shows: the dense SVD may
-call it free and this elimination held. Bodies go in a minimum-degree order, so a
-chain or a tree makes no fill; a free motion that one body makes alone (a
+call it free and this elimination held. Bodies go in rounds of least degree
+(bodies of at most two neighbours that share no rows, together, their SVDs
+stacked), so a chain or a tree makes no fill and a chain of n bodies takes
+about log2(n) rounds; a free motion that one body makes alone (a
 shaft's spin) stays a vector on that body. The basis returned is sparse and
 orthonormal.
 """

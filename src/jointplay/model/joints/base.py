@@ -111,17 +111,13 @@ class Contact:
 
 def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:
     """Rows of ``delta(p) = t + w x p = [I, -[p]x] @ tau`` for the chosen joint axes."""
-    px, py, pz = np.asarray(p, dtype=float).tolist()
-    full = np.array(
-        [
-            [1.0, 0.0, 0.0, 0.0, pz, -py],
-            [0.0, 1.0, 0.0, -pz, 0.0, px],
-            [0.0, 0.0, 1.0, py, -px, 0.0],
-        ]
-    )
-    if directions == "xyz":
-        return full
-    return full[["xyz".index(axis) for axis in directions]]
+    px, py, pz = (float(c) for c in p)
+    rows = {
+        "x": (1.0, 0.0, 0.0, 0.0, pz, -py),
+        "y": (0.0, 1.0, 0.0, -pz, 0.0, px),
+        "z": (0.0, 0.0, 1.0, py, -px, 0.0),
+    }
+    return np.array([rows[axis] for axis in directions]).reshape(-1, 6)
 
 
 class Joint(BaseModel):
@@ -161,8 +157,7 @@ class Joint(BaseModel):
     @cached_property
     def R_world_joint(self) -> FloatArray:
         """Joint axes x, y, z as columns, in global axes."""
-        up = None if self.up is None else np.array(self.up)
-        return joint_frame(np.array(self.axis), up)
+        return joint_frame(self.axis, self.up)  # tuples: NumPy's scalars cost more here
 
     @cached_property
     def centre(self) -> FloatArray:
