@@ -258,7 +258,7 @@ def null_basis(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond)
         for k in pivot.others:
             dependents.setdefault(k, []).append(i)
     vectors: list[dict[int, FloatArray]] = []
-    for j, V in elim.free:
+    for j, V in sorted(elim.free, key=lambda free: free[0]):  # in body order
         for q in range(V.shape[1]):
             vectors.append(_back_substitute(j, V[:, q], elim, position, dependents))
     return _orthonormal(vectors, m)
