@@ -27,6 +27,7 @@ from jointplay.present.plot import (
     most_loaded_joints,
     save,
     sweep_figure,
+    with_play,
 )
 from jointplay.present.scene import (
     CIRCLE_POINTS,
@@ -441,3 +442,34 @@ def test_contacts_at_one_place_get_one_short_label(names: list[str], label: str)
     points = [ViewPoint((0.01, -0.02), name, i == 0) for i, name in enumerate(names)]
     (merged,) = _merged(points, 1e-9)
     assert merged.label == label and merged.touching and merged.at == (0.01, -0.02)
+
+
+@pytest.mark.parametrize(
+    ("path", "case"),
+    [
+        (STUDIES / "carriage.yaml", None),  # eight guide contacts at one corner
+        (GALLERY / "lathe_slide.yaml", None),  # labels near the panels' edges
+        (STUDIES / "wobbly_table.yaml", "leaning on foot4"),  # a plate, five joints
+    ],
+    ids=["carriage", "lathe-slide", "wobbly-table"],
+)
+def test_joint_panel_labels_stay_inside_their_panels(path: Path, case: str | None) -> None:
+    """Each contact's label and each note is drawn inside its joint panel (it
+    used to run into the next panel, or past the frame)."""
+    model = jointplay.load(path)
+    result = jointplay.solve(model, case=case)
+    fig = clearance_figure(model, result)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    checked = 0
+    for ax in fig.axes:
+        box = ax.get_window_extent(renderer)
+        for text in ax.texts:
+            if not text.get_text():
+                continue
+            inside = text.get_window_extent(renderer)
+            slack = 2.0  # pixels: anti-aliasing at the frame
+            assert inside.x0 >= box.x0 - slack and inside.x1 <= box.x1 + slack, text.get_text()
+            assert inside.y0 >= box.y0 - slack and inside.y1 <= box.y1 + slack, text.get_text()
+            checked += 1
+    assert checked >= len(with_play(model))  # a label at least per joint panel
