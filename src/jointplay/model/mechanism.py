@@ -34,7 +34,7 @@ from jointplay.model.fields import (
     TorqueVector,
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
-from jointplay.model.tolerance import PLAY_FIELDS, Toleranced
+from jointplay.model.tolerance import Toleranced
 from jointplay.units import shown
 
 if TYPE_CHECKING:
@@ -383,10 +383,8 @@ class Model(BaseModel):
             )
             if size <= 0.0:
                 continue
-            fields = type(joint).model_fields
-            for field in PLAY_FIELDS:
-                play = getattr(joint, field) if field in fields else None
-                if play and play >= LARGE_PLAY_SHARE * size:
+            for field, play in joint.plays().items():
+                if play >= LARGE_PLAY_SHARE * size:
                     out.append(
                         f"joint '{joint.name}': {field} {play:g} mm is {play / size:.3g} times "
                         f"{what} ({size:g} mm); a play is usually a small part of it: if "
@@ -437,9 +435,7 @@ def _check_smallest_plays(model: Model) -> list[EntryError]:
     size = max([extent, *(j.size for j in model.joints)])
     found = []
     for i, joint in enumerate(model.joints):
-        fields = type(joint).model_fields
-        for field in PLAY_FIELDS:
-            play = getattr(joint, field) if field in fields else None
+        for field, play in joint.plays().items():
             if not play:
                 continue
             # a play that varies: its largest value (a part may have any play in its range)

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.geometry import FloatArray
-from jointplay.model.tolerance import PLAY_FIELDS, Toleranced
+from jointplay.model.tolerance import Toleranced
 from jointplay.present.scene import Scene, mechanism_scene
 from jointplay.version import __version__
 
@@ -418,9 +418,8 @@ class _Page:
         self.summary_end = len(self.parts)
         plays = []
         for joint in model.joints:
-            for field in PLAY_FIELDS:
-                value = getattr(joint, field) if field in type(joint).model_fields else None
-                if value is None or (field == "clearance" and joint.type_name == "point"):
+            for field, value in joint.plays().items():
+                if field == "clearance" and joint.type_name == "point":
                     continue  # a point joint's play is its gap
                 origin = value.describe() if isinstance(value, Toleranced) else "as given"
                 used = "its mean" if isinstance(value, Toleranced) else "as given"

@@ -22,7 +22,7 @@ from jointplay.errors import ModelError
 from jointplay.geometry import FloatArray
 from jointplay.model.joints import Joint
 from jointplay.model.mechanism import Load, Model
-from jointplay.model.tolerance import PLAY_FIELDS, Toleranced
+from jointplay.model.tolerance import Toleranced
 
 
 @dataclass(frozen=True)
@@ -137,8 +137,7 @@ def toleranced_plays(asm: Assembly) -> tuple[PlayVariable, ...]:
     """Every play of the model given by limits or a fit, in joint order."""
     out = []
     for joint in asm.model.joints:
-        for name in PLAY_FIELDS:
-            value = getattr(joint, name, None)
+        for name, value in joint.plays().items():
             if isinstance(value, Toleranced):
                 out.append(PlayVariable(joint.name, name, value))
     return tuple(out)

@@ -25,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, model_validator
 
 from jointplay.geometry import FloatArray, is_parallel, joint_frame, left_jacobian_inverse, skew
 from jointplay.model.fields import Direction, Name, Play, Point, PositiveStiffness
+from jointplay.model.tolerance import PLAY_FIELDS
 
 ContactKind = Literal["ball", "fixed"]
 #: A cone's vector part (k,) and scalar part.
@@ -165,6 +166,16 @@ class Joint(BaseModel):
 
     def contacts(self) -> tuple[Contact, ...]:
         raise NotImplementedError
+
+    def plays(self) -> dict[str, float]:
+        """The joint's plays by field name (mm; a ``Toleranced`` one as
+        itself, its mean as a float), those its type has and that are given."""
+        fields = type(self).model_fields
+        return {
+            name: getattr(self, name)
+            for name in PLAY_FIELDS
+            if name in fields and getattr(self, name) is not None
+        }
 
     @cached_property
     def cones(self) -> tuple[Contact, ...]:
