@@ -63,7 +63,7 @@ def test_solve_json_has_exactly_the_documented_schema() -> None:
     assert set(l2) == {"axes", "translation", "rotation", "contacts", "reaction"}
     assert set(l2["reaction"]) == {"force", "moment"}
     assert l2["axes"] == {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
-    keys = {"name", "gap_used", "in_contact", "force", "point", "penetration"}
+    keys = {"name", "gap_used", "in_contact", "force", "point", "penetration", "torque", "unit"}
     assert [set(c) for c in l2["contacts"]] == [keys] * 2
     assert l2["contacts"][0]["force"] == [0.0, 0.0, 0.0]  # free: no force
     assert l2["contacts"][1]["point"] == [220.0, 0.0, 0.0]

@@ -97,3 +97,148 @@ def test_cli_envelope(tmp_path: Path) -> None:
         app, ["envelope", "examples/studies/shaft_fits.yaml", "--point", "B", "--plays", "min"]
     )
     assert bad.exit_code == 2 and "'max' or 'mean'" in bad.output
+
+
+# -- envelopes on real mechanisms: one-sided supports, free motions, the model's loads
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def door(gravity: bool) -> jointplay.Model:
+    """A door on two hinges about global Z, 1,600 mm apart; its handle 800 mm out."""
+    data: dict[str, Any] = {
+        "bodies": [{"name": "frame", "ground": True}, {"name": "door"}],
+        "joints": [
+            {
+                "name": "upper",
+                "type": "revolute",
+                "between": ["frame", "door"],
+                "at": [0, 0, 1800],
+                "axis": [0, 0, 1],
+                "length": 40,
+                "clearance": 0.1,
+                "axial_clearance": 0.5,
+            },
+            {
+                "name": "lower",
+                "type": "cylindrical",
+                "between": ["frame", "door"],
+                "at": [0, 0, 200],
+                "axis": [0, 0, 1],
+                "length": 40,
+                "clearance": 0.1,
+            },
+        ],
+        "points": [{"name": "handle", "body": "door", "at": [800, 0, 1000]}],
+    }
+    if gravity:
+        data["bodies"][1].update({"mass": "20 kg", "center_of_mass": [400, 0, 1000]})
+        data["gravity"] = [0, 0, "-9.81 m/s^2"]
+    return jointplay.model_from_dict(data)
+
+
+def test_a_door_is_bounded_in_the_directions_its_hinges_hold() -> None:
+    env = Envelope("handle", directions=60).run(door(gravity=False))
+    # a force at the handle with a part along Y turns the door: not held, and said so
+    np.testing.assert_allclose(env.directions[:, 1], 0.0, atol=1e-12)
+    [words] = env.not_held
+    assert "rotation about the global Z axis" in words and "door" in words
+    # in the held plane XZ: the hinges' play J/2 across, and along Z the upper hinge's
+    # axial play Ja/2 plus the tilt (J / (1,600 + 40) mm, both bores' ends) at 800 mm
+    tilt = 0.1 / 1640
+    assert env.largest == pytest.approx(0.25 + 800 * tilt, abs=1e-9)
+    np.testing.assert_allclose(env.extent[0], [-0.05, 0.05], atol=1e-9)
+    np.testing.assert_allclose(env.extent[1], [0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(env.extent[2], [-0.25 - 800 * tilt, 0.25 + 800 * tilt], atol=1e-9)
+
+
+def test_a_heavy_door_rests_where_its_weight_puts_it() -> None:
+    heavy = door(gravity=True)
+    env = Envelope("handle", directions=60).run(heavy)
+    assert "rotation about the global Z axis" in env.not_held[0]
+    assert "against the weights" in env.over
+    # a 1 N probe does not lift 20 kg: every support point is the resting position
+    rest = jointplay.solve(heavy).points["handle"].displacement
+    np.testing.assert_allclose(env.hull, np.tile(rest, (len(env.hull), 1)), atol=1e-9)
+    # and it lies in the envelope of the door without weight
+    assert np.all(Envelope("handle", directions=60).run(door(gravity=False)).contains(env.hull))
+
+
+def test_the_located_plate_envelope_is_the_lever_rule_of_its_two_pins() -> None:
+    model = jointplay.load(ROOT / "examples" / "gallery" / "located_plate.yaml")
+    env = Envelope("drilled hole", directions=100).run(model)
+    assert env.not_held == ()  # the weight keeps the plate on its buttons
+    # at (100, 50): the hole pin at (40, 60) plays R = J1/2 in any direction, the slot pin
+    # at (170, 60) c = J2/2 across (Y); a turn w moves the point by (10 w, 60 w), the slot
+    # pin by 130 w across; so the greatest X is max of sqrt(R^2 - e^2) + 10 (c + e) / 130
+    R = model.joint("hole pin").clearance.high / 2
+    c = model.joint("slot pin").clearance.high / 2
+    k = 10 / 130
+    assert env.extent[0, 1] == pytest.approx(R * np.hypot(1, k) + k * c, abs=1e-9)
+    np.testing.assert_allclose(env.extent[2], [0.0, 0.0], atol=1e-12)  # on its buttons
+    # without its weight the plate lifts off its buttons under some probes: left out
+    weightless = model.model_copy(update={"gravity": None})
+    light = Envelope("drilled hole", directions=100).run(weightless)
+    assert len(light.not_held) == 1 and "lift a part off its supports" in light.not_held[0]
+    assert len(light.directions) < 106
+
+
+def test_an_envelope_over_load_ranges_takes_every_corner() -> None:
+    data = {
+        "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
+        "joints": [
+            {
+                "name": "ball",
+                "type": "spherical",
+                "between": ["g", "b"],
+                "at": [0, 0, 0],
+                "clearance": 0.4,
+            }
+        ],
+        "loads": [{"body": "b", "at": [0, 0, 0], "force": [{"min": -5, "max": 5}, 3, 0]}],
+        "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
+    }
+    model = jointplay.model_from_dict(data)
+    env = Envelope("c", directions=50).run(model)
+    assert "2 load sets" in env.over
+    corner = 0.2 * np.array([5.0, 3.0, 0.0]) / np.hypot(5, 3)
+    np.testing.assert_allclose(env.extent[0], [-corner[0], corner[0]], atol=1e-9)
+    np.testing.assert_allclose(env.extent[1], [corner[1], corner[1]], atol=1e-9)
+    # a third level adds the mean load, straight along Y: the ball's full J/2
+    finer = Envelope("c", directions=50, levels=3).run(model)
+    assert finer.extent[1, 1] == pytest.approx(0.2, abs=1e-9)
+    # asked for probes instead: the ball of the play
+    probes = Envelope("c", directions=50, loads="probes").run(model)
+    assert probes.largest == pytest.approx(0.2, abs=1e-9)
+
+
+def test_an_envelope_over_load_cases_holds_each_case() -> None:
+    path = ROOT / "examples" / "studies" / "wobbly_table.yaml"
+    model = jointplay.load(path)
+    env = Envelope("probe", directions=40).run(model)
+    assert "over 3 load cases" in env.over
+    for case, result in jointplay.solve_cases(model).items():
+        d = result.points["probe"].displacement
+        assert np.any(np.all(np.abs(env.hull - d) < 1e-9, axis=1)), case
+        assert np.all(env.contains(d[None, :]))
+
+
+def test_no_direction_held_is_exit_3(tmp_path: Path) -> None:
+    data = {
+        "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
+        "joints": [
+            {
+                "name": "ring",
+                "type": "sphere_in_cylinder",
+                "between": ["g", "b"],
+                "at": [0, 0, 0],
+                "clearance": 0.1,
+            }
+        ],
+        "points": [{"name": "p", "body": "b", "at": [10, 10, 0]}],
+    }
+    path = tmp_path / "ring.yaml"
+    path.write_text(json.dumps(data))
+    out = CliRunner().invoke(app, ["envelope", str(path), "--point", "p"])
+    assert out.exit_code == 3, out.output
+    assert "no force at point 'p' is held" in out.output

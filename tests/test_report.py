@@ -221,7 +221,8 @@ def test_the_report_opens_with_a_summary_and_the_plays_used() -> None:
     assert "all pass" in html
     assert "Plays the nominal solve used" in html
     for joint in model.joints:
-        assert f"<td>{joint.name}</td><td>clearance</td><td>{float(joint.clearance):g}</td>" in html
+        used = f"{float(joint.clearance):g} mm"
+        assert f"<td>{joint.name}</td><td>clearance</td><td>{used}</td>" in html
     assert "H7/g6 at 25 mm: 0.007 to 0.041 mm (normal)" in html
 
 
@@ -250,7 +251,7 @@ def test_the_summary_reads_point_gaps_and_skips_plays_of_zero() -> None:
     plays = html[html.index("Plays the nominal solve used") : html.index(">Model</h2>")]
     points = [j for j in model.joints if j.type_name == "point"]
     assert points and all(f"<td>{j.name}</td><td>gap</td>" in plays for j in points)
-    assert "<td>clearance</td><td>0</td>" not in plays
+    assert "<td>clearance</td><td>0 mm</td>" not in plays
     result = jointplay.solve(model)
     with_play = [
         c.gap_used

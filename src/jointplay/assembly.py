@@ -594,7 +594,11 @@ def assemble(model: Model) -> Assembly:
                     blocks[at : at + k],
                     contact.radius / s,
                     m,
-                    0.0 if contact.kind == "fixed" else spring,
+                    0.0
+                    if contact.kind == "fixed"
+                    else spring
+                    if contact.stiffness is None
+                    else contact.stiffness,
                     offset,
                 )
             )

@@ -287,7 +287,7 @@ def montecarlo(
     _guarded(run, as_json)
 
 
-@app.command(short_help="Worst-case envelope of a functional point under any load.")
+@app.command(short_help="Worst-case envelope of a functional point under the loads it takes.")
 def envelope(
     model_path: ModelPath,
     point: Annotated[
@@ -308,12 +308,33 @@ def envelope(
         Path | None,
         typer.Option("--csv", metavar="FILE", help="Write each direction's support point."),
     ] = None,
+    loads: Annotated[
+        str,
+        typer.Option(
+            "--loads",
+            metavar="auto|model|probes",
+            help="Over the model's load cases and load ranges, or over probe forces at the "
+            "point in every direction the mechanism holds (auto: the model's if it has cases "
+            "or ranges).",
+        ),
+    ] = "auto",
+    levels: Annotated[
+        int,
+        typer.Option(
+            "--levels", min=2, help="Values of each varying load component (2: its limits)."
+        ),
+    ] = 2,
+    probe: Annotated[
+        float,
+        typer.Option("--probe", help="Probe force (N) against the weights; > 0."),
+    ] = 1.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print the envelope as JSON.")] = False,
     plot: PlotOption = None,
 ) -> None:
     """Worst-case envelope of a functional point: every displacement the
-    plays allow under any load (its largest size and direction, its extent
-    along each axis, and the hull's points)."""
+    plays allow under the loads the mechanism takes (its largest size and
+    direction, its extent along each axis, and the hull's points), and the
+    probe directions it does not hold."""
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render_envelope
     from jointplay.studies.envelope import Envelope
@@ -321,9 +342,20 @@ def envelope(
     def run() -> None:
         if plays not in ("max", "mean"):
             raise OptionError(f"--plays {plays!r}: expected 'max' or 'mean'")
+        if not probe > 0:
+            raise OptionError(f"--probe {probe:g}: expected a force > 0 N")
+        if loads not in ("auto", "model", "probes"):
+            raise OptionError(f"--loads {loads!r}: expected 'auto', 'model' or 'probes'")
         _check_outputs(csv, plot)
         model = load(model_path)
-        settings = Envelope(point, directions, "max" if plays == "max" else "mean")
+        settings = Envelope(
+            point,
+            directions,
+            "max" if plays == "max" else "mean",
+            "auto" if loads == "auto" else "model" if loads == "model" else "probes",
+            levels,
+            probe,
+        )
         result = settings.run(model, source=str(model_path))
         _finish_study(
             result,

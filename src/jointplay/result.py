@@ -60,8 +60,10 @@ class ContactResult:
 
     ``force`` is the force that body a exerts on body b at this contact (N,
     joint frame), acting at ``point`` (mm, global; on the joint axis for
-    cylindrical ends, as in the paper's modelling). A contact that does not
-    touch carries no force.
+    cylindrical ends, as in the paper's modelling). ``torque`` is the moment
+    it adds about that point (N*mm, joint frame): a drive's reaction torque,
+    0 for a contact that pushes at a point. A contact that does not touch
+    carries no force.
     """
 
     name: str
@@ -69,7 +71,9 @@ class ContactResult:
     in_contact: bool
     force: FloatArray  # N, joint frame, a on b
     point: FloatArray  # mm, global
-    penetration: float = 0.0  # mm past the clearance (compliant contacts only)
+    penetration: float = 0.0  # past the clearance, in ``unit`` (compliant contacts only)
+    torque: FloatArray = field(default_factory=lambda: np.zeros(3))  # N*mm, joint frame
+    unit: str = "mm"  # of the play: "rad" for a drive's backlash
 
     @property
     def force_magnitude(self) -> float:
@@ -83,6 +87,8 @@ class ContactResult:
             "force": _list(self.force),
             "point": _list(self.point),
             "penetration": self.penetration,
+            "torque": _list(self.torque),
+            "unit": self.unit,
         }
 
 
@@ -331,6 +337,9 @@ def build_result(
     point = T.centre[T.joint_of] + np.einsum("cab,cb->ca", T.R_world_joint[T.joint_of], local)
     force = wrench[:, :3]
     force = _clean_rows(force, np.maximum(TINY, np.max(np.abs(force), axis=1, initial=0.0)))
+    # what the contact adds besides its force at its point: a drive's torque
+    torque = wrench[:, 3:] - cross(local, wrench[:, :3])
+    torque = _clean_rows(torque, np.maximum(TINY, np.max(np.abs(wrench[:, 3:]), axis=1)))
     wrench_sum = np.zeros((len(model.joints), 6))
     np.add.at(wrench_sum, T.joint_of, wrench)
 
@@ -338,13 +347,16 @@ def build_result(
     touching = gap >= TOUCHING
     gaps, pasts = gap.tolist(), past.tolist()
     for c_index, c in enumerate(asm.contacts):
+        lever = c.contact.turn_lever
         state = ContactResult(
             c.contact.name,
             gaps[c_index],
             bool(touching[c_index]),
             force[c_index] + 0.0,
             point[c_index],
-            pasts[c_index],
+            pasts[c_index] if lever is None else pasts[c_index] / lever,
+            torque[c_index] + 0.0,
+            "mm" if lever is None else "rad",
         )
         per_joint.setdefault(c.joint_index, []).append(state)
 

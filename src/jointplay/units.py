@@ -28,6 +28,7 @@ BASE_UNITS: dict[str, str] = {
     "torque": "N*mm",
     "angle": "rad",
     "stiffness": "N/mm",
+    "torsional_stiffness": "N*mm/rad",
     "mass": "kg",
     "acceleration": "mm/s^2",
 }
@@ -39,6 +40,7 @@ UNIT_EXAMPLES: dict[str, str] = {
     "torque": "'1 N*m' or '500 N*mm'",
     "angle": "'0.5 deg' or '1 mrad'",
     "stiffness": "'2e5 N/mm' or '200 N/um'",
+    "torsional_stiffness": "'50 N*m/deg' or '3e6 N*mm/rad'",
     "mass": "'2 kg' or '300 g'",
     "acceleration": "'9.81 m/s^2'",
 }
@@ -55,6 +57,7 @@ LIMITS: dict[str, float] = {
     "torque": 1e12,
     "angle": 1e3,
     "stiffness": 1e12,
+    "torsional_stiffness": 1e15,
     "mass": 1e6,
     "acceleration": 1e7,
 }
@@ -125,8 +128,8 @@ def to_base(value: Any, dimension: str) -> float:
         raise ValueError(_expected(dimension, value))
     if not math.isfinite(number):
         raise ValueError(
-            f"expected a finite {dimension}, got {shown(value)}; write a number of at most "
-            f"{LIMITS[dimension]:g} {unit}"
+            f"expected a finite {dimension.replace('_', ' ')}, got {shown(value)}; write a "
+            f"number of at most {LIMITS[dimension]:g} {unit}"
         )
     if abs(number) > LIMITS[dimension]:
         raise ValueError(
@@ -288,5 +291,5 @@ def _expected(dimension: str, value: Any) -> str:
 
 
 def _a(dimension: str) -> str:
-    """'a length', 'an acceleration'."""
-    return f"{'an' if dimension[0] in 'aeiou' else 'a'} {dimension}"
+    """'a length', 'an acceleration', 'a torsional stiffness'."""
+    return f"{'an' if dimension[0] in 'aeiou' else 'a'} {dimension.replace('_', ' ')}"

@@ -18,7 +18,7 @@ from pydantic import (
     WithJsonSchema,
 )
 
-from jointplay.model.tolerance import parse_play, parse_scattered
+from jointplay.model.tolerance import parse_angular_play, parse_play, parse_scattered
 from jointplay.units import BASE_UNITS, NUMBER_FIRST, UNIT_EXAMPLES, shown, to_base
 
 Vec3 = tuple[float, float, float]
@@ -159,6 +159,23 @@ _FIT_SCHEMA: dict[str, Any] = {
 _PLAY_SCHEMA = WithJsonSchema(
     {"anyOf": [_quantity_schema("length"), _range_schema("length"), _FIT_SCHEMA]}
 )
+_AT_RADIUS_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "properties": {"length": _quantity_schema("length"), "radius": _quantity_schema("length")},
+    "required": ["length", "radius"],
+    "additionalProperties": False,
+    "description": "a play along an arc at a radius: the angle length / radius",
+}
+_ANGLE_OR_ARC: dict[str, Any] = {"anyOf": [_quantity_schema("angle"), _AT_RADIUS_SCHEMA]}
+_ANGULAR_RANGE: dict[str, Any] = {
+    **_range_schema("angle"),
+    "properties": {
+        "min": _ANGLE_OR_ARC,
+        "max": _ANGLE_OR_ARC,
+        "distribution": {"enum": ["uniform", "normal"]},
+    },
+}
+_ANGULAR_PLAY_SCHEMA = WithJsonSchema({"anyOf": [*_ANGLE_OR_ARC["anyOf"], _ANGULAR_RANGE]})
 
 
 #: Names appear in every message and report: one printable line, at most 100 characters.
@@ -174,6 +191,10 @@ NonNegativeLength = Annotated[
 #: A joint's play: a length, or limits / an ISO fit (``tolerance.Toleranced``,
 #: a float equal to the mean play that also knows its spread).
 Play = Annotated[float, PlainValidator(parse_play), AfterValidator(_non_negative), _PLAY_SCHEMA]
+#: A drive's angular play (rad): an angle, a length at a radius, or limits.
+AngularPlay = Annotated[
+    float, PlainValidator(parse_angular_play), AfterValidator(_non_negative), _ANGULAR_PLAY_SCHEMA
+]
 PositiveLength = Annotated[
     float, BeforeValidator(_scalar("length")), AfterValidator(_positive), _quantity("length")
 ]
@@ -232,6 +253,12 @@ AccelerationVector = Annotated[
     BeforeValidator(_vector("acceleration")),
     BeforeValidator(_with_units),
     WithJsonSchema(_vector_schema(_GRAVITY_COMPONENT)),
+]
+PositiveTorsionalStiffness = Annotated[
+    float,
+    BeforeValidator(_scalar("torsional_stiffness")),
+    AfterValidator(_positive),
+    _quantity("torsional_stiffness"),
 ]
 PositiveStiffness = Annotated[
     float,

@@ -34,7 +34,7 @@ from jointplay.model.fields import (
     TorqueVector,
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
-from jointplay.model.tolerance import Toleranced
+from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced
 from jointplay.units import shown
 
 if TYPE_CHECKING:
@@ -384,11 +384,19 @@ class Model(BaseModel):
             if size <= 0.0:
                 continue
             for field, play in joint.plays().items():
-                if play >= LARGE_PLAY_SHARE * size:
+                length = joint.play_length(field, play)
+                if length >= LARGE_PLAY_SHARE * size:
                     out.append(
-                        f"joint '{joint.name}': {field} {play:g} mm is {play / size:.3g} times "
-                        f"{what} ({size:g} mm); a play is usually a small part of it: if "
-                        f"{play:g} was meant in um, write '{play:g} um'"
+                        f"joint '{joint.name}': {field} {play:g} {_unit(field)} is "
+                        f"{length / size:.3g} times {what} ({size:g} mm)"
+                        + (
+                            f" at its lever ({joint.play_length(field, 1.0):g} mm)"
+                            if field in ANGULAR_PLAYS
+                            else ""
+                        )
+                        + f"; a play is usually a small part of it: if {play:g} was meant in "
+                        f"{'mrad' if field in ANGULAR_PLAYS else 'um'}, write "
+                        f"'{play:g} {'mrad' if field in ANGULAR_PLAYS else 'um'}'"
                     )
         return tuple(out)
 
@@ -409,6 +417,10 @@ class Model(BaseModel):
         data = self.model_dump(by_alias=True, exclude_none=True)
         data.update(changes)
         return Model.model_validate(data)
+
+
+def _unit(play_field: str) -> str:
+    return "rad" if play_field in ANGULAR_PLAYS else "mm"
 
 
 def check_case(model: Model, case: str | None, source: str) -> None:
@@ -440,11 +452,11 @@ def _check_smallest_plays(model: Model) -> list[EntryError]:
                 continue
             # a play that varies: its largest value (a part may have any play in its range)
             most, what = (
-                (play.high, f"up to {play.high:g} mm")
+                (play.high, f"up to {play.high:g} {_unit(field)}")
                 if isinstance(play, Toleranced)
-                else (play, f"{play:g} mm")
+                else (float(play), f"{play:g} {_unit(field)}")
             )
-            if most < SMALLEST_PLAY_SHARE * size:
+            if joint.play_length(field, most) < SMALLEST_PLAY_SHARE * size:
                 found.append(
                     EntryError(
                         f"joints[{i}] '{joint.name}'",

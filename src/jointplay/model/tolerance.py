@@ -1,7 +1,8 @@
 """Plays that vary from part to part: a clearance given by its limits or an ISO fit.
 
 A joint's play (``clearance``, ``axial_clearance``, ``clearance_y``,
-``clearance_z``, a point's ``gap``) may be a plain length, or one of::
+``clearance_z``, a point's ``gap``; a drive's ``backlash``, an angle) may be
+a plain value, or one of::
 
     clearance: {fit: "H7/g6", diameter: 20}                    # ISO 286 limits
     clearance: {fit: "H7/g6", diameter: 20, distribution: normal}
@@ -35,7 +36,9 @@ from jointplay.units import shown, to_base
 Distribution = Literal["uniform", "normal"]
 DISTRIBUTIONS: tuple[Distribution, ...] = ("uniform", "normal")
 #: Joint fields that hold a play and may be toleranced.
-PLAY_FIELDS = ("clearance", "axial_clearance", "clearance_y", "clearance_z", "gap")
+PLAY_FIELDS = ("clearance", "axial_clearance", "clearance_y", "clearance_z", "gap", "backlash")
+#: Those of ``PLAY_FIELDS`` that are angles (rad), not lengths.
+ANGULAR_PLAYS = ("backlash",)
 
 _FIT_KEYS = {"fit", "diameter", "distribution"}
 _RANGE_KEYS = {"min", "max", "distribution"}
@@ -174,6 +177,43 @@ def parse_play(value: Any) -> float:
     )
 
 
+def parse_angular_play(value: Any) -> float:
+    """A drive's backlash: an angle (rad; ``"0.2 deg"``, ``"3 arcmin"``), the
+    play ``{length, radius}`` at a radius (a gear's flank, a screw's lead),
+    or ``{min, max}`` angles (a ``Toleranced`` in rad)."""
+    if isinstance(value, Toleranced):
+        return value
+    if not isinstance(value, Mapping):
+        return to_base(value, "angle")
+    keys = set(value)
+    if keys & {"min", "max"}:
+        limits = {
+            key: _at_radius(v) if key in ("min", "max") and isinstance(v, Mapping) else v
+            for key, v in value.items()
+        }
+        return _from_limits(limits, "angle", "a backlash")
+    if keys == {"length", "radius"}:
+        return _at_radius(value)
+    raise ValueError(
+        f"expected an angle, {{length, radius}} or {{min, max}}, got {shown(dict(value))}; "
+        "write e.g. '0.2 deg', '3 arcmin', {length: '20 um', radius: '15 mm'} or "
+        "{min: '0.1 deg', max: '0.3 deg'}"
+    )
+
+
+def _at_radius(value: Mapping[str, Any]) -> float:
+    """The angle (rad) of a play ``{length, radius}`` along an arc."""
+    if set(value) != {"length", "radius"}:
+        raise ValueError(
+            f"expected an angle or {{length, radius}}, got {shown(dict(value))}; write e.g. "
+            "{length: '20 um', radius: '15 mm'}"
+        )
+    length, radius = to_base(value["length"], "length"), to_base(value["radius"], "length")
+    if not radius > 0:
+        raise ValueError(f"radius: expected a length > 0, got {radius:g} mm")
+    return length / radius
+
+
 def parse_scattered(value: Any, dimension: str) -> float:
     """A load's component: a number (``to_base``), or ``{min, max,
     distribution}`` for one that varies from sample to sample in a Monte
@@ -190,7 +230,9 @@ def _from_limits(value: Mapping[str, Any], dimension: str, what: str) -> Toleran
     from jointplay.units import BASE_UNITS
 
     unit = BASE_UNITS[dimension]
-    example = "{min: 0.02, max: 0.06}" if dimension == "length" else "{min: 8, max: 12}"
+    example = {"length": "{min: 0.02, max: 0.06}", "angle": "{min: '0.1 deg', max: '0.3 deg'}"}.get(
+        dimension, "{min: 8, max: 12}"
+    )
     unknown = set(value) - _RANGE_KEYS
     if unknown:
         raise ValueError(
@@ -203,8 +245,8 @@ def _from_limits(value: Mapping[str, Any], dimension: str, what: str) -> Toleran
             f"{what}'s limits need both 'min' and 'max'; '{sorted(missing)[0]}' is missing"
         )
     low, high = to_base(value["min"], dimension), to_base(value["max"], dimension)
-    if dimension == "length" and low < 0:
-        raise ValueError(f"min: expected a play >= 0 mm, got {low:g} mm")
+    if dimension in ("length", "angle") and low < 0:
+        raise ValueError(f"min: expected a play >= 0 {unit}, got {low:g} {unit}")
     if high < low:
         raise ValueError(f"max ({high:g} {unit}) is below min ({low:g} {unit}); swap them")
     return Toleranced(low, high, _distribution(value), unit=unit)

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.geometry import FloatArray
-from jointplay.model.tolerance import Toleranced
+from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced
 from jointplay.present.scene import Scene, mechanism_scene
 from jointplay.version import __version__
 
@@ -423,11 +423,12 @@ class _Page:
                     continue  # a point joint's play is its gap
                 origin = value.describe() if isinstance(value, Toleranced) else "as given"
                 used = "its mean" if isinstance(value, Toleranced) else "as given"
-                plays.append((joint.name, field, _num(float(value)), used, origin))
+                unit = "rad" if field in ANGULAR_PLAYS else "mm"
+                plays.append((joint.name, field, f"{_num(float(value))} {unit}", used, origin))
         if plays:
             self.parts.append(
                 _table(
-                    ["joint", "play", "used (mm)", "", "from"],
+                    ["joint", "play", "used", "", "from"],
                     [(j, f, v, u, o if o != "as given" else "") for j, f, v, u, o in plays],
                     "Plays the nominal solve used (a toleranced play at its mean)",
                 )
@@ -545,7 +546,7 @@ class _Page:
                     "state",
                     "force (N)",
                     "F (joint frame, N)",
-                    "at (mm)",
+                    "at (mm), or torque (N*mm, joint frame)",
                 ],
                 [
                     (
@@ -555,7 +556,7 @@ class _Page:
                         "touching" if c.in_contact else "free",
                         _num(c.force_magnitude),
                         _vec(c.force),
-                        _vec(c.point),
+                        f"torque {_vec(c.torque)}" if c.unit == "rad" else _vec(c.point),
                     )
                     for name, jr in result.joints.items()
                     for c in jr.contacts
@@ -620,9 +621,11 @@ class _Page:
                         f"{_num(ext[2, 0])} .. {_num(ext[2, 1])}",
                     )
                 ],
-                f"plays at their {env.settings.plays}, under any load",
+                f"plays at their {env.settings.plays}, under {env.over or 'any load'}",
             )
         )
+        for words in env.not_held:
+            self.paragraph(f"Not held, left out: {words}.")
         self.parts.append(_svg(envelope_figure(env)))
 
     def montecarlo(self, mc: MonteCarloResult) -> None:

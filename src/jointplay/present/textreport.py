@@ -99,7 +99,7 @@ def render(
             table.add_row(axis, direction, _num(jr.translation[i]), _num(jr.rotation[i]))
         contacts = ", ".join(
             f"{c.name}: {'TOUCHING' if c.in_contact else 'free'} ({100 * c.gap_used:.2f}% of play"
-            + (f", {c.penetration:.6g} mm past it)" if c.penetration > 0 else ")")
+            + (f", {c.penetration:.6g} {c.unit} past it)" if c.penetration > 0 else ")")
             for c in jr.contacts
         )
         parts.append(table)
@@ -110,7 +110,9 @@ def render(
         forces.add_column("F (joint frame)")
         forces.add_column("at (global) or moment")
         for c in jr.contacts:
-            if c.in_contact:
+            if c.in_contact and np.any(c.torque) and not np.any(c.force):  # a drive's torque
+                forces.add_row(f"  {c.name}", "", "", f"{_vec(c.torque, 6)} N*mm")
+            elif c.in_contact:
                 forces.add_row(
                     f"  {c.name}", f"{c.force_magnitude:.6g}", _vec(c.force, 6), fmt_point(c.point)
                 )
@@ -254,10 +256,11 @@ def render_envelope(
     head = Text()
     head.append(f"{title or source}: worst-case envelope of point '{st.point}'\n", style="bold")
     head.append(
-        f"every displacement the plays allow under any load ({len(result.h)} directions, "
-        f"plays at their {'upper limits' if st.plays == 'max' else 'means'}, stiffness "
-        "left out)\n"
+        f"every displacement the plays allow under {result.over or 'any load'} (plays at "
+        f"their {'upper limits' if st.plays == 'max' else 'means'}, stiffness left out)\n"
     )
+    for words in result.not_held:
+        head.append(f"not held, left out: {words}\n")
     size = result.largest
     direction = result.largest_vector / size if size > 0 else np.zeros(3)
     head.append(f"largest displacement: {size:.6g} mm along {_vec(direction)}\n")

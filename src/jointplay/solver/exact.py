@@ -318,7 +318,9 @@ def _build(
                     touching,
                     wrench[:3] + 0.0,
                     a_place(joint.centre + Rw @ q),
-                    past,
+                    past if c.contact.turn_lever is None else past / c.contact.turn_lever,
+                    _clean(wrench[3:] - np.cross(q, wrench[:3]), float(np.max(np.abs(wrench)))),
+                    "mm" if c.contact.turn_lever is None else "rad",
                 )
             )
         joints[joint.name] = JointResult(

@@ -1,23 +1,41 @@
 """The worst-case envelope of a functional point: where the plays let it go.
 
-Under every possible load, a functional point P can reach exactly the
-displacements ``d_P(x)`` of the positions x that every clearance allows: a
-convex set (a linear image of the intersection of the joints' cones). Its
-support function in a direction u, ``h(u) = max u . d_P(x)``, is one cone
-program: the equilibrium under a unit force along u applied at P (with rigid
-contacts only the load's direction matters). ``Envelope`` evaluates it in
-many directions spread evenly over the sphere, all in one batch, then climbs
-from the farthest support points to the largest displacement (each step
-``u <- d / |d|`` can only increase |d|).
+Under loads that push a functional point P in a direction u, P goes as far
+as the clearances let it: the support function ``h(u) = max u . d_P(x)``
+over the positions x that every clearance allows is one cone program, the
+equilibrium under a unit force along u at P (with rigid contacts only the
+load's direction matters). The envelope takes it in many directions spread
+evenly over the sphere, all in one batch, then climbs from the farthest
+support points to the largest displacement (each step ``u <- d / |d|`` can
+only increase |d|).
 
-The envelope is that of the plays alone: a contact's stiffness is left out
-(it would let the point go further the harder it is pushed). With toleranced
-plays it is taken at their upper limits (``plays="max"``: every part of the
-batch is inside) or at their means (``plays="mean"``).
+Over which loads (``Envelope.loads``):
+
+* ``probes``: such unit probes at P, added to the *standing* loads, the
+  weights (a preload is given as a load case). A probe direction is kept
+  only if the mechanism holds it: a force at P that would drive a free
+  motion (a door about its hinges) or lift a part off its one-sided supports
+  (a plate off its buttons) has no equilibrium, and is listed instead.
+* ``model``: the loads the model itself says it takes: every load case, and
+  for each, every combination of its varying load components (``{min,
+  max}``) at ``levels`` evenly spaced values (2: their limits). The
+  envelope is then the convex hull of P's displacements under those loads.
+  It is exact for those loads; a load between them (a force turning between
+  two limits, on a round bore) may push P a little further: raise
+  ``levels`` to see.
+* ``auto`` (the default): ``model`` if the model has load cases or varying
+  load components, else ``probes``.
+
+The envelope is that of the plays alone: a contact's stiffness, and a
+drive's, are left out (they would let the point go further the harder it is
+pushed). With toleranced plays it is taken at their upper limits
+(``plays="max"``: every part of the batch is inside) or at their means
+(``plays="mean"``).
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -27,8 +45,10 @@ from jointplay.assembly import assemble
 from jointplay.errors import OptionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
+from jointplay.model.tolerance import Toleranced
+from jointplay.settings import DEFAULT
 from jointplay.solver.workspace import Workspace
-from jointplay.studies.variation import play_map
+from jointplay.studies.variation import load_map, play_map
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -37,6 +57,11 @@ if TYPE_CHECKING:
 AXES = np.vstack([np.eye(3), -np.eye(3)])
 #: Steps of the climb from a support point to the largest displacement.
 CLIMB_STEPS = 30
+#: Most load combinations an envelope over the model's loads solves (levels ** components
+#: per case): beyond it the grid is a slip, and Monte Carlo is the study to run.
+MOST_LOAD_SETS = 100_000
+#: A probe direction whose part in the held directions is below this is not held at all.
+HELD_SHARE = 1e-9
 
 
 def sphere_directions(n: int) -> FloatArray:
@@ -50,15 +75,27 @@ def sphere_directions(n: int) -> FloatArray:
 
 @dataclass(frozen=True)
 class Envelope:
-    """Settings of a worst-case envelope; ``run`` returns an ``EnvelopeResult``."""
+    """Settings of a worst-case envelope; ``run`` returns an ``EnvelopeResult``.
+
+    ``loads``: ``"probes"``, ``"model"`` or ``"auto"`` (module docstring).
+    ``levels``: values per varying load component (``model``). ``probe``: the
+    probe force (N) against the standing loads (``probes``; without weights
+    only its direction matters)."""
 
     point: str
     directions: int = 200
     plays: Literal["max", "mean"] = "max"
+    loads: Literal["auto", "model", "probes"] = "auto"
+    levels: int = 2
+    probe: float = 1.0
 
     def __post_init__(self) -> None:
         if self.directions < 6:
             raise ValueError("directions: at least 6")
+        if self.levels < 2:
+            raise ValueError("levels: at least 2 (the limits of each varying load)")
+        if not self.probe > 0:
+            raise ValueError("probe: a force > 0 N")
 
     def run(self, model: Model, *, source: str | None = None) -> EnvelopeResult:
         """``source``: the model file's name, for messages."""
@@ -71,7 +108,12 @@ class Envelope:
             )
         point = model.points[names.index(self.point)]
         rigid = model.model_copy(
-            update={"joints": tuple(j.model_copy(update={"stiffness": None}) for j in model.joints)}
+            update={
+                "joints": tuple(
+                    j.model_copy(update=_without_springs(type(j).model_fields))
+                    for j in model.joints
+                )
+            }
         )
         asm = assemble(rigid)
         ws = Workspace(asm)
@@ -79,39 +121,228 @@ class Envelope:
         if self.plays == "max" and pmap.variables:
             highs = np.array([v.value.high for v in pmap.variables])
             ws = ws.with_radii(pmap.radii(highs)[0])
+        varying = any(
+            isinstance(c, Toleranced)
+            for case in (model.case_names or (None,))
+            for load in model.loads_of(case)
+            for vector in (load.force, load.torque)
+            for c in vector or ()
+        )
+        mode = self.loads
+        if mode == "auto":
+            mode = "model" if model.case_names or varying else "probes"
+        directions = np.vstack([AXES, sphere_directions(self.directions)])
         if point.body not in asm.body_index:  # a point of the ground does not move
-            u = np.vstack([AXES, sphere_directions(self.directions)])
-            zero = np.zeros_like(u)
-            return EnvelopeResult(self, point.body, u, np.zeros(len(u)), zero, zero[0], 0.0)
-        W = asm.wrench_work(point.body, point.at)[:, :3]
+            zero = np.zeros_like(directions)
+            return EnvelopeResult(
+                self,
+                point.body,
+                directions,
+                np.zeros(len(directions)),
+                zero,
+                zero[0],
+                0.0,
+                "a point of the ground: it does not move",
+                (),
+            )
         at = np.asarray(point.at)
 
-        def support(u: FloatArray) -> FloatArray:
-            batch = ws.solve_batch(u @ W.T)
-            motion = batch.body_displacement(point.body)
-            return np.asarray(motion[:, :3] + np.cross(motion[:, 3:], at))
+        def motion_of(work: FloatArray) -> FloatArray:
+            motion = ws.solve_batch(work).body_displacement(point.body)
+            d = np.asarray(motion[:, :3] + np.cross(motion[:, 3:], at))
+            d[np.abs(d) < DEFAULT.round_off * asm.s] = 0.0  # round-off of exact zeros
+            return d
 
-        u = np.vstack([AXES, sphere_directions(self.directions)])
-        d = support(u)
-        # climb from the farthest few to the largest displacement
+        if mode == "model":
+            d, over = self._over_model(rigid, asm, motion_of, source)
+            h = directions @ d.T  # (n, samples)
+            best = np.argmax(h, axis=1)
+            size = np.linalg.norm(d, axis=1)
+            top = int(np.argmax(size))
+            return EnvelopeResult(
+                self,
+                point.body,
+                directions,
+                h[np.arange(len(directions)), best],
+                d[best],
+                d[top],
+                float(size[top]),
+                over,
+                (),
+            )
+        return self._probed(rigid, ws, point.body, at, directions, motion_of)
+
+    def _over_model(
+        self, model: Model, asm: Any, motion_of: Any, source: str
+    ) -> tuple[FloatArray, str]:
+        """P's displacement under every load set the model takes, and those words."""
+        parts, counts = [], []
+        for case in model.case_names or (None,):
+            lmap = load_map(asm, case)
+            nl = len(lmap.variables)
+            if self.levels**nl > MOST_LOAD_SETS:
+                raise OptionError(
+                    f"{nl} load components vary{'' if case is None else f' in case {case!r}'}: "
+                    f"{self.levels}^{nl} load combinations are more than the envelope's "
+                    f"{MOST_LOAD_SETS:,}; fix some of them, lower --levels, or run a Monte "
+                    "Carlo study",
+                    source=source,
+                )
+            grids = [np.linspace(v.value.low, v.value.high, self.levels) for v in lmap.variables]
+            combos = list(itertools.product(*grids))
+            values = np.array(combos, dtype=float).reshape(len(combos), nl)
+            parts.append(motion_of(lmap.work(values)))
+            counts.append(len(values))
+        cases = model.case_names
+        each = (
+            f"the {self.levels} evenly spaced values of each varying load component"
+            if self.levels > 2
+            else "both limits of each varying load component"
+        )
+        over = (
+            f"the model's loads: {sum(counts):,} load set{'s' if sum(counts) > 1 else ''}"
+            + (f" over {len(cases)} load cases" if cases else "")
+            + (f", {each}" if any(c > 1 for c in counts) else "")
+        )
+        return np.vstack(parts), over
+
+    def _probed(
+        self,
+        model: Model,
+        ws: Workspace,
+        body: str,
+        at: FloatArray,
+        directions: FloatArray,
+        motion_of: Any,
+    ) -> EnvelopeResult:
+        """Unit probes at the point against the weights, in the directions held."""
+        asm = ws.asm
+        g0 = asm.work_of(model.weights())
+        W = asm.wrench_work(body, tuple(at))[:, :3] * self.probe
+        held_dirs, not_held, why = _held_directions(ws, g0, W, directions, self.directions)
+        if not len(held_dirs):
+            raise _none_held(self.point, not_held, why)
+        work = g0 + held_dirs @ W.T
+        d, ok, why = _solved_rows(work, motion_of, why)
+        if not np.all(ok):
+            lost = held_dirs[~ok]
+            not_held = [
+                *not_held,
+                f"{len(lost)} of {len(held_dirs)} probe directions lift a part off its "
+                f"supports, e.g. a force at the point along {_words(lost[0])}",
+            ]
+            held_dirs, d = held_dirs[ok], d[ok]
+        if not len(held_dirs):
+            raise _none_held(self.point, not_held, why)
+        # climb from the farthest few to the largest displacement, in held directions
         size = np.linalg.norm(d, axis=1)
-        best = np.argsort(size)[-4:]
-        far, far_d = float(size[best[-1]]), d[best[-1]]
-        for start in best:
+        top = int(np.argmax(size))
+        far, far_d = float(size[top]), d[top]
+        for start in np.argsort(size)[-4:]:
             cur = d[start]
             for _ in range(CLIMB_STEPS):
                 n = float(np.linalg.norm(cur))
                 if n == 0.0:
                     break
-                nxt = support((cur / n)[None, :])[0]
-                grown = float(np.linalg.norm(nxt))
-                if grown <= n * (1 + 1e-13):
+                u = cur / n
+                if not _is_held(ws, g0, W, u):
                     break
-                cur = nxt
+                nxt, fine, _ = _solved_rows((g0 + W @ u)[None, :], motion_of, why)
+                if not fine[0] or float(np.linalg.norm(nxt[0])) <= n * (1 + 1e-13):
+                    break
+                cur = nxt[0]
             if float(np.linalg.norm(cur)) > far:
                 far, far_d = float(np.linalg.norm(cur)), cur
-        h = np.einsum("ij,ij->i", u, d)
-        return EnvelopeResult(self, point.body, u, h, d, far_d, far)
+        h = np.einsum("ij,ij->i", held_dirs, d)
+        standing = "the weights" if np.any(g0) else "no standing load"
+        over = (
+            f"probe forces of {self.probe:g} N at the point in {len(held_dirs)} directions "
+            f"the mechanism holds, against {standing}"
+        )
+        return EnvelopeResult(self, body, held_dirs, h, d, far_d, far, over, tuple(not_held))
+
+
+def _without_springs(fields: Any) -> dict[str, None]:
+    return {name: None for name in ("stiffness", "torsional_stiffness") if name in fields}
+
+
+def _words(u: FloatArray) -> str:
+    return "[" + ", ".join(f"{c + 0.0:.3g}" for c in u) + "]"
+
+
+def _none_held(
+    point: str, not_held: list[str], why: UnboundedMechanismError | None
+) -> UnboundedMechanismError:
+    assert why is not None  # no direction is held only after one was found not held
+    return UnboundedMechanismError(
+        f"no force at point '{point}' is held: {'; '.join(not_held)}",
+        body=why.body,
+        motion=why.motion,
+        direction=why.direction,
+    )
+
+
+def _held_directions(
+    ws: Workspace, g0: FloatArray, W: FloatArray, directions: FloatArray, n: int
+) -> tuple[FloatArray, list[str], UnboundedMechanismError | None]:
+    """The probe directions that drive no free motion (a subspace of the
+    sphere's), the words for those that do, and the free motion they drive."""
+    from jointplay.solver import held
+
+    held.check_driven(ws, g0)  # the weights alone drive a free motion: exit 3, as a solve
+    if ws.N.shape[1] == 0:
+        return directions, [], None
+    C = np.asarray(ws.N.T @ W)  # (free motions, 3): what a unit probe drives
+    _, sv, Vt = np.linalg.svd(C)
+    rank = int(np.sum(sv > ws.settings.drive_tolerance * max(float(sv[0]), 1e-300)))
+    if rank == 0:
+        return directions, [], None
+    basis = Vt[rank:].T  # (3, k): the probe directions that drive nothing
+    driven = Vt[:rank]
+    why = held.unbounded(ws.asm, np.asarray(ws.N @ (C @ driven[0])))
+    what = str(why).split(" is not held by any joint")[0]  # "body 'door': rotation about ..."
+    not_held = [
+        f"a force at the point with a part along {_words(driven[0])}"
+        + (f" or {_words(driven[1])}" if rank > 1 else "")
+        + f" drives {what}, which no joint holds"
+    ]
+    k = basis.shape[1]
+    if k == 0:
+        return np.zeros((0, 3)), not_held, why
+    if k == 1:
+        out = np.vstack([basis[:, 0], -basis[:, 0]])
+    else:  # a great circle, evenly
+        theta = 2 * np.pi * np.arange(max(n, 4)) / max(n, 4)
+        out = np.outer(np.cos(theta), basis[:, 0]) + np.outer(np.sin(theta), basis[:, 1])
+    return out, not_held, why
+
+
+def _is_held(ws: Workspace, g0: FloatArray, W: FloatArray, u: FloatArray) -> bool:
+    if ws.N.shape[1] == 0:
+        return True
+    g = g0 + W @ u
+    drive = np.asarray(ws.N.T @ g)
+    return bool(np.linalg.norm(drive) <= ws.settings.drive_tolerance * np.linalg.norm(g))
+
+
+def _solved_rows(
+    work: FloatArray, motion_of: Any, why: UnboundedMechanismError | None
+) -> tuple[FloatArray, Any, UnboundedMechanismError | None]:
+    """P's displacement per row, which rows are held (a row that lifts a part
+    off its one-sided supports has no equilibrium), and why one was not."""
+    try:
+        return motion_of(work), np.ones(len(work), dtype=bool), why
+    except UnboundedMechanismError:
+        pass
+    d = np.zeros((len(work), 3))
+    ok = np.zeros(len(work), dtype=bool)
+    for i, row in enumerate(work):
+        try:
+            d[i] = motion_of(row[None, :])[0]
+            ok[i] = True
+        except UnboundedMechanismError as exc:
+            why = exc
+    return d, ok, why
 
 
 @dataclass(frozen=True)
@@ -127,12 +358,19 @@ class EnvelopeResult:
     hull: FloatArray  # (n, 3) mm
     largest_vector: FloatArray  # (3,) mm
     largest: float  # mm
+    #: Over which loads, in words (``Envelope.loads``).
+    over: str = ""
+    #: The directions of a probe force that the mechanism does not hold, in words.
+    not_held: tuple[str, ...] = ()
 
     @property
     def extent(self) -> FloatArray:
         """(3, 2): per global axis, the least and the greatest displacement (mm)
-        (exact: the support values along -X, +X, ...)."""
-        return np.column_stack([-self.h[3:6], self.h[0:3]])
+        among the support points: exact when the directions include +-X, +-Y,
+        +-Z (every probe held), or over the model's loads."""
+        if not len(self.hull):
+            return np.zeros((3, 2))
+        return np.column_stack([self.hull.min(axis=0), self.hull.max(axis=0)])
 
     def contains(self, displacement: FloatArray, tol: float = 1e-9) -> FloatArray:
         """(N,) bool: each displacement (N, 3) is inside every supporting plane."""
@@ -147,6 +385,8 @@ class EnvelopeResult:
             "point": self.settings.point,
             "body": self.body,
             "plays": self.settings.plays,
+            "loads": self.over,
+            "not_held": list(self.not_held),
             "largest_displacement": self.largest,
             "largest_direction": direction,
             "largest_vector": self.largest_vector.tolist(),

@@ -8,6 +8,7 @@ from jointplay.model.joints.point import PointOnPlane
 from jointplay.model.joints.prismatic import Prismatic
 from jointplay.model.joints.revolute import Revolute
 from jointplay.model.joints.rigid import Rigid
+from jointplay.model.joints.slot import Slot
 from jointplay.model.joints.sphere_in_cylinder import SphereInCylinder
 from jointplay.model.joints.spherical import Spherical
 
@@ -21,6 +22,7 @@ __all__ = [
     "Prismatic",
     "Revolute",
     "Rigid",
+    "Slot",
     "SphereInCylinder",
     "Spherical",
 ]

@@ -57,6 +57,11 @@ class Contact:
     point: FloatArray
     offset: FloatArray | None = None  # (6,): a face's normal row; None for a plain ball
     lever: FloatArray | None = None  # (3, k): where the centre of pressure goes
+    #: The contact's own spring (N/mm at its rows' scale); None: the joint's ``stiffness``.
+    stiffness: float | None = None
+    #: A contact that limits a rotation (a drive): the lever (mm) by which its
+    #: rows turn the angle into a length. None: a contact of lengths.
+    turn_lever: float | None = None
 
     @property
     def one_sided(self) -> bool:
@@ -166,6 +171,11 @@ class Joint(BaseModel):
 
     def contacts(self) -> tuple[Contact, ...]:
         raise NotImplementedError
+
+    def play_length(self, field: str, play: float) -> float:
+        """A play of this joint as a length (mm), to compare with lengths: an
+        angular play (``ANGULAR_PLAYS``) at the radius where it acts."""
+        return play
 
     def plays(self) -> dict[str, float]:
         """The joint's plays by field name (mm; a ``Toleranced`` one as

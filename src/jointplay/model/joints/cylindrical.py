@@ -9,6 +9,10 @@ disc of radius J/2 across the axis. Axial slide and spin are free::
       | (o) |  shaft  | (o) |      |(delta_y, delta_z)(+L/2 x)| <= J/2
       |  .  |---------|  .  |      slide along x and spin about x free
       <------- L ------->
+
+An ``axial_clearance`` Ja limits the slide to +-Ja/2 (a ball screw's nut, a
+shoulder): contact ``axial``. A ``backlash`` b holds the spin by a drive
+within +-b/2 (``drive.py``): contact ``drive``.
 """
 
 from __future__ import annotations
@@ -18,8 +22,9 @@ from typing import Literal, Self
 import numpy as np
 from pydantic import model_validator
 
-from jointplay.model.fields import PositiveLength
-from jointplay.model.joints.base import Contact, Joint, point_rows
+from jointplay.model.fields import Play, PositiveLength
+from jointplay.model.joints.base import Contact, point_rows
+from jointplay.model.joints.drive import Driven
 
 #: An engaged length below this fraction of the clearance holds no tilt: its
 #: two end discs are one circle, to round-off (and the cone program's rows
@@ -45,9 +50,19 @@ def end_contacts(length: float, clearance: float) -> tuple[Contact, ...]:
     return tuple(out)
 
 
-class Cylindrical(Joint):
+def axial_contact(axial_clearance: float | None) -> tuple[Contact, ...]:
+    """The centre's slide along the axis within +-Ja/2 (none if Ja is None)."""
+    if axial_clearance is None:
+        return ()
+    centre = np.zeros(3)
+    return (Contact("axial", "ball", point_rows(centre, "x"), axial_clearance / 2, centre),)
+
+
+class Cylindrical(Driven):
     type: Literal["cylindrical"] = "cylindrical"
     length: PositiveLength
+    #: Total play along the axis; None: the slide is free.
+    axial_clearance: Play | None = None
 
     @model_validator(mode="after")
     def _check_length(self) -> Self:
@@ -55,7 +70,11 @@ class Cylindrical(Joint):
         return self
 
     def contacts(self) -> tuple[Contact, ...]:
-        return end_contacts(self.length, self.clearance)
+        return (
+            *end_contacts(self.length, self.clearance),
+            *axial_contact(self.axial_clearance),
+            *self.drive_contacts(),
+        )
 
     @property
     def size(self) -> float:

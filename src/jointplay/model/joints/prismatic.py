@@ -19,6 +19,9 @@ Each of the eight contacts is two-sided (|.| <= J/2 covers both faces); a
 contact's force acts along y (or z) at its edge point, reported on the
 slider's mid-plane (y = 0 for a y contact, z = 0 for a z contact), which
 gives the same moment.
+
+An ``axial_clearance`` Ja limits the slide to +-Ja/2 (a ball screw's nut with
+axial backlash Ja): contact ``axial``.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
 from jointplay.model.joints.base import Contact, Joint, point_rows
+from jointplay.model.joints.cylindrical import axial_contact
 
 
 def _sign(v: float) -> str:
@@ -45,6 +49,8 @@ class Prismatic(Joint):
     clearance: Play | None = None  # type: ignore[assignment]
     clearance_y: Play | None = None
     clearance_z: Play | None = None
+    #: Total play along the slide (a screw's axial backlash); None: the slide is free.
+    axial_clearance: Play | None = None
 
     @model_validator(mode="after")
     def _check_play(self) -> Prismatic:
@@ -78,7 +84,7 @@ class Prismatic(Joint):
                 p = np.array([x, y, 0.0])
                 name = f"z x{_sign(x)} y{_sign(y)}"
                 out.append(Contact(name, "ball", point_rows(p, "z"), jz / 2, p))
-        return tuple(out)
+        return (*out, *axial_contact(self.axial_clearance))
 
     @property
     def size(self) -> float:

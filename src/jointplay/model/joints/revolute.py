@@ -9,21 +9,23 @@ is free::
       |  .  |---------|  .  |      |(delta_y, delta_z)(+-L/2 x)| <= J/2
       | (o) |  shaft  | (o) |      |delta_x(0)| <= Ja/2
       |  .  |---------|  .  |      spin about x free
+
+A ``backlash`` b holds the spin by a drive within +-b/2 (``drive.py``).
 """
 
 from __future__ import annotations
 
 from typing import Literal, Self
 
-import numpy as np
 from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
-from jointplay.model.joints.base import Contact, Joint, point_rows
-from jointplay.model.joints.cylindrical import check_engagement, end_contacts
+from jointplay.model.joints.base import Contact
+from jointplay.model.joints.cylindrical import axial_contact, check_engagement, end_contacts
+from jointplay.model.joints.drive import Driven
 
 
-class Revolute(Joint):
+class Revolute(Driven):
     type: Literal["revolute"] = "revolute"
     length: PositiveLength
     axial_clearance: Play
@@ -34,9 +36,11 @@ class Revolute(Joint):
         return self
 
     def contacts(self) -> tuple[Contact, ...]:
-        centre = np.zeros(3)
-        axial = Contact("axial", "ball", point_rows(centre, "x"), self.axial_clearance / 2, centre)
-        return (*end_contacts(self.length, self.clearance), axial)
+        return (
+            *end_contacts(self.length, self.clearance),
+            *axial_contact(self.axial_clearance),
+            *self.drive_contacts(),
+        )
 
     @property
     def size(self) -> float:

@@ -1,0 +1,73 @@
+"""Slot joint: a pin of engagement ``length`` L in a slot along ``along``.
+
+Joint frame: x = the pin's ``axis``, y = ``along`` (its part across the
+axis), z = x cross y, across the slot. At both ends of the engagement,
+x = -L/2 and x = +L/2, the pin's axis point stays within the slot's width:
+the displacement across, delta_z, within +-J/2 (``clearance`` = J, the slot's
+width less the pin's diameter). Along the slot the pin is free, or, with
+``slot_length`` Js (the slot's length less the pin's diameter), within
++-Js/2 of its place at both ends. The spin about the pin is free, and so is
+the tilt along the slot unless ``slot_length`` is given; the tilt across it
+is limited by the engagement::
+
+          y (along) ^
+                    |     ___________________
+                    |    (    (o) -> free    )   |delta_z(+-L/2 x)| <= J/2
+                    |     -------------------    delta_y free, or
+                    +---------------------> z    |delta_y(+-L/2 x)| <= Js/2
+                  (pin axis x out of the page)
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Literal, Self
+
+import numpy as np
+from pydantic import model_validator
+
+from jointplay.geometry import FloatArray, cross, is_parallel, joint_frame
+from jointplay.model.fields import Direction, NonNegativeLength, PositiveLength
+from jointplay.model.joints.base import Contact, Joint, point_rows
+from jointplay.model.joints.cylindrical import check_engagement
+
+
+class Slot(Joint):
+    type: Literal["slot"] = "slot"
+    along: Direction
+    length: PositiveLength
+    #: Total play along the slot; None: the pin slides freely along it.
+    slot_length: NonNegativeLength | None = None
+
+    @model_validator(mode="after")
+    def _check_slot(self) -> Self:
+        if self.up is not None:
+            raise ValueError("a slot's joint frame is set by 'axis' and 'along'; remove 'up'")
+        if is_parallel(np.array(self.along), np.array(self.axis)):
+            raise ValueError(
+                f"along {list(self.along)} is parallel to the pin's axis {list(self.axis)}; "
+                "give the slot's direction across the pin"
+            )
+        check_engagement(self.length, self.clearance)
+        return self
+
+    @cached_property
+    def R_world_joint(self) -> FloatArray:
+        """x = axis, y = along (across the axis), z = x cross y."""
+        return joint_frame(self.axis, cross(np.array(self.axis), np.array(self.along)))
+
+    def contacts(self) -> tuple[Contact, ...]:
+        out = []
+        for end, sign in (("-", -1.0), ("+", 1.0)):
+            p = np.array([sign * self.length / 2, 0.0, 0.0])
+            out.append(Contact(f"across{end}", "ball", point_rows(p, "z"), self.clearance / 2, p))
+        if self.slot_length is not None:
+            for end, sign in (("-", -1.0), ("+", 1.0)):
+                p = np.array([sign * self.length / 2, 0.0, 0.0])
+                rows = point_rows(p, "y")
+                out.append(Contact(f"along{end}", "ball", rows, self.slot_length / 2, p))
+        return tuple(out)
+
+    @property
+    def size(self) -> float:
+        return self.length

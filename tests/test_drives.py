@@ -1,0 +1,285 @@
+"""Drives with backlash, axial plays of screws, and pins in slots, against closed forms."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import jointplay
+from conftest import MM, RAD
+from jointplay import UnboundedMechanismError
+from jointplay.studies.montecarlo import MonteCarlo
+
+ARM = 100.0  # mm, from the pivot to where the force acts
+
+
+def arm(joint: dict[str, object], force: float = 10.0) -> jointplay.Model:
+    """An arm on a pivot about global Z, pushed across at its tip (torque F * ARM)."""
+    pivot: dict[str, object] = {
+        "name": "pivot",
+        "type": "revolute",
+        "between": ["ground", "arm"],
+        "at": [0, 0, 0],
+        "axis": [0, 0, 1],
+        "length": 20,
+        "clearance": 0.02,
+        "axial_clearance": 0.01,
+    }
+    pivot.update(joint)
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "ground", "ground": True}, {"name": "arm"}],
+            "joints": [pivot],
+            "loads": [{"body": "arm", "at": [ARM, 0, 0], "force": [0, force, 0]}],
+            "points": [{"name": "tip", "body": "arm", "at": [ARM, 0, 0]}],
+        }
+    )
+
+
+def solved(model: jointplay.Model) -> jointplay.Result:
+    result = jointplay.solve(model)
+    result.check()
+    return result
+
+
+@pytest.mark.parametrize("force", [10.0, -7.0])
+def test_an_arm_turns_by_half_its_backlash_and_the_drive_takes_the_torque(force: float) -> None:
+    b = math.radians(0.2)
+    r = solved(arm({"backlash": "0.2 deg"}, force))
+    jr = r.joints["pivot"]
+    sign = math.copysign(1.0, force)
+    assert jr.rotation[0] == pytest.approx(sign * b / 2, abs=RAD)
+    np.testing.assert_allclose(jr.rotation[1:], 0.0, atol=RAD)
+    # the bore's play across, then the turn: the tip moves by J/2 + ARM * b/2
+    tip = r.points["tip"].displacement
+    np.testing.assert_allclose(tip, [0.0, sign * (0.01 + ARM * b / 2), 0.0], atol=MM)
+    drive = {c.name: c for c in jr.contacts}["drive"]
+    assert drive.in_contact and drive.unit == "rad"
+    np.testing.assert_allclose(drive.force, 0.0, atol=1e-12)
+    # statics: the drive's reaction torque balances F * ARM about the axis (joint x)
+    assert drive.torque[0] == pytest.approx(-force * ARM, rel=1e-12)
+    np.testing.assert_allclose(drive.torque[1:], 0.0, atol=1e-9)
+    assert jr.reaction_moment[0] == pytest.approx(-force * ARM, rel=1e-12)
+
+
+def test_a_stiff_drive_turns_past_its_backlash_by_torque_over_stiffness() -> None:
+    b, k, force = math.radians(0.2), 2e6, 10.0  # N*mm/rad
+    r = solved(arm({"backlash": "0.2 deg", "torsional_stiffness": f"{k} N*mm/rad"}, force))
+    jr = r.joints["pivot"]
+    assert jr.rotation[0] == pytest.approx(b / 2 + force * ARM / k, abs=RAD)
+    drive = {c.name: c for c in jr.contacts}["drive"]
+    assert drive.penetration == pytest.approx(force * ARM / k, abs=RAD)
+    assert drive.torque[0] == pytest.approx(-force * ARM, rel=1e-9)
+    # the same stiffness in other units: 2e6 N*mm/rad is 34.9 N*m/deg
+    r2 = solved(
+        arm({"backlash": "0.2 deg", "torsional_stiffness": f"{k / 1e3 * math.pi / 180} N*m/deg"})
+    )
+    assert r2.joints["pivot"].rotation[0] == pytest.approx(jr.rotation[0], abs=RAD)
+
+
+@pytest.mark.parametrize(
+    "backlash",
+    [
+        0.00349065850398866,
+        "0.2 deg",
+        "12 arcmin",
+        {"length": "52.3598775598 um", "radius": "15 mm"},
+    ],
+)
+def test_backlash_in_any_unit_is_the_same_angle(backlash: object) -> None:
+    r = solved(arm({"backlash": backlash}))
+    assert r.joints["pivot"].rotation[0] == pytest.approx(math.radians(0.1), abs=RAD)
+
+
+def test_zero_backlash_is_an_ideal_drive_and_no_drive_leaves_the_spin_free() -> None:
+    r = solved(arm({"backlash": 0}))
+    assert r.joints["pivot"].rotation[0] == pytest.approx(0.0, abs=RAD)
+    with pytest.raises(UnboundedMechanismError, match="rotation about the global Z axis"):
+        jointplay.solve(arm({}))
+
+
+def test_a_cylindrical_joint_takes_a_drive_and_an_axial_play() -> None:
+    model = arm({"type": "cylindrical", "axial_clearance": 0.04, "backlash": "1 mrad"})
+    pushed = model.replace(
+        loads=[
+            {"body": "arm", "at": [ARM, 0, 0], "force": [0, 10, 0]},
+            {"body": "arm", "at": [0, 0, 0], "force": [0, 0, -3]},
+        ]
+    )
+    jr = solved(pushed).joints["pivot"]
+    assert jr.translation[0] == pytest.approx(-0.02, abs=MM)  # axial play along joint x = Z
+    assert jr.rotation[0] == pytest.approx(0.5e-3, abs=RAD)
+    with pytest.raises(UnboundedMechanismError):  # without its axial play the slide is free
+        jointplay.solve(
+            pushed.replace(
+                joints=[
+                    {
+                        **pushed.joints[0].model_dump(exclude_none=True),
+                        "axial_clearance": None,
+                    }
+                ]
+            )
+        )
+
+
+def test_a_screw_nut_on_a_prismatic_slide_holds_it_within_its_axial_play() -> None:
+    model = jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "bed", "ground": True}, {"name": "table"}],
+            "joints": [
+                {
+                    "name": "guide",
+                    "type": "prismatic",
+                    "between": ["bed", "table"],
+                    "at": [0, 0, 0],
+                    "length": 200,
+                    "width": 60,
+                    "height": 30,
+                    "clearance": 0.02,
+                    "axial_clearance": "30 um",
+                }
+            ],
+            "loads": [{"body": "table", "at": [0, 0, 0], "force": [-50, 0, 0]}],
+        }
+    )
+    jr = solved(model).joints["guide"]
+    assert jr.translation[0] == pytest.approx(-0.015, abs=MM)
+    axial = {c.name: c for c in jr.contacts}["axial"]
+    assert axial.force[0] == pytest.approx(50.0, rel=1e-12)
+
+
+def slot(joint: dict[str, object], force: list[float]) -> jointplay.Model:
+    """A pin (body 'pin') in a slot of the ground along X, the pin's axis Z."""
+    base: dict[str, object] = {
+        "name": "slot",
+        "type": "slot",
+        "between": ["plate", "pin"],
+        "at": [0, 0, 0],
+        "axis": [0, 0, 1],
+        "along": [1, 0, 0],
+        "length": 10,
+        "clearance": 0.04,
+    }
+    base.update(joint)
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "plate", "ground": True}, {"name": "pin"}],
+            "joints": [base],
+            "loads": [{"body": "pin", "at": [0, 0, 0], "force": force}],
+        }
+    )
+
+
+def test_a_pin_in_a_slot_has_its_play_across_and_is_free_along() -> None:
+    r = solved(slot({}, [0, 5, 0]))
+    jr = r.joints["slot"]
+    np.testing.assert_allclose(jr.R_world_joint[:, 1], [1, 0, 0], atol=1e-15)  # y along
+    np.testing.assert_allclose(jr.R_world_joint[:, 2], [0, 1, 0], atol=1e-15)  # z = x cross y
+    np.testing.assert_allclose(jr.translation, [0, 0, 0.02], atol=MM)
+    np.testing.assert_allclose(r.bodies["pin"].translation, [0, 0.02, 0], atol=MM)
+    with pytest.raises(UnboundedMechanismError, match="translation along the global X axis"):
+        jointplay.solve(slot({}, [1, 5, 0]))
+
+
+def test_a_slot_length_limits_the_slide_and_the_engagement_the_tilt() -> None:
+    r = solved(slot({"slot_length": 0.5}, [2, 0, 0]))
+    np.testing.assert_allclose(r.bodies["pin"].translation, [0.25, 0, 0], atol=MM)
+    # a moment tilting the pin across the slot: its ends go +-J/2, the tilt is J / L
+    tilted = slot({}, [0, 0, 0]).replace(
+        loads=[{"body": "pin", "torque": [1, 0, 0]}]  # about X: the ends move along Y
+    )
+    r = solved(tilted)
+    np.testing.assert_allclose(r.bodies["pin"].rotation, [0.04 / 10, 0, 0], atol=RAD)
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({"up": [0, 1, 0]}, "remove 'up'"),
+        ({"along": [0, 0, 2]}, "parallel to the pin's axis"),
+        ({"length": 1e-6}, "less than a thousandth of the clearance"),
+    ],
+)
+def test_a_bad_slot_is_refused(change: dict[str, object], words: str) -> None:
+    with pytest.raises(jointplay.ModelError, match=words):
+        slot(change, [0, 1, 0])
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({"torsional_stiffness": 1e6}, "torsional_stiffness needs a drive"),
+        ({"backlash": {"length": 0.02}}, r"expected an angle, \{length, radius\}"),
+        ({"backlash": {"length": 0.02, "radius": 0}}, "radius: expected a length > 0"),
+        ({"backlash": "2 mm"}, "expected an angle"),
+        ({"backlash": -0.001}, "expected a value >= 0"),
+        ({"backlash": {"min": "0.3 deg", "max": "0.1 deg"}}, "swap them"),
+        ({"backlash": "0.1 deg", "torsional_stiffness": 1e-9}, "holds nothing"),
+    ],
+)
+def test_a_bad_drive_is_refused(change: dict[str, object], words: str) -> None:
+    with pytest.raises(jointplay.ModelError, match=words):
+        arm(change)
+
+
+def test_a_toleranced_backlash_is_drawn_and_each_sample_turns_by_its_own_half(
+    tmp_path: Path,
+) -> None:
+    model = arm({"backlash": {"min": "3 arcmin", "max": "9 arcmin"}, "axial_clearance": 0})
+    result = MonteCarlo(samples=200, seed=2, chunk=100).run(model)
+    assert result.play_labels == ("pivot.backlash",)
+    b = result.plays[:, 0]
+    assert np.all((b >= math.radians(3 / 60)) & (b <= math.radians(9 / 60)))
+    expected_y = 0.01 + ARM * b / 2
+    np.testing.assert_allclose(result.displacement[:, 0, 1], expected_y, atol=MM)
+
+
+GALLERY = Path(__file__).resolve().parents[1] / "examples" / "gallery"
+
+
+@pytest.mark.parametrize(
+    ("name", "point"),
+    [
+        ("four_bar.yaml", "fingertip"),
+        ("spindle.yaml", "tool tip"),
+        ("located_plate.yaml", "drilled hole"),
+    ],
+)
+def test_the_real_mechanisms_solve_and_give_an_envelope_and_a_monte_carlo(
+    name: str, point: str
+) -> None:
+    from jointplay.studies.envelope import Envelope
+
+    model = jointplay.load(GALLERY / name)
+    solved(model)
+    env = Envelope(point, directions=40).run(model)
+    assert env.largest > 0 and env.not_held == ()
+    mc = MonteCarlo(samples=200, seed=1, chunk=100).run(model)
+    assert mc.samples == 200 and len(mc.play_labels) >= 2
+    assert mc.feasibility_mm < 1e-9 and mc.equilibrium_residual < 1e-8
+
+
+def test_the_spindle_drive_takes_the_cutting_torque() -> None:
+    model = jointplay.load(GALLERY / "spindle.yaml")
+    r = solved(model)
+    drive = {c.name: c for c in r.joints["rear bearing"].contacts}["drive"]
+    # the cut: 300 N along Y and -150 N along Z at 20 mm above the axis X
+    cut = np.cross([-80.0, 0.0, 20.0], [-50.0, 300.0, -150.0])
+    assert drive.torque[0] == pytest.approx(-cut[0], rel=1e-10)
+    # past its backlash by T / k: the belt's 40 N*m/deg
+    k = 40e3 / math.radians(1.0)
+    b = float(model.joint("rear bearing").backlash)  # type: ignore[attr-defined]
+    spin = r.joints["rear bearing"].rotation[0]
+    assert abs(spin) == pytest.approx(b / 2 + abs(cut[0]) / k, abs=RAD)
+
+
+def test_the_located_plate_stands_on_its_buttons() -> None:
+    r = solved(jointplay.load(GALLERY / "located_plate.yaml"))
+    pushes = [r.joints[f"button{i}"].contacts[0].force[0] for i in (1, 2, 3)]
+    assert all(p > 0 for p in pushes)
+    assert sum(pushes) == pytest.approx(4 * 9.81 + 80.0, rel=1e-12)  # weight and drill
+    slot = {c.name: c for c in r.joints["slot pin"].contacts}
+    assert set(slot) == {"across-", "across+"}  # free along the slot: no contact there
