@@ -283,3 +283,21 @@ def test_the_located_plate_stands_on_its_buttons() -> None:
     assert sum(pushes) == pytest.approx(4 * 9.81 + 80.0, rel=1e-12)  # weight and drill
     slot = {c.name: c for c in r.joints["slot pin"].contacts}
     assert set(slot) == {"across-", "across+"}  # free along the slot: no contact there
+
+
+def test_the_pictures_show_a_drive_as_a_note_and_a_slot_as_two_walls(tmp_path: Path) -> None:
+    from jointplay.present.plot import mechanism_figure, save
+    from jointplay.present.scene import joint_view
+
+    for name in ("four_bar.yaml", "located_plate.yaml"):
+        model = jointplay.load(GALLERY / name)
+        result = solved(model)
+        out = save(mechanism_figure(model, result), tmp_path / f"{name}.png")
+        assert out.stat().st_size > 10_000
+    bar = jointplay.load(GALLERY / "four_bar.yaml")
+    motor = joint_view(bar.joint("motor"), solved(bar).joints["motor"])
+    assert "drive (spin): +0.001745 rad of ±0.001745 rad (touching)" in motor.note
+    assert [p.label for p in motor.points] == ["end-", "end+"]  # no marker for the drive
+    plate = jointplay.load(GALLERY / "located_plate.yaml")
+    view = joint_view(plate.joint("slot pin"), solved(plate).joints["slot pin"])
+    assert view.rectangle == (math.inf, float(plate.joint("slot pin").clearance) / 2)

@@ -10,6 +10,7 @@ PNG, SVG or PDF. The geometry comes from ``scene.py``.
 
 from __future__ import annotations
 
+import logging
 import math
 import textwrap
 from collections.abc import Sequence
@@ -31,6 +32,10 @@ from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
 from jointplay.present.outputs import check_figure_path
 from jointplay.present.scene import JointView, Scene, joint_view, mechanism_scene
+
+# a stale font cache makes matplotlib log each font it falls back from; the
+# figure is drawn all the same, and only jointplay's own words reach stderr
+logging.getLogger("matplotlib.font_manager").setLevel(logging.ERROR)
 
 if TYPE_CHECKING:
     from mpl_toolkits.mplot3d.axes3d import Axes3D
@@ -412,7 +417,14 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
             )
         if view.rectangle is not None:
             hy, hz = view.rectangle
-            ax.add_patch(Rectangle((-hy, -hz), 2 * hy, 2 * hz, fill=False, color=DOMAIN))
+            if math.isinf(hy):  # free along y: the slot's two walls
+                for level in (-hz, hz):
+                    ax.axhline(level, color=DOMAIN, linewidth=1.0)
+            elif math.isinf(hz):
+                for level in (-hy, hy):
+                    ax.axvline(level, color=DOMAIN, linewidth=1.0)
+            else:
+                ax.add_patch(Rectangle((-hy, -hz), 2 * hy, 2 * hz, fill=False, color=DOMAIN))
         if len(view.points) > 1 and not view.rectangle:  # the axis seen end on
             P = np.array([p.at for p in view.points])
             ax.plot(P[:, 0], P[:, 1], color=INITIAL, linewidth=0.8)

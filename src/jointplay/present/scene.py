@@ -269,6 +269,8 @@ def _domain_glyph(
         c = at - n * m * cone.radius
         corners = [c + half * (su * u + sv * v) for su, sv in ((1, 1), (-1, 1), (-1, -1), (1, -1))]
         return [np.vstack([*corners, corners[0]])]
+    if cone.turn_lever is not None:  # a drive limits a spin, no point's position
+        return []
     directions = cone.rows[:, :3]
     r = m * cone.radius
     world = directions @ R.T  # each limited direction in global axes
@@ -303,7 +305,8 @@ class JointView:
     ``plane == "yz"``: seen along the joint axis (the paper's figure 6):
     ``circles`` are clearance circles (radius, mm; ``sphere`` marks a
     sphere's section, cut at the contact point's x), ``rectangle`` the half
-    plays (y, z) of a slot. ``plane == "x-across"``: seen across the axis,
+    plays (y, z) of a slider (``inf``: free that way, a pin in a slot).
+    ``plane == "x-across"``: seen across the axis,
     for a face or a plane: ``walls`` are the positions along x that b may not
     pass; ``outline`` is b's face. ``note`` says what the view cannot show (a
     revolute joint's axial play).
@@ -327,7 +330,7 @@ class JointView:
         point touching its plane with no gap)."""
         spans = [r for r, _ in self.circles] + [abs(w) for w in self.walls]
         if self.rectangle is not None:
-            spans += list(self.rectangle)
+            spans += [h for h in self.rectangle if math.isfinite(h)]
         spans += [max(abs(p.at[0]), abs(p.at[1])) for p in self.points if self.plane == "yz"]
         spans += [abs(p.at[0]) for p in self.points]
         return max(spans, default=0.0)
@@ -363,6 +366,12 @@ def _joint_view(joint: Joint, jr: JointResult) -> JointView:
     notes: list[str] = []
     for cone, contact in zip(cones, jr.contacts, strict=True):
         d = delta(cone.point)
+        if cone.turn_lever is not None:  # a drive: the spin, which no picture of a point shows
+            notes.append(
+                f"{contact.name} (spin): {w[0]:+.4g} rad of ±{cone.radius / cone.turn_lever:.4g} "
+                "rad" + (" (touching)" if contact.in_contact else "")
+            )
+            continue
         dirs = "".join(_axis_name(row) for row in cone.rows[:, :3]) if cone.kind == "ball" else ""
         if dirs == "x":  # an axial stop: not seen along the axis
             notes.append(
@@ -387,8 +396,11 @@ def _joint_view(joint: Joint, jr: JointResult) -> JointView:
         points.append(ViewPoint((float(d[1]), float(d[2])), label, contact.in_contact))
     points = _merged(points, 1e-6 * max((r for r, _ in circles), default=1.0))
     rectangle = None
-    if half_y is not None or half_z is not None:
-        rectangle = (half_y or 0.0, half_z or 0.0)
+    if half_y is not None or half_z is not None:  # a direction with no limit is free (a slot)
+        rectangle = (
+            math.inf if half_y is None else half_y,
+            math.inf if half_z is None else half_z,
+        )
     return JointView(
         joint.name,
         joint.type_name,
