@@ -215,6 +215,8 @@ def test_a_bad_slot_is_refused(change: dict[str, object], words: str) -> None:
         ({"backlash": {"length": 0.02}}, r"expected an angle, \{length, radius\}"),
         ({"backlash": {"length": 0.02, "radius": 0}}, "radius: expected a length > 0"),
         ({"backlash": "2 mm"}, "expected an angle"),
+        ({"backlash": "2 percent"}, "expected an angle, got '2 percent', which is dimensionless"),
+        ({"backlash": "0.1 deg", "torsional_stiffness": "3e6 N*mm"}, "angle differs from"),
         ({"backlash": -0.001}, "expected a value >= 0"),
         ({"backlash": {"min": "0.3 deg", "max": "0.1 deg"}}, "swap them"),
         ({"backlash": "0.1 deg", "torsional_stiffness": 1e-9}, "holds nothing"),
@@ -297,7 +299,7 @@ def test_the_pictures_show_a_drive_as_a_note_and_a_slot_as_two_walls(tmp_path: P
     bar = jointplay.load(GALLERY / "four_bar.yaml")
     motor = joint_view(bar.joint("motor"), solved(bar).joints["motor"])
     assert "drive (spin): +0.001745 rad of ±0.001745 rad (touching)" in motor.note
-    assert [p.label for p in motor.points] == ["end-", "end+"]  # no marker for the drive
+    assert not any("drive" in p.label for p in motor.points)  # no marker for the drive
     plate = jointplay.load(GALLERY / "located_plate.yaml")
     view = joint_view(plate.joint("slot pin"), solved(plate).joints["slot pin"])
     assert view.rectangle == (math.inf, float(plate.joint("slot pin").clearance) / 2)

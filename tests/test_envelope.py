@@ -199,13 +199,14 @@ def test_an_envelope_over_load_ranges_takes_every_corner() -> None:
         "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
     }
     model = jointplay.model_from_dict(data)
-    env = Envelope("c", directions=50).run(model)
+    env = Envelope("c", directions=50, levels=2).run(model)
     assert "2 load sets" in env.over
     corner = 0.2 * np.array([5.0, 3.0, 0.0]) / np.hypot(5, 3)
     np.testing.assert_allclose(env.extent[0], [-corner[0], corner[0]], atol=1e-9)
     np.testing.assert_allclose(env.extent[1], [corner[1], corner[1]], atol=1e-9)
-    # a third level adds the mean load, straight along Y: the ball's full J/2
-    finer = Envelope("c", directions=50, levels=3).run(model)
+    # the default third level adds the mean load, straight along Y: the ball's full J/2
+    finer = Envelope("c", directions=50).run(model)
+    assert "3 load sets" in finer.over
     assert finer.extent[1, 1] == pytest.approx(0.2, abs=1e-9)
     # asked for probes instead: the ball of the play
     probes = Envelope("c", directions=50, loads="probes").run(model)
@@ -242,3 +243,38 @@ def test_no_direction_held_is_exit_3(tmp_path: Path) -> None:
     out = CliRunner().invoke(app, ["envelope", str(path), "--point", "p"])
     assert out.exit_code == 3, out.output
     assert "no force at point 'p' is held" in out.output
+
+
+def test_a_load_set_the_mechanism_does_not_hold_is_left_out_and_listed(tmp_path: Path) -> None:
+    model = jointplay.load(ROOT / "examples" / "gallery" / "located_plate.yaml")
+    drill = model.loads[0].model_dump()
+    drill["force"] = [-30.0, 15.0, {"min": -80, "max": 50}]  # at +50 N it lifts the plate
+    lifting = model.replace(loads=[drill])
+    env = Envelope("drilled hole", directions=40, plays="mean").run(lifting)
+    [words] = env.not_held
+    assert "1 of 3 load sets of the loads (e.g. loads[0].force[2] = 50)" in words
+    assert "translation along the global +Z axis" in words
+    held = [
+        jointplay.solve(lifting.replace(loads=[{**drill, "force": [-30, 15, f]}]))
+        for f in (-80, -15)
+    ]
+    for r in held:  # the load sets held are in it, exactly
+        d = r.points["drilled hole"].displacement
+        assert np.any(np.all(np.abs(env.hull - d) < 1e-9, axis=1))
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--probe", "inf"], "--probe inf: expected a force > 0"),
+        (["--probe", "0"], "--probe 0: expected a force > 0"),
+        (["--loads", "some"], "expected 'auto', 'model' or 'probes'"),
+        (["--loads", "model"], "--loads model: the model has no loads"),
+    ],
+)
+def test_bad_envelope_options_exit_2(tmp_path: Path, args: list[str], words: str) -> None:
+    path = tmp_path / "door.yaml"
+    path.write_text(json.dumps(door(gravity=False).model_dump(mode="json", exclude_none=True)))
+    out = CliRunner().invoke(app, ["envelope", str(path), "--point", "handle", *args])
+    assert out.exit_code == 2, out.output
+    assert words in out.output

@@ -17,6 +17,7 @@ from rich.console import Console
 
 from jointplay import __version__
 from jointplay.errors import JointplayError, ModelError, OptionError, UnboundedMechanismError
+from jointplay.units import LIMITS
 
 app = typer.Typer(
     add_completion=False,
@@ -321,9 +322,11 @@ def envelope(
     levels: Annotated[
         int,
         typer.Option(
-            "--levels", min=2, help="Values of each varying load component (2: its limits)."
+            "--levels",
+            min=2,
+            help="Values of each varying load component (2: its limits; 3 adds its mean).",
         ),
-    ] = 2,
+    ] = 3,
     probe: Annotated[
         float,
         typer.Option("--probe", help="Probe force (N) against the weights; > 0."),
@@ -342,8 +345,10 @@ def envelope(
     def run() -> None:
         if plays not in ("max", "mean"):
             raise OptionError(f"--plays {plays!r}: expected 'max' or 'mean'")
-        if not probe > 0:
-            raise OptionError(f"--probe {probe:g}: expected a force > 0 N")
+        if not 0 < probe <= LIMITS["force"]:
+            raise OptionError(
+                f"--probe {probe:g}: expected a force > 0 and <= {LIMITS['force']:g} N"
+            )
         if loads not in ("auto", "model", "probes"):
             raise OptionError(f"--loads {loads!r}: expected 'auto', 'model' or 'probes'")
         _check_outputs(csv, plot)

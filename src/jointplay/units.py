@@ -221,8 +221,14 @@ def _factor(expression: str, dimension: str) -> float | tuple[str, str]:
         return cannot
     quantity = registry.Quantity(1.0, parsed)
     base = BASE_UNITS[dimension]
-    if quantity.dimensionality != registry.Quantity(1.0, base).dimensionality:
-        if quantity.dimensionless:
+    reference = registry.Quantity(1.0, base)
+    # pint counts angles as dimensionless: compare the powers of the radian as well,
+    # so that "2 percent" is no angle and "0.5 deg" no length
+    turns = (_radians(quantity), _radians(reference))
+    if quantity.dimensionality != reference.dimensionality or turns[0] != turns[1]:
+        if quantity.dimensionality == reference.dimensionality and not quantity.dimensionless:
+            kind = f"a unit whose angle differs from {base}'s"
+        elif quantity.dimensionless:
             kind = (
                 f"dimensionless (a bare number means the base unit; a unit must be {_a(dimension)})"
             )
@@ -233,6 +239,11 @@ def _factor(expression: str, dimension: str) -> float | tuple[str, str]:
         return float(quantity.to(base).magnitude)
     except Exception:  # an offset unit (degC)
         return cannot
+
+
+def _radians(quantity: Any) -> float:
+    """The power of the radian in ``quantity``'s unit (deg, arcmin: 1; percent: 0)."""
+    return float(dict(quantity.to_base_units().units._units).get("radian", 0))
 
 
 def _is_unit_expression(expression: str) -> bool:

@@ -108,11 +108,17 @@ def _plain_name(value: str) -> str:
 # unit's meaning is checked when the file is read.
 
 
+def _article(dimension: str) -> str:
+    """'a length', 'an angle', 'a torsional stiffness'."""
+    words = dimension.replace("_", " ")
+    return f"{'an' if words[0] in 'aeiou' else 'a'} {words}"
+
+
 def _quantity_schema(dimension: str) -> dict[str, Any]:
     unit = BASE_UNITS[dimension]
     return {
         "anyOf": [{"type": "number"}, {"type": "string", "pattern": NUMBER_FIRST}],
-        "description": f"a {dimension}: a number in {unit}, or with its unit: "
+        "description": f"{_article(dimension)}: a number in {unit}, or with its unit: "
         f"{UNIT_EXAMPLES[dimension]}",
     }
 
@@ -127,7 +133,7 @@ def _range_schema(dimension: str) -> dict[str, Any]:
         },
         "required": ["min", "max"],
         "additionalProperties": False,
-        "description": f"a {dimension} that varies from part to part: its limits",
+        "description": f"{_article(dimension)} that varies from part to part: its limits",
     }
 
 

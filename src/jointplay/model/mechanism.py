@@ -395,8 +395,11 @@ class Model(BaseModel):
                             else ""
                         )
                         + f"; a play is usually a small part of it: if {play:g} was meant in "
-                        f"{'mrad' if field in ANGULAR_PLAYS else 'um'}, write "
-                        f"'{play:g} {'mrad' if field in ANGULAR_PLAYS else 'um'}'"
+                        + (
+                            f"degrees, write '{play:g} deg'"
+                            if field in ANGULAR_PLAYS
+                            else f"um, write '{play:g} um'"
+                        )
                     )
         return tuple(out)
 
@@ -462,7 +465,8 @@ def _check_smallest_plays(model: Model) -> list[EntryError]:
                         f"joints[{i}] '{joint.name}'",
                         f"{field}: {what} is less than {SMALLEST_PLAY_SHARE:g} of the "
                         f"model's size ({size:g} mm), too small to tell from 0 in double "
-                        "precision; write 0 for no play, or the real play ('2 um')",
+                        "precision; write 0 for no play, or the real play "
+                        + ("('0.1 deg')" if field in ANGULAR_PLAYS else "('2 um')"),
                     )
                 )
     return found

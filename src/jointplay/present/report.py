@@ -798,14 +798,20 @@ def _joint_sizes(joint: Any) -> str:
         "width",
         "height",
         "diameter",
+        "slot_length",
         "stiffness",
+        "backlash",
+        "torsional_stiffness",
     ):
         value = getattr(joint, field, None)
         if value is None or (field == "clearance" and joint.type_name in ("rigid", "point")):
             continue
         describe = getattr(value, "describe", None)
-        text = describe() if callable(describe) else _num(value)
+        unit = {"backlash": " rad", "stiffness": " N/mm", "torsional_stiffness": " N*mm/rad"}
+        text = describe() if callable(describe) else _num(value) + unit.get(field, "")
         parts.append(f"{field} {text}")
+    if getattr(joint, "along", None) is not None:
+        parts.append(f"along {_vec(np.asarray(joint.along, dtype=float))}")
     return ", ".join(parts)
 
 

@@ -341,7 +341,8 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
     for play, words in result.plays_described.items():
         head.append(f"  {play}: {words}\n")
     head.append(
-        "sensitivity s: mm of the measure per mm of play (per N or N*mm of a load), at "
+        "sensitivity s: mm of the measure per mm of play (per rad of a backlash, per N or "
+        "N*mm of a load), at "
         "the nominal (mean) values; worst case: |s| T of the stack sum |s| T, T the "
         "tolerance; RSS: (s sigma)^2 of sum (s sigma)^2"
     )

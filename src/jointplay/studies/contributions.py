@@ -226,8 +226,9 @@ class ContributionsResult:
                     {
                         "measure": measure,
                         "play": play,
-                        "tolerance_mm": self.width[i],
-                        "sigma_mm": self.sigma[i],
+                        "tolerance": self.width[i],
+                        "sigma": self.sigma[i],
+                        "unit": unit_of(play),
                         "sensitivity": self.sensitivity[k, i],
                         "worst_case_pct": wc[k, i],
                         "rss_pct": rss[k, i],
@@ -273,3 +274,16 @@ def _percent(part: FloatArray) -> FloatArray:
     total = np.sum(part, axis=1, keepdims=True)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.asarray(np.where(total > 0, 100.0 * part / total, 0.0))
+
+
+def unit_of(variable: str) -> str:
+    """The unit of a varying play or load component, from its label:
+    ``l2.clearance`` mm, ``motor.backlash`` rad, ``loads[0].force[1]`` N."""
+    from jointplay.model.tolerance import ANGULAR_PLAYS
+
+    last = variable.rsplit(".", 1)[-1]
+    if last.startswith("force["):
+        return "N"
+    if last.startswith("torque["):
+        return "N*mm"
+    return "rad" if last in ANGULAR_PLAYS else "mm"

@@ -29,8 +29,11 @@ Over which loads (``Envelope.loads``):
 The envelope is that of the plays alone: a contact's stiffness, and a
 drive's, are left out (they would let the point go further the harder it is
 pushed). With toleranced plays it is taken at their upper limits
-(``plays="max"``: every part of the batch is inside) or at their means
-(``plays="mean"``).
+(``plays="max"``) or at their means (``plays="mean"``). A probe envelope at
+the upper limits holds every part of the batch: each clearance domain holds
+the smaller ones. Under the model's loads it need not: a larger play moves
+the equilibrium elsewhere, not always further along every axis (the Monte
+Carlo study takes each part's own plays).
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ from jointplay.model.tolerance import Toleranced
 from jointplay.settings import DEFAULT
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.variation import load_map, play_map
+from jointplay.units import LIMITS
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -60,8 +64,6 @@ CLIMB_STEPS = 30
 #: Most load combinations an envelope over the model's loads solves (levels ** components
 #: per case): beyond it the grid is a slip, and Monte Carlo is the study to run.
 MOST_LOAD_SETS = 100_000
-#: A probe direction whose part in the held directions is below this is not held at all.
-HELD_SHARE = 1e-9
 
 
 def sphere_directions(n: int) -> FloatArray:
@@ -86,7 +88,7 @@ class Envelope:
     directions: int = 200
     plays: Literal["max", "mean"] = "max"
     loads: Literal["auto", "model", "probes"] = "auto"
-    levels: int = 2
+    levels: int = 3
     probe: float = 1.0
 
     def __post_init__(self) -> None:
@@ -94,8 +96,8 @@ class Envelope:
             raise ValueError("directions: at least 6")
         if self.levels < 2:
             raise ValueError("levels: at least 2 (the limits of each varying load)")
-        if not self.probe > 0:
-            raise ValueError("probe: a force > 0 N")
+        if not 0 < self.probe <= LIMITS["force"]:
+            raise ValueError(f"probe: a force > 0 and at most {LIMITS['force']:g} N")
 
     def run(self, model: Model, *, source: str | None = None) -> EnvelopeResult:
         """``source``: the model file's name, for messages."""
@@ -154,7 +156,7 @@ class Envelope:
             return d
 
         if mode == "model":
-            d, over = self._over_model(rigid, asm, motion_of, source)
+            d, over, not_held = self._over_model(rigid, asm, motion_of, source)
             h = directions @ d.T  # (n, samples)
             best = np.argmax(h, axis=1)
             size = np.linalg.norm(d, axis=1)
@@ -168,18 +170,22 @@ class Envelope:
                 d[top],
                 float(size[top]),
                 over,
-                (),
+                not_held,
             )
         return self._probed(rigid, ws, point.body, at, directions, motion_of)
 
     def _over_model(
         self, model: Model, asm: Any, motion_of: Any, source: str
-    ) -> tuple[FloatArray, str]:
-        """P's displacement under every load set the model takes, and those words."""
-        parts, counts = [], []
+    ) -> tuple[FloatArray, str, tuple[str, ...]]:
+        """P's displacement under every load set the model takes that the
+        mechanism holds, those words, and the load sets it does not hold."""
+        parts, counts, not_held = [], [], []
+        why: UnboundedMechanismError | None = None
+        varied = False
         for case in model.case_names or (None,):
             lmap = load_map(asm, case)
             nl = len(lmap.variables)
+            varied = varied or nl > 0
             if self.levels**nl > MOST_LOAD_SETS:
                 raise OptionError(
                     f"{nl} load components vary{'' if case is None else f' in case {case!r}'}: "
@@ -191,20 +197,49 @@ class Envelope:
             grids = [np.linspace(v.value.low, v.value.high, self.levels) for v in lmap.variables]
             combos = list(itertools.product(*grids))
             values = np.array(combos, dtype=float).reshape(len(combos), nl)
-            parts.append(motion_of(lmap.work(values)))
-            counts.append(len(values))
+            work = lmap.work(values)
+            if not np.any(work):
+                raise OptionError(
+                    "--loads model: the model has no loads"
+                    + ("" if case is None else f" in case {case!r}")
+                    + " (no 'loads', no weight): nothing pushes the point; use --loads probes",
+                    source=source,
+                )
+            d, ok, why = _solved_rows(work, motion_of, why)
+            name = "the loads" if case is None else f"case {case!r}"
+            if not np.all(ok):
+                lost = ", ".join(
+                    f"{v.label} = {value:g}"
+                    for v, value in zip(lmap.variables, values[~ok][0], strict=True)
+                )
+                not_held.append(
+                    f"{int(np.sum(~ok))} of {len(values)} load sets of {name} "
+                    + (f"(e.g. {lost}) " if lost else "")
+                    + f"have no equilibrium: {why}"
+                )
+            parts.append(d[ok])
+            counts.append(int(np.sum(ok)))
+        if not sum(counts):
+            assert why is not None
+            raise UnboundedMechanismError(
+                f"no load set of the model is held: {'; '.join(not_held)}",
+                body=why.body,
+                motion=why.motion,
+                direction=why.direction,
+            )
         cases = model.case_names
         each = (
-            f"the {self.levels} evenly spaced values of each varying load component"
+            f"{self.levels} evenly spaced values of each varying load component"
             if self.levels > 2
             else "both limits of each varying load component"
         )
+        total = sum(counts)
         over = (
-            f"the model's loads: {sum(counts):,} load set{'s' if sum(counts) > 1 else ''}"
+            f"the model's loads: {total:,} load set{'s' if total > 1 else ''}"
             + (f" over {len(cases)} load cases" if cases else "")
-            + (f", {each}" if any(c > 1 for c in counts) else "")
+            + (f", {each}" if varied else "")
         )
-        return np.vstack(parts), over
+        return np.vstack(parts), over, tuple(not_held)
 
     def _probed(
         self,
