@@ -266,8 +266,9 @@ def test_a_load_set_the_mechanism_does_not_hold_is_left_out_and_listed(tmp_path:
 @pytest.mark.parametrize(
     ("args", "words"),
     [
-        (["--probe", "inf"], "--probe inf: expected a force > 0"),
-        (["--probe", "0"], "--probe 0: expected a force > 0"),
+        (["--probe", "inf"], "--probe inf: expected a force of 1e-06 to 1e+09 N"),
+        (["--probe", "0"], "--probe 0: expected a force of 1e-06 to 1e+09 N"),
+        (["--probe", "1.0000001e9"], "--probe 1000000100: expected"),
         (["--loads", "some"], "expected 'auto', 'model' or 'probes'"),
         (["--loads", "model"], "--loads model: the model has no loads"),
     ],
@@ -278,3 +279,40 @@ def test_bad_envelope_options_exit_2(tmp_path: Path, args: list[str], words: str
     out = CliRunner().invoke(app, ["envelope", str(path), "--point", "handle", *args])
     assert out.exit_code == 2, out.output
     assert words in out.output
+
+
+def test_probes_that_drive_no_free_motion_are_all_kept() -> None:
+    # the lathe slide's probes drive nothing free: all 206 directions, none listed
+    # (judged against the probe itself, as a solve judges a load: not against
+    # the round-off of the probes' part on the free motions)
+    model = jointplay.load(ROOT / "examples" / "gallery" / "lathe_slide.yaml")
+    env = Envelope("tip", directions=200).run(model)
+    assert len(env.directions) == 206 and env.not_held == ()
+
+
+def test_a_case_without_loads_is_its_rest_position_and_many_loads_take_two_levels() -> None:
+    model = jointplay.load(ROOT / "examples" / "studies" / "wobbly_table.yaml")
+    env = Envelope("probe", directions=40).run(model)  # its case 'resting' has no own loads
+    assert "3 load sets over 3 load cases" in env.over
+    data = {
+        "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
+        "joints": [
+            {
+                "name": "ball",
+                "type": "spherical",
+                "between": ["g", "b"],
+                "at": [0, 0, 0],
+                "clearance": 0.4,
+            }
+        ],
+        "loads": [
+            {"body": "b", "at": [0, 0, 0], "force": [{"min": -1, "max": 1}, 1, 0]}
+            for _ in range(11)
+        ],
+        "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
+    }
+    many = jointplay.model_from_dict(data)  # 3^11 is over the cap: 2^11 sets
+    wide = Envelope("c", directions=20).run(many)
+    assert "2,048 load sets, both limits" in wide.over
+    with pytest.raises(jointplay.OptionError, match="3\\^11 load combinations"):
+        Envelope("c", directions=20, levels=3).run(many)

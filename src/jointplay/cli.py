@@ -320,13 +320,14 @@ def envelope(
         ),
     ] = "auto",
     levels: Annotated[
-        int,
+        int | None,
         typer.Option(
             "--levels",
             min=2,
-            help="Values of each varying load component (2: its limits; 3 adds its mean).",
+            help="Values of each varying load component (2: its limits; 3 adds its mean; "
+            "default 3, or 2 where 3 would make over 100,000 load sets).",
         ),
-    ] = 3,
+    ] = None,
     probe: Annotated[
         float,
         typer.Option("--probe", help="Probe force (N) against the weights; > 0."),
@@ -340,14 +341,15 @@ def envelope(
     probe directions it does not hold."""
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render_envelope
-    from jointplay.studies.envelope import Envelope
+    from jointplay.studies.envelope import SMALLEST_PROBE, Envelope
 
     def run() -> None:
         if plays not in ("max", "mean"):
             raise OptionError(f"--plays {plays!r}: expected 'max' or 'mean'")
-        if not 0 < probe <= LIMITS["force"]:
+        if not SMALLEST_PROBE <= probe <= LIMITS["force"]:
             raise OptionError(
-                f"--probe {probe:g}: expected a force > 0 and <= {LIMITS['force']:g} N"
+                f"--probe {probe:.10g}: expected a force of {SMALLEST_PROBE:g} to "
+                f"{LIMITS['force']:g} N"
             )
         if loads not in ("auto", "model", "probes"):
             raise OptionError(f"--loads {loads!r}: expected 'auto', 'model' or 'probes'")

@@ -7,6 +7,7 @@ solver builds its own workspace from it (see ``assembly.py``).
 from __future__ import annotations
 
 import difflib
+import math
 from collections import deque
 from collections.abc import Iterable
 from functools import cached_property
@@ -386,8 +387,9 @@ class Model(BaseModel):
             for field, play in joint.plays().items():
                 length = joint.play_length(field, play)
                 if length >= LARGE_PLAY_SHARE * size:
+                    degrees = f" ({math.degrees(play):.3g} deg)" if field in ANGULAR_PLAYS else ""
                     out.append(
-                        f"joint '{joint.name}': {field} {play:g} {_unit(field)} is "
+                        f"joint '{joint.name}': {field} {play:g} {_unit(field)}{degrees} is "
                         f"{length / size:.3g} times {what} ({size:g} mm)"
                         + (
                             f" at its lever ({joint.play_length(field, 1.0):g} mm)"

@@ -18,7 +18,8 @@ Over which loads (``Envelope.loads``):
   (a plate off its buttons) has no equilibrium, and is listed instead.
 * ``model``: the loads the model itself says it takes: every load case, and
   for each, every combination of its varying load components (``{min,
-  max}``) at ``levels`` evenly spaced values (2: their limits). The
+  max}``) at ``levels`` evenly spaced values (3: their limits and mean,
+  or 2 where three would make too many; 2: their limits). The
   envelope is then the convex hull of P's displacements under those loads.
   It is exact for those loads; a load between them (a force turning between
   two limits, on a round bore) may push P a little further: raise
@@ -29,11 +30,12 @@ Over which loads (``Envelope.loads``):
 The envelope is that of the plays alone: a contact's stiffness, and a
 drive's, are left out (they would let the point go further the harder it is
 pushed). With toleranced plays it is taken at their upper limits
-(``plays="max"``) or at their means (``plays="mean"``). A probe envelope at
-the upper limits holds every part of the batch: each clearance domain holds
-the smaller ones. Under the model's loads it need not: a larger play moves
-the equilibrium elsewhere, not always further along every axis (the Monte
-Carlo study takes each part's own plays).
+(``plays="max"``) or at their means (``plays="mean"``). Without weights, a
+probe envelope at the upper limits holds every part of the batch: each
+clearance domain holds the smaller ones. Against weights, or under the
+model's loads, it need not: a larger play moves the equilibrium elsewhere,
+not always further along every axis (the Monte Carlo study takes each
+part's own plays).
 """
 
 from __future__ import annotations
@@ -61,6 +63,8 @@ if TYPE_CHECKING:
 AXES = np.vstack([np.eye(3), -np.eye(3)])
 #: Steps of the climb from a support point to the largest displacement.
 CLIMB_STEPS = 30
+#: Smallest probe force (N): a smaller one vanishes against the weights' round-off.
+SMALLEST_PROBE = 1e-6
 #: Most load combinations an envelope over the model's loads solves (levels ** components
 #: per case): beyond it the grid is a slip, and Monte Carlo is the study to run.
 MOST_LOAD_SETS = 100_000
@@ -88,16 +92,19 @@ class Envelope:
     directions: int = 200
     plays: Literal["max", "mean"] = "max"
     loads: Literal["auto", "model", "probes"] = "auto"
-    levels: int = 3
+    levels: int | None = None
     probe: float = 1.0
 
     def __post_init__(self) -> None:
         if self.directions < 6:
             raise ValueError("directions: at least 6")
-        if self.levels < 2:
+        if self.levels is not None and self.levels < 2:
             raise ValueError("levels: at least 2 (the limits of each varying load)")
-        if not 0 < self.probe <= LIMITS["force"]:
-            raise ValueError(f"probe: a force > 0 and at most {LIMITS['force']:g} N")
+        if not SMALLEST_PROBE <= self.probe <= LIMITS["force"]:
+            raise ValueError(
+                f"probe: a force of {SMALLEST_PROBE:g} to {LIMITS['force']:g} N, "
+                f"not {self.probe:.10g}"
+            )
 
     def run(self, model: Model, *, source: str | None = None) -> EnvelopeResult:
         """``source``: the model file's name, for messages."""
@@ -130,9 +137,10 @@ class Envelope:
             for vector in (load.force, load.torque)
             for c in vector or ()
         )
+        loaded = any(model.loads_of(case) for case in (model.case_names or (None,)))
         mode = self.loads
         if mode == "auto":
-            mode = "model" if model.case_names or varying else "probes"
+            mode = "model" if (model.case_names or varying) and loaded else "probes"
         directions = np.vstack([AXES, sphere_directions(self.directions)])
         if point.body not in asm.body_index:  # a point of the ground does not move
             zero = np.zeros_like(directions)
@@ -182,29 +190,26 @@ class Envelope:
         parts, counts, not_held = [], [], []
         why: UnboundedMechanismError | None = None
         varied = False
+        used: set[int] = set()
         for case in model.case_names or (None,):
             lmap = load_map(asm, case)
             nl = len(lmap.variables)
             varied = varied or nl > 0
-            if self.levels**nl > MOST_LOAD_SETS:
+            # by default the limits and the mean, or the limits only where that is too many
+            levels = self.levels or (3 if 3**nl <= MOST_LOAD_SETS else 2)
+            used.add(levels)
+            if levels**nl > MOST_LOAD_SETS:
                 raise OptionError(
                     f"{nl} load components vary{'' if case is None else f' in case {case!r}'}: "
-                    f"{self.levels}^{nl} load combinations are more than the envelope's "
+                    f"{levels}^{nl} load combinations are more than the envelope's "
                     f"{MOST_LOAD_SETS:,}; fix some of them, lower --levels, or run a Monte "
                     "Carlo study",
                     source=source,
                 )
-            grids = [np.linspace(v.value.low, v.value.high, self.levels) for v in lmap.variables]
+            grids = [np.linspace(v.value.low, v.value.high, levels) for v in lmap.variables]
             combos = list(itertools.product(*grids))
             values = np.array(combos, dtype=float).reshape(len(combos), nl)
             work = lmap.work(values)
-            if not np.any(work):
-                raise OptionError(
-                    "--loads model: the model has no loads"
-                    + ("" if case is None else f" in case {case!r}")
-                    + " (no 'loads', no weight): nothing pushes the point; use --loads probes",
-                    source=source,
-                )
             d, ok, why = _solved_rows(work, motion_of, why)
             name = "the loads" if case is None else f"case {case!r}"
             if not np.all(ok):
@@ -219,6 +224,12 @@ class Envelope:
                 )
             parts.append(d[ok])
             counts.append(int(np.sum(ok)))
+        if not any(model.loads_of(case) for case in (model.case_names or (None,))):
+            raise OptionError(
+                "--loads model: the model has no loads (no 'loads', no weight, no case with "
+                "loads): nothing pushes the point; use --loads probes",
+                source=source,
+            )
         if not sum(counts):
             assert why is not None
             raise UnboundedMechanismError(
@@ -229,9 +240,10 @@ class Envelope:
             )
         cases = model.case_names
         each = (
-            f"{self.levels} evenly spaced values of each varying load component"
-            if self.levels > 2
-            else "both limits of each varying load component"
+            "both limits of each varying load component"
+            if used == {2}
+            else f"{'/'.join(map(str, sorted(used)))} evenly spaced values of each varying "
+            "load component"
         )
         total = sum(counts)
         over = (
@@ -329,7 +341,9 @@ def _held_directions(
         return directions, [], None
     C = np.asarray(ws.N.T @ W)  # (free motions, 3): what a unit probe drives
     _, sv, Vt = np.linalg.svd(C)
-    rank = int(np.sum(sv > ws.settings.drive_tolerance * max(float(sv[0]), 1e-300)))
+    # as a solve judges a load: its part on the free motions against the load itself
+    probe_size = float(np.linalg.norm(W, 2))
+    rank = int(np.sum(sv > ws.settings.drive_tolerance * probe_size))
     if rank == 0:
         return directions, [], None
     basis = Vt[rank:].T  # (3, k): the probe directions that drive nothing
