@@ -303,3 +303,21 @@ def test_the_pictures_show_a_drive_as_a_note_and_a_slot_as_two_walls(tmp_path: P
     plate = jointplay.load(GALLERY / "located_plate.yaml")
     view = joint_view(plate.joint("slot pin"), solved(plate).joints["slot pin"])
     assert view.rectangle == (math.inf, float(plate.joint("slot pin").clearance) / 2)
+
+
+def test_a_pin_whose_axial_play_no_load_takes_is_batched_as_a_tie() -> None:
+    # The arm's axial play is unloaded: its optimal positions form a face (a tie),
+    # and the answer is the face's least-norm point, axial slide 0. The batch
+    # solves such rows by Newton with the face's tie rows (``Face.tie_rows``);
+    # before, every sample went to the full solver's least-norm program.
+    model = arm({"backlash": {"min": "3 arcmin", "max": "9 arcmin"}})
+    result = MonteCarlo(samples=300, seed=5, chunk=300).run(model)
+    assert result.batched >= 290  # the reason for the tie rows: few full solves
+    b = result.plays[:, 0]
+    np.testing.assert_allclose(result.displacement[:, 0, 1], 0.01 + ARM * b / 2, atol=MM)
+    np.testing.assert_allclose(result.displacement[:, 0, [0, 2]], 0.0, atol=MM)
+    for i in range(0, 300, 50):  # the full solver's least-norm answer, sample by sample
+        alone = solved(arm({"backlash": float(b[i])}))
+        np.testing.assert_allclose(
+            result.displacement[i, 0], alone.points["tip"].displacement, atol=1e-12
+        )

@@ -195,8 +195,9 @@ def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> B
         assert point.certificate is not None  # optimum certifies or raises
         feas[first] = point.certificate.feasibility_mm / ws.asm.s
         residual[first] = point.certificate.equilibrium_residual
-        if point.active is not None and dense:
-            solved_by_set.setdefault(point.active, []).append(np.array([first]))
+        seed = point.active if point.active is not None else point.tie
+        if seed is not None and dense:
+            solved_by_set.setdefault(seed, []).append(np.array([first]))
 
     return BatchSolution(
         asm=ws.asm,
@@ -245,11 +246,14 @@ def _newton_batch(
     lam = np.zeros((B, len(ws.balls)))
     f = np.zeros((B, stack.A.shape[0]))
     face = faces.face_of(ws, key)
-    if not face.determined:  # a tie, or a tilting face (uniqueness depends on x)
+    Eq, e = face.Eq, face.e
+    tie = face.tie_rows  # a tie: its rows pick the least-norm point of the face
+    if tie is not None:
+        Eq, e = np.vstack([linalg.dense(Eq), tie]), np.concatenate([e, np.zeros(len(tie))])
+    elif not face.determined:  # a tilting face (uniqueness depends on x), or a large tie
         return np.zeros(B, dtype=bool), x, lam, f, None
     surface, linear = key
     ne0 = ws.Eq.shape[0]
-    Eq, e = face.Eq, face.e
     eq_soft = np.zeros((B, len(Eq)))
     eq_soft[:, ne0 + face.lam_rows] = sigma[:, list(linear)]
     e_rows = np.repeat(e[None, :], B, axis=0)
@@ -258,7 +262,7 @@ def _newton_batch(
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
     # (the same positions); the forces are split afterwards
-    kept = _independent_rows(ws, face, x0[0])
+    kept = None if tie is not None else _independent_rows(ws, face, x0[0])
     redundant = kept is not None
     s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
     sub = face.stack.take(s_keep)
@@ -293,7 +297,12 @@ def _newton_batch(
     in_set = np.zeros(len(ws.balls), dtype=bool)
     in_set[[*surface, *linear]] = True
     touching = (stack.spring == 0) & (stack.gap_used(stack.levels(x)[2], r) >= st.touching)
-    if redundant or np.any(touching & ~in_set):
+    if tie is not None:
+        # the least-norm point of the face's affine hull is the tie's answer only
+        # where it stays inside every other cone, off their limits (else the
+        # optimal face is smaller: the full solver's least-norm program)
+        conv = conv & ~np.any(touching & ~in_set, axis=1)
+    elif redundant or np.any(touching & ~in_set):
         # Newton's split is one of many; the documented one (``forces``),
         # from the neighbour's split, on the cone limits that bind it
         apex = st.feasibility_tolerance * ws.max_radius

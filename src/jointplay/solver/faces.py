@@ -43,6 +43,8 @@ class Point:
     certificate: Certificate | None = None
     active: FaceKey | None = None  # the active set that determines x, if any
     nu: FloatArray | None = None  # the rigid rows' multipliers (None: least squares)
+    #: The active set of a tie: its face holds every optimum, x is its least-norm point.
+    tie: FaceKey | None = None
 
 
 @dataclass(frozen=True)
@@ -72,10 +74,19 @@ class Face:
     #: that depends on x (a tilting face: see ``is_determined``).
     #: Computed when first asked (a null space): most trial faces never are.
     _determine: Callable[[], bool | None] = field(repr=False, compare=False)
+    _ties: Callable[[], FloatArray | None] = field(repr=False, compare=False)
 
     @cached_property
     def determined(self) -> bool | None:
         return self._determine()
+
+    @cached_property
+    def tie_rows(self) -> FloatArray | None:
+        """For a tie: rows ``T^T M`` (T the directions the face leaves free, M
+        the least-norm metric) whose zero picks the least-norm point of the
+        face's affine hull, as the free motions' rows ``K`` do for the
+        mechanism. None for a face that pins x, tilts, or is large (sparse)."""
+        return None if self.determined is not False else self._ties()
 
 
 def face_of(ws: Workspace, key: FaceKey) -> Face:
@@ -104,6 +115,13 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
                 return None
             return pins_position(ws, linalg.vstack([L, sub.A], ws.m))
 
+        def ties(L: Matrix = L, sub: BallStack = sub) -> FloatArray | None:
+            if ws.sparse:
+                return None
+            rows = linalg.dense(linalg.vstack([ws.Eq, L, sub.A], ws.m))
+            free = linalg.null_space(rows, ws.m, ws.settings.free_motion_rcond)
+            return np.asarray(ws.asm.metric_times(linalg.dense(free)).T)
+
         face = Face(
             key,
             sub,
@@ -116,6 +134,7 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
             stack.rows_of(surface),
             stack.rows_of(linear),
             determined,
+            ties,
         )
         ws.faces[key] = face
     return face
