@@ -156,7 +156,7 @@ def test_a_heavy_door_rests_where_its_weight_puts_it() -> None:
     heavy = door(gravity=True)
     env = Envelope("handle", directions=60).run(heavy)
     assert "rotation about the global Z axis" in env.not_held[0]
-    assert "against the weights" in env.over
+    assert "against the standing loads" in env.over
     # a 1 N probe does not lift 20 kg: every support point is the resting position
     rest = jointplay.solve(heavy).points["handle"].displacement
     np.testing.assert_allclose(env.hull, np.tile(rest, (len(env.hull), 1)), atol=1e-9)
@@ -316,3 +316,33 @@ def test_a_case_without_loads_is_its_rest_position_and_many_loads_take_two_level
     assert "2,048 load sets, both limits" in wide.over
     with pytest.raises(jointplay.OptionError, match="3\\^11 load combinations"):
         Envelope("c", directions=20, levels=3).run(many)
+
+
+def test_probes_push_against_a_standing_preload() -> None:
+    # a ball joint (J/2 = 0.2) whose centre a spring presses with 10 N along -Y:
+    # a 1 N probe along u leaves the centre at 0.2 (u - 10 Y) / |u - 10 Y|
+    def ball(standing: bool) -> jointplay.Model:
+        return jointplay.model_from_dict(
+            {
+                "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
+                "joints": [
+                    {"name": "ball", "type": "spherical", "between": ["g", "b"],
+                     "at": [0, 0, 0], "clearance": 0.4}
+                ],
+                "loads": [
+                    {"body": "b", "at": [0, 0, 0], "force": [0, -10, 0], "standing": standing}
+                ],
+                "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
+            }
+        )  # fmt: skip
+
+    env = Envelope("c", directions=60).run(ball(standing=True))
+    assert "against the standing loads" in env.over
+    total = env.directions - np.array([0.0, 10.0, 0.0])
+    expected = 0.2 * total / np.linalg.norm(total, axis=1)[:, None]
+    np.testing.assert_allclose(env.hull, expected, atol=1e-9)
+    assert env.extent[1, 1] < 0  # a 1 N probe never lifts the centre off the preloaded side
+    # the same load, not standing: the probes alone, the ball of the play
+    free = Envelope("c", directions=60).run(ball(standing=False))
+    assert free.largest == pytest.approx(0.2, abs=1e-9)
+    np.testing.assert_allclose(free.extent, [[-0.2, 0.2]] * 3, atol=1e-9)

@@ -330,7 +330,9 @@ def envelope(
     ] = None,
     probe: Annotated[
         float,
-        typer.Option("--probe", help="Probe force (N) against the weights; > 0."),
+        typer.Option(
+            "--probe", help="Probe force (N) against the weights and standing loads; > 0."
+        ),
     ] = 1.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print the envelope as JSON.")] = False,
     plot: PlotOption = None,

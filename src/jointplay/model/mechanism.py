@@ -177,6 +177,9 @@ class Load(BaseModel):
     at: Point | None = None
     force: ForceVector | None = None
     torque: TorqueVector | None = None
+    #: A load that always acts, as the weights do (a preload: a spring, a clamp):
+    #: an envelope's probes push against it. Every solve takes every load alike.
+    standing: bool = False
 
     @model_validator(mode="after")
     def _check(self) -> Load:

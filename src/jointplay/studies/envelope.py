@@ -11,8 +11,10 @@ only increase |d|).
 
 Over which loads (``Envelope.loads``):
 
-* ``probes``: such unit probes at P, added to the *standing* loads, the
-  weights (a preload is given as a load case). A probe direction is kept
+* ``probes``: such unit probes at P, added to the *standing* loads: the
+  weights, and the loads marked ``standing`` (a preload: a spring, a clamp).
+  They hold the parts against some limits; the probe shows where a push
+  sends the point across the plays they leave free. A probe direction is kept
   only if the mechanism holds it: a force at P that would drive a free
   motion (a door about its hinges) or lift a part off its one-sided supports
   (a plate off its buttons) has no equilibrium, and is listed instead.
@@ -30,10 +32,10 @@ Over which loads (``Envelope.loads``):
 The envelope is that of the plays alone: a contact's stiffness, and a
 drive's, are left out (they would let the point go further the harder it is
 pushed). With toleranced plays it is taken at their upper limits
-(``plays="max"``) or at their means (``plays="mean"``). Without weights, a
-probe envelope at the upper limits holds every part of the batch: each
-clearance domain holds the smaller ones. Against weights, or under the
-model's loads, it need not: a larger play moves the equilibrium elsewhere,
+(``plays="max"``) or at their means (``plays="mean"``). Without standing
+loads, a probe envelope at the upper limits holds every part of the batch:
+each clearance domain holds the smaller ones. Against standing loads, or
+under the model's load sets, it need not: a larger play moves the equilibrium elsewhere,
 not always further along every axis (the Monte Carlo study takes each
 part's own plays).
 """
@@ -262,9 +264,10 @@ class Envelope:
         directions: FloatArray,
         motion_of: Any,
     ) -> EnvelopeResult:
-        """Unit probes at the point against the weights, in the directions held."""
+        """Unit probes at the point against the standing loads (the weights and
+        the loads marked ``standing``), in the directions held."""
         asm = ws.asm
-        g0 = asm.work_of(model.weights())
+        g0 = asm.work_of(model.weights() + tuple(ld for ld in model.loads if ld.standing))
         W = asm.wrench_work(body, tuple(at))[:, :3] * self.probe
         held_dirs, not_held, why = _held_directions(ws, g0, W, directions, self.directions)
         if not len(held_dirs):
@@ -301,7 +304,7 @@ class Envelope:
             if float(np.linalg.norm(cur)) > far:
                 far, far_d = float(np.linalg.norm(cur)), cur
         h = np.einsum("ij,ij->i", held_dirs, d)
-        standing = "the weights" if np.any(g0) else "no standing load"
+        standing = "the standing loads" if np.any(g0) else "no standing load"
         over = (
             f"probe forces of {self.probe:g} N at the point in {len(held_dirs)} directions "
             f"the mechanism holds, against {standing}"
