@@ -35,7 +35,7 @@ from jointplay.model.fields import (
     TorqueVector,
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
-from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced
+from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced, play_unit
 from jointplay.units import shown
 
 if TYPE_CHECKING:
@@ -392,7 +392,7 @@ class Model(BaseModel):
                 if length >= LARGE_PLAY_SHARE * size:
                     degrees = f" ({math.degrees(play):.3g} deg)" if field in ANGULAR_PLAYS else ""
                     out.append(
-                        f"joint '{joint.name}': {field} {play:g} {_unit(field)}{degrees} is "
+                        f"joint '{joint.name}': {field} {play:g} {play_unit(field)}{degrees} is "
                         f"{length / size:.3g} times {what} ({size:g} mm)"
                         + (
                             f" at its lever ({joint.play_length(field, 1.0):g} mm)"
@@ -427,10 +427,6 @@ class Model(BaseModel):
         return Model.model_validate(data)
 
 
-def _unit(play_field: str) -> str:
-    return "rad" if play_field in ANGULAR_PLAYS else "mm"
-
-
 def check_case(model: Model, case: str | None, source: str) -> None:
     """An ``OptionError`` naming the cases unless ``case`` is None or one of them."""
     if case is None:
@@ -460,9 +456,9 @@ def _check_smallest_plays(model: Model) -> list[EntryError]:
                 continue
             # a play that varies: its largest value (a part may have any play in its range)
             most, what = (
-                (play.high, f"up to {play.high:g} {_unit(field)}")
+                (play.high, f"up to {play.high:g} {play_unit(field)}")
                 if isinstance(play, Toleranced)
-                else (float(play), f"{play:g} {_unit(field)}")
+                else (float(play), f"{play:g} {play_unit(field)}")
             )
             if joint.play_length(field, most) < SMALLEST_PLAY_SHARE * size:
                 found.append(

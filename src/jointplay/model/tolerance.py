@@ -40,6 +40,12 @@ PLAY_FIELDS = ("clearance", "axial_clearance", "clearance_y", "clearance_z", "ga
 #: Those of ``PLAY_FIELDS`` that are angles (rad), not lengths.
 ANGULAR_PLAYS = ("backlash",)
 
+
+def play_unit(field: str) -> str:
+    """The unit of a play field's values: rad for an angular play, else mm."""
+    return "rad" if field in ANGULAR_PLAYS else "mm"
+
+
 _FIT_KEYS = {"fit", "diameter", "distribution"}
 _RANGE_KEYS = {"min", "max", "distribution"}
 

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.geometry import FloatArray
-from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced
+from jointplay.model.tolerance import Toleranced, play_unit
 from jointplay.present.scene import Scene, mechanism_scene
 from jointplay.version import __version__
 
@@ -423,8 +423,9 @@ class _Page:
                     continue  # a point joint's play is its gap
                 origin = value.describe() if isinstance(value, Toleranced) else "as given"
                 used = "its mean" if isinstance(value, Toleranced) else "as given"
-                unit = "rad" if field in ANGULAR_PLAYS else "mm"
-                plays.append((joint.name, field, f"{_num(float(value))} {unit}", used, origin))
+                plays.append(
+                    (joint.name, field, f"{_num(float(value))} {play_unit(field)}", used, origin)
+                )
         if plays:
             self.parts.append(
                 _table(

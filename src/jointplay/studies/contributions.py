@@ -279,11 +279,11 @@ def _percent(part: FloatArray) -> FloatArray:
 def unit_of(variable: str) -> str:
     """The unit of a varying play or load component, from its label:
     ``l2.clearance`` mm, ``motor.backlash`` rad, ``loads[0].force[1]`` N."""
-    from jointplay.model.tolerance import ANGULAR_PLAYS
+    from jointplay.model.tolerance import play_unit
 
     last = variable.rsplit(".", 1)[-1]
     if last.startswith("force["):
         return "N"
     if last.startswith("torque["):
         return "N*mm"
-    return "rad" if last in ANGULAR_PLAYS else "mm"
+    return play_unit(last)
