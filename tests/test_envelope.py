@@ -183,22 +183,28 @@ def test_the_located_plate_envelope_is_the_lever_rule_of_its_two_pins() -> None:
     assert len(light.directions) < 106
 
 
+def ball_at_origin(*loads: dict[str, Any]) -> jointplay.Model:
+    """A body on a ball joint of play J = 0.4 at the origin, its point 'c' there."""
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
+            "joints": [
+                {
+                    "name": "ball",
+                    "type": "spherical",
+                    "between": ["g", "b"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.4,
+                }
+            ],
+            "loads": list(loads),
+            "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
+        }
+    )
+
+
 def test_an_envelope_over_load_ranges_takes_every_corner() -> None:
-    data = {
-        "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
-        "joints": [
-            {
-                "name": "ball",
-                "type": "spherical",
-                "between": ["g", "b"],
-                "at": [0, 0, 0],
-                "clearance": 0.4,
-            }
-        ],
-        "loads": [{"body": "b", "at": [0, 0, 0], "force": [{"min": -5, "max": 5}, 3, 0]}],
-        "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
-    }
-    model = jointplay.model_from_dict(data)
+    model = ball_at_origin({"body": "b", "at": [0, 0, 0], "force": [{"min": -5, "max": 5}, 3, 0]})
     env = Envelope("c", directions=50, levels=2).run(model)
     assert "2 load sets" in env.over
     corner = 0.2 * np.array([5.0, 3.0, 0.0]) / np.hypot(5, 3)
@@ -294,24 +300,9 @@ def test_a_case_without_loads_is_its_rest_position_and_many_loads_take_two_level
     model = jointplay.load(ROOT / "examples" / "studies" / "wobbly_table.yaml")
     env = Envelope("probe", directions=40).run(model)  # its case 'resting' has no own loads
     assert "3 load sets over 3 load cases" in env.over
-    data = {
-        "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
-        "joints": [
-            {
-                "name": "ball",
-                "type": "spherical",
-                "between": ["g", "b"],
-                "at": [0, 0, 0],
-                "clearance": 0.4,
-            }
-        ],
-        "loads": [
-            {"body": "b", "at": [0, 0, 0], "force": [{"min": -1, "max": 1}, 1, 0]}
-            for _ in range(11)
-        ],
-        "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
-    }
-    many = jointplay.model_from_dict(data)  # 3^11 is over the cap: 2^11 sets
+    many = ball_at_origin(
+        *({"body": "b", "at": [0, 0, 0], "force": [{"min": -1, "max": 1}, 1, 0]} for _ in range(11))
+    )  # 3^11 is over the cap: 2^11 sets
     wide = Envelope("c", directions=20).run(many)
     assert "2,048 load sets, both limits" in wide.over
     with pytest.raises(jointplay.OptionError, match="3\\^11 load combinations"):
@@ -322,19 +313,9 @@ def test_probes_push_against_a_standing_preload() -> None:
     # a ball joint (J/2 = 0.2) whose centre a spring presses with 10 N along -Y:
     # a 1 N probe along u leaves the centre at 0.2 (u - 10 Y) / |u - 10 Y|
     def ball(standing: bool) -> jointplay.Model:
-        return jointplay.model_from_dict(
-            {
-                "bodies": [{"name": "g", "ground": True}, {"name": "b"}],
-                "joints": [
-                    {"name": "ball", "type": "spherical", "between": ["g", "b"],
-                     "at": [0, 0, 0], "clearance": 0.4}
-                ],
-                "loads": [
-                    {"body": "b", "at": [0, 0, 0], "force": [0, -10, 0], "standing": standing}
-                ],
-                "points": [{"name": "c", "body": "b", "at": [0, 0, 0]}],
-            }
-        )  # fmt: skip
+        return ball_at_origin(
+            {"body": "b", "at": [0, 0, 0], "force": [0, -10, 0], "standing": standing}
+        )
 
     env = Envelope("c", directions=60).run(ball(standing=True))
     assert "against the standing loads" in env.over
