@@ -189,6 +189,7 @@ def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
     conv = _newton_rows(
         face.stack,
         np.repeat(face.stack.r[None, :], 3, axis=0),
+        np.zeros((3, face.stack.A.shape[0])),
         face.Eq,
         np.repeat(face.e[None, :], 3, axis=0),
         np.zeros((3, face.Eq.shape[0])),

@@ -14,8 +14,10 @@ Everything the solver needs is linear in ``x``:
 
 * ``G_joint @ x`` is a joint's relative torsor ``(t [mm], w [rad])`` of b with
   respect to a, at the joint centre, in the joint frame;
-* each contact is ``|| A @ x || + B @ x <= radius`` (scaled by ``s``; ``B``
-  is zero for a plain ball of play), or ``A @ x = 0``;
+* each contact is ``|| A @ x - c || + B @ x <= radius`` (scaled by ``s``;
+  ``B`` is zero for a plain ball of play; ``c``, the centre of its play, is
+  zero unless the joint's features deviate, see ``deviations.py``), or
+  ``A @ x = 0``;
 * the loads' work is ``g @ x`` (N*mm), so the potential energy is ``-g @ x``.
 """
 
@@ -73,6 +75,9 @@ class ContactRows:
     #: A ball with no play is fixed rows, unless its play was set by a study
     #: (``Assembly.with_radii``): the contacts then keep the model's layout.
     zero_play_is_fixed: bool = True
+    #: (k,) scaled: where the play's centre sits, ``rows @ delta / s`` for the
+    #: joint's deviation ``delta``; None: at 0 (no deviation).
+    centre: FloatArray | None = None
 
     @property
     def is_fixed(self) -> bool:
@@ -83,6 +88,7 @@ class ContactRows:
             and self.radius == 0.0
             and self.stiffness == 0.0
             and self.offset_block is None
+            and self.centre is None
         )
 
     @property
@@ -103,6 +109,21 @@ class ContactRows:
         out = np.zeros((self.k, self.m))
         np.add.at(out.T, self.cols, self.block.T)
         return out
+
+    def exact_parts(
+        self, s: float, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray
+    ) -> tuple[FloatArray, float]:
+        """``Contact.exact_parts`` (mm) measured from the play's centre."""
+        vector, scalar = self.contact.exact_parts(R_rel, phi, t_rel)
+        vector = np.asarray(vector, dtype=float)
+        if self.centre is not None:
+            vector = vector - self.centre * s
+        return vector, scalar
+
+    def exact_level(self, s: float, R_rel: FloatArray, phi: FloatArray, t_rel: FloatArray) -> float:
+        """``|a| + b`` of ``exact_parts``: compare with ``radius * s``."""
+        vector, scalar = self.exact_parts(s, R_rel, phi, t_rel)
+        return float(np.linalg.norm(vector)) + scalar
 
     def dense_offset(self) -> FloatArray:
         """``B`` as a full m-vector (zero for a plain ball)."""
@@ -141,11 +162,12 @@ def _rows_matrix(blocks: Sequence[tuple[IntArray, FloatArray]], m: int, sparse: 
 
 @dataclass(frozen=True)
 class BallStack:
-    """The clearance cones ``|A_i x| + B_i x <= r_i`` stacked for vectorized work.
+    """The clearance cones ``|A_i x - c_i| + B_i x <= r_i`` stacked for vectorized work.
 
     ``A`` holds the rows of every cone one after the other (cone ``i`` is rows
     ``start[i] : start[i] + k[i]``; ``k[i]`` is 0 for a one-sided limit),
-    ``B`` one row per cone (zero for a plain ball), ``r`` the radii (scaled).
+    ``B`` one row per cone (zero for a plain ball), ``r`` the radii (scaled),
+    ``centre`` the cones' centres stacked like the rows of A (None: all 0).
     The dual of cone i is a force ``lam_i >= |f_i|`` with a vector ``f_i``
     (``f`` stacks them like the rows of ``A``); it does the work
     ``A_i^T f_i + lam_i B_i`` (see ``adjoint``).
@@ -157,6 +179,7 @@ class BallStack:
     r: FloatArray  # (n,)
     spring: FloatArray  # (n,) contact stiffness N/mm, 0 for a hard limit
     B: Matrix  # (n, m)
+    centre: FloatArray | None = None  # (sum k,) scaled; None: every centre at 0
 
     @staticmethod
     def of(balls: Sequence[ContactRows], m: int, sparse: bool = False) -> BallStack:
@@ -176,7 +199,12 @@ class BallStack:
             m,
             sparse,
         )
-        return BallStack(A, start, k, r, spring, B)
+        centre = None
+        if any(c.centre is not None for c in balls):
+            centre = np.concatenate(
+                [np.zeros(c.k) if c.centre is None else c.centre for c in balls]
+            )
+        return BallStack(A, start, k, r, spring, B, centre)
 
     @property
     def m(self) -> int:
@@ -204,8 +232,15 @@ class BallStack:
         idx = np.asarray(which, dtype=np.intp)
         k = self.k[idx]
         start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
+        rows = self.rows_of(idx)
         return BallStack(
-            self.A[self.rows_of(idx)], start, k, self.r[idx], self.spring[idx], self.B[idx]
+            self.A[rows],
+            start,
+            k,
+            self.r[idx],
+            self.spring[idx],
+            self.B[idx],
+            None if self.centre is None else self.centre[rows],
         )
 
     def with_limits(self, rows: Matrix) -> BallStack:
@@ -219,6 +254,7 @@ class BallStack:
             np.concatenate([self.r, np.zeros(n)]),
             np.concatenate([self.spring, np.zeros(n)]),
             linalg.vstack([self.B, rows], self.m),
+            self.centre,
         )
 
     @cached_property
@@ -262,15 +298,36 @@ class BallStack:
             return np.add.reduceat(w, self.start, axis=-1)
         return w @ S
 
-    def norms(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """``(A @ x, |A_i x|)`` for one x (m,) or a batch of rows (B, m)."""
+    def centres(self, centre: FloatArray | None = None) -> FloatArray:
+        """The centres stacked like the rows of A: ``centre`` if given (a
+        study's, a row per sample), else the stack's own (0 without)."""
+        if centre is not None:
+            return centre
+        return np.zeros(self.A.shape[0]) if self.centre is None else self.centre
+
+    def norms(
+        self, x: FloatArray, centre: FloatArray | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """``(A @ x - c, |A_i x - c_i|)`` for one x (m,) or a batch of rows
+        (B, m); ``centre``: other centres than the stack's (like ``v``)."""
         v = linalg.times(self.A, x)
+        c = self.centre if centre is None else centre
+        if c is not None:
+            v = v - c
         return v, np.sqrt(self.segment_sum(v * v))
 
-    def levels(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """``(A @ x, |A_i x|, |A_i x| + B_i x)``: each cone's level, to compare with r."""
-        v, rho = self.norms(x)
+    def levels(
+        self, x: FloatArray, centre: FloatArray | None = None
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(A @ x - c, |A_i x - c_i|, |A_i x - c_i| + B_i x)``: each cone's
+        level, to compare with r."""
+        v, rho = self.norms(x, centre)
         return v, rho, rho + linalg.times(self.B, x)
+
+    @property
+    def homogeneous(self) -> BallStack:
+        """The same cones centred at 0: the directions they let go on for ever."""
+        return self if self.centre is None else replace(self, centre=None)
 
     def adjoint(self, f: FloatArray, lam: FloatArray) -> FloatArray:
         """``sum_i A_i^T f_i + lam_i B_i``: the work of the contact forces (rows batched)."""
@@ -415,16 +472,27 @@ class Assembly:
             out[G.cols] += G.block.T @ (w2[:, None] * (G.block @ X[G.cols]))
         return out
 
-    def with_radii(self, radii: FloatArray) -> Assembly:
+    def with_radii(self, radii: FloatArray, centre: FloatArray | None = None) -> Assembly:
         """This assembly with other scaled radii for its clearance cones
-        (``balls`` order); everything else, the scales included, is kept."""
+        (``balls`` order) and, if given, other centres (stacked like the rows
+        of ``stack.A``); everything else, the scales included, is kept."""
         radii = np.asarray(radii, dtype=float)
         if radii.shape != (len(self.balls),):
             raise ValueError(f"radii must have shape ({len(self.balls)},), not {radii.shape}")
-        new_radius = {id(c): float(r) for c, r in zip(self.balls, radii, strict=True)}
+        k = [c.k for c in self.balls]
+        if centre is not None:
+            centre = np.asarray(centre, dtype=float)
+            if centre.shape != (sum(k),):
+                raise ValueError(f"centre must have shape ({sum(k)},), not {centre.shape}")
+            ends = np.cumsum(k)
+            centres = [centre[e - n : e] for e, n in zip(ends, k, strict=True)]
+        new = {
+            id(c): (float(r), c.centre if centre is None else centres[i])
+            for i, (c, r) in enumerate(zip(self.balls, radii, strict=True))
+        }
         contacts = tuple(
-            replace(c, radius=new_radius[id(c)], zero_play_is_fixed=False)
-            if id(c) in new_radius
+            replace(c, radius=new[id(c)][0], centre=new[id(c)][1], zero_play_is_fixed=False)
+            if id(c) in new
             else c
             for c in self.contacts
         )
@@ -581,10 +649,16 @@ def assemble(model: Model) -> Assembly:
             continue
         blocks = (np.vstack([c.rows for c in cones]) / s) @ G.block
         spring = joint.stiffness or 0.0
+        # a deviation moves each play's centre, and a face's limit along its normal
+        delta = np.zeros(6) if joint.deviation is None else joint.deviation.mean()
         at = 0
         for cdx, contact in enumerate(cones):
             k = contact.rows.shape[0]
             offset = None if contact.offset is None else (contact.offset / s) @ G.block
+            deviated = joint.deviation is not None and contact.kind == "ball"
+            radius = contact.radius
+            if deviated and contact.offset is not None:
+                radius += float(contact.offset @ delta)
             contacts.append(
                 ContactRows(
                     jdx,
@@ -592,7 +666,7 @@ def assemble(model: Model) -> Assembly:
                     contact,
                     G.cols,
                     blocks[at : at + k],
-                    contact.radius / s,
+                    radius / s,
                     m,
                     0.0
                     if contact.kind == "fixed"
@@ -600,6 +674,7 @@ def assemble(model: Model) -> Assembly:
                     if contact.stiffness is None
                     else contact.stiffness,
                     offset,
+                    centre=(contact.rows @ delta) / s if deviated else None,
                 )
             )
             at += k

@@ -111,7 +111,7 @@ def linearization(asm: Assembly, x: FloatArray, reach_mm: FloatArray) -> Lineari
             past = float(np.linalg.norm(c.contact.rows[:, :3] @ d))
             play = 0.0
         else:
-            past = max(c.contact.exact_level(R_rel, phi, t_rel) - float(reach_mm[i]), 0.0)
+            past = max(c.exact_level(asm.s, R_rel, phi, t_rel) - float(reach_mm[i]), 0.0)
             play = 2.0 * c.contact.radius
         if past > worst:
             worst, where = past, (joint.name, c.contact.name)

@@ -82,16 +82,23 @@ class BatchSolution:
         return stack.gap_used(stack.levels(self.x)[2])
 
 
-def solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None = None) -> BatchSolution:
+def solve_batch(
+    ws: Workspace,
+    work: FloatArray,
+    radii: FloatArray | None = None,
+    centres: FloatArray | None = None,
+) -> BatchSolution:
     """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
-    cone radii (``Assembly.balls`` order; default: the model's).
+    cone radii (``Assembly.balls`` order; default: the model's); ``centres``
+    (B, rows): each sample's cone centres, stacked like ``stack.A``'s rows
+    (a deviation of the joints' features; default: the model's).
 
     In one BLAS thread: the work is many small matrices, which more threads
     only slow down, and a study's processes would compete for the cores
     (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
     samples/s against 145,000)."""
     with _blas().limit(limits=1, user_api="blas"):
-        return _solve_batch(ws, work, radii)
+        return _solve_batch(ws, work, radii, centres)
 
 
 @functools.cache
@@ -102,7 +109,9 @@ def _blas() -> Any:
     return ThreadpoolController()
 
 
-def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> BatchSolution:
+def _solve_batch(
+    ws: Workspace, work: FloatArray, radii: FloatArray | None, centres: FloatArray | None
+) -> BatchSolution:
     from scipy.spatial import cKDTree  # here: a single solve need not import it
 
     work = np.atleast_2d(np.asarray(work, dtype=float))
@@ -126,8 +135,19 @@ def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> B
         if not np.all(np.isfinite(r)) or np.any(r < 0):
             raise ValueError("radii must be finite and >= 0")
         varied = True
+    n_rows = ws.stack.A.shape[0]
+    if centres is None:
+        c = np.broadcast_to(ws.stack.centres(), (B, n_rows))
+    else:
+        c = np.asarray(centres, dtype=float)
+        if c.shape != (B, n_rows):
+            raise ValueError(f"centres must have shape ({B}, {n_rows}), not {c.shape}")
+        if not np.all(np.isfinite(c)):
+            raise ValueError("centres must be finite")
+        varied = True
     # the nearest solved sample (loads, and plays when they vary) starts Newton
-    features = np.hstack([g_hat, r / max(ws.max_radius, TINY)]) if varied else g_hat
+    scale = max(ws.max_radius, TINY)
+    features = np.hstack([g_hat, r / scale, c / scale]) if varied else g_hat
 
     x = np.zeros((B, ws.m))
     lam = np.zeros((B, n_balls))
@@ -173,6 +193,7 @@ def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> B
                         lam[near],
                         f[near],
                         r[now],
+                        c[now],
                     )
                     failed[now[~ok]] += 1
                     if np.any(ok):
@@ -186,7 +207,7 @@ def _solve_batch(ws: Workspace, work: FloatArray, radii: FloatArray | None) -> B
         if not pending.size:
             break
         first, pending = int(pending[0]), pending[1:]
-        solver = ws.with_radii(r[first]) if varied else ws
+        solver = ws.with_radii(r[first], c[first]) if varied else ws
         if dense:
             solver.last = None  # a warm start would retry the set the batch gave up on
         point = pipeline.optimum(solver, g_hat[first], sigma[first])
@@ -230,11 +251,12 @@ def _newton_batch(
     lam0: FloatArray,
     f0: FloatArray,
     r: FloatArray,
+    c: FloatArray,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
     each from its own start (rows of ``x0``, ``lam0``, ``f0``: the nearest
     solved sample's answer and split) and with its own cone radii (rows of
-    ``r``).
+    ``r``) and centres (rows of ``c``).
 
     Returns (accepted mask, x, full multipliers, force vectors, their
     certificate); a row is accepted only if it converged and passes the
@@ -258,14 +280,17 @@ def _newton_batch(
     eq_soft[:, ne0 + face.lam_rows] = sigma[:, list(linear)]
     e_rows = np.repeat(e[None, :], B, axis=0)
     e_rows[:, ne0 + face.lam_rows] = r[:, list(linear)]
+    e_rows[:, ne0 + face.f_rows] = c[:, face.linear_rows]
     r_surface = r[:, list(surface)]
+    c_surface = c[:, face.surface_rows]
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
     # (the same positions); the forces are split afterwards
-    kept = None if tie is not None else _independent_rows(ws, face, x0[0])
+    kept = None if tie is not None else _independent_rows(ws, face, x0[0], c_surface[0])
     redundant = kept is not None
     s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
     sub = face.stack.take(s_keep)
+    sub_rows = face.stack.rows_of(s_keep)
     lam_s = np.zeros((B, na))
     lam_k = lam0[:, list(surface)][:, s_keep]
     nu = np.zeros((B, ne))
@@ -274,6 +299,7 @@ def _newton_batch(
     conv = _newton_rows(
         sub,
         r_surface[:, s_keep],
+        c_surface[:, sub_rows],
         Eq[e_keep],
         e_rows[:, e_keep],
         eq_soft[:, e_keep],
@@ -287,7 +313,7 @@ def _newton_batch(
     lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
 
     lam[:, list(surface)] = lam_s
-    v, rho = face.stack.norms(x)
+    v, rho = face.stack.norms(x, c_surface)
     f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
@@ -296,7 +322,7 @@ def _newton_batch(
     # may share the load: the split rule decides, as when the set is redundant
     in_set = np.zeros(len(ws.balls), dtype=bool)
     in_set[[*surface, *linear]] = True
-    touching = (stack.spring == 0) & (stack.gap_used(stack.levels(x)[2], r) >= st.touching)
+    touching = (stack.spring == 0) & (stack.gap_used(stack.levels(x, c)[2], r) >= st.touching)
     if tie is not None:
         # the least-norm point of the face's affine hull is the tie's answer only
         # where it stays inside every other cone, off their limits (else the
@@ -307,12 +333,12 @@ def _newton_batch(
         # from the neighbour's split, on the cone limits that bind it
         apex = st.feasibility_tolerance * ws.max_radius
         split, lam, f, _ = forces.least_squares_rows(
-            ws.asm, x, lam, f, g_hat, r, (lam0, f0), apex, st
+            ws.asm, x, lam, f, g_hat, r, (lam0, f0), apex, st, c
         )
         # rigid joints' forces by least squares, for split and own rows alike
         # (the batch reports contact forces only)
-        checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
-        ok = conv & split & _pinned(ws, key, x, lam, f)
+        checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
+        ok = conv & split & _pinned(ws, key, x, lam, f, c)
         return ok & checks.passed(st, ws.max_radius), x, lam, f, checks
     lam_a = lam[:, list(surface) + list(linear)]
     positive = ws.settings.positive_force
@@ -322,13 +348,14 @@ def _newton_batch(
         f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
         inside = (f_norm < (1.0 - positive) * lam[:, list(linear)]) | (lin.k == 0)
         strict &= np.all(inside, axis=1)
-    checks = certificate.check(ws, g_hat, x, lam, f, sigma, r)
+    checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
     return conv & strict & checks.passed(ws.settings, ws.max_radius), x, lam, f, checks
 
 
 def _newton_rows(
     sub: BallStack,
     r: FloatArray,
+    c_rows: FloatArray,
     Eq: FloatArray,
     e: FloatArray,
     eq_soft: FloatArray,
@@ -340,8 +367,8 @@ def _newton_rows(
     settings: SolverSettings,
 ) -> BoolArray:
     """Newton on the KKT equations (see ``newton.newton``), rows in place,
-    each row with its own radii ``r`` (B, na) and right sides ``e`` (B, ne);
-    returns the converged mask."""
+    each row with its own radii ``r`` (B, na), centres ``c_rows`` (B, rows of
+    ``sub``) and right sides ``e`` (B, ne); returns the converged mask."""
     B, m = q.shape
     A, start, k, Bo = sub.A, sub.start, sub.k, sub.B
     na, ne = len(k), Eq.shape[0]
@@ -361,7 +388,7 @@ def _newton_rows(
     conv = np.zeros(B, dtype=bool)
     for it in range(settings.batch_newton_steps + 1):
         xs = x[todo]
-        v = xs @ A.T
+        v = xs @ A.T - c_rows[todo]
         rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
         directed = np.all(rho > 0, axis=1)
         if not np.all(directed):  # a contact at its centre has no direction: full solver
@@ -410,7 +437,7 @@ def _newton_rows(
 
 
 def _pinned(
-    ws: Workspace, key: FaceKey, x: FloatArray, lam: FloatArray, f: FloatArray
+    ws: Workspace, key: FaceKey, x: FloatArray, lam: FloatArray, f: FloatArray, c: FloatArray
 ) -> BoolArray:
     """Whether the forces ``lam``, ``f`` (rows) pin each row's position
     down: any other optimum keeps every loaded contact where it is, so the
@@ -421,7 +448,7 @@ def _pinned(
     stack, st = ws.stack, ws.settings
     B = x.shape[0]
     loaded = lam > st.positive_force * np.max(lam, axis=1, keepdims=True)
-    v, rho = stack.norms(x)
+    v, rho = stack.norms(x, c)
     f_norm = np.sqrt(stack.segment_sum(f * f))
     parts = [np.broadcast_to(linalg.dense(ws.Eq), (B, *ws.Eq.shape))]
     surface, linear = key
@@ -450,7 +477,9 @@ def _pinned(
     return np.asarray(sv[:, ws.m - 1] > st.free_motion_rcond * sv[:, 0])[same]
 
 
-def _independent_rows(ws: Workspace, face: Face, x: FloatArray) -> tuple[IntArray, IntArray] | None:
+def _independent_rows(
+    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray
+) -> tuple[IntArray, IntArray] | None:
     """None if the active rows of ``face`` at ``x`` (each surface cone's
     gradient and the equalities) are independent. Else they are redundant
     (contacts on the four corners of a guide: the forces are not unique,
@@ -462,7 +491,7 @@ def _independent_rows(ws: Workspace, face: Face, x: FloatArray) -> tuple[IntArra
     Eq = linalg.dense(face.Eq)
     rows = [Eq]
     if len(sub.k):
-        v, rho = sub.norms(x)
+        v, rho = sub.norms(x, centre)
         u = v / np.repeat(np.where(rho > 0, rho, 1.0), sub.k)
         rows.insert(0, np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B)
     J = np.vstack(rows)

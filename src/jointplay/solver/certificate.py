@@ -164,15 +164,17 @@ def check(
     sigma: FloatArray,
     r: FloatArray | None = None,
     nu: FloatArray | None = None,
+    c: FloatArray | None = None,
 ) -> Checks:
     """The certificate of B answers (rows of ``x``, ``lam``, ``f``; ``nu``:
     rigid multipliers, else least squares) under unit loads ``g_hat`` (rows),
-    with contact softness ``sigma`` and, if given, each row's own radii ``r``."""
+    with contact softness ``sigma`` and, if given, each row's own radii ``r``
+    and cone centres ``c``."""
     stack = ws.stack
     B = x.shape[0]
     radii = np.broadcast_to(stack.r if r is None else r, lam.shape)
     if len(stack.k):
-        v, rho, level = stack.levels(x)
+        v, rho, level = stack.levels(x, c)
         reach = radii + sigma * np.maximum(lam, 0.0)
         feas = np.max(level - reach, axis=1)
         gap = np.abs(lam) * np.abs(reach - level) + np.abs(lam * rho - stack.segment_sum(f * v))

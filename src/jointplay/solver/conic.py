@@ -67,14 +67,12 @@ def cone_program(
     e: FloatArray,
     stack: BallStack,
     *,
-    shift: FloatArray | None = None,
     tolerance: float | None = None,
     max_iter: int | None = None,
 ) -> ConeProgram:
-    """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, -A_i x - a_i)``
-    per contact (a one-sided limit, with no rows, is a non-negative slack).
-    Its dual is ``(lam_i, f_i)``. ``shift``: the offsets ``a`` stacked like
-    the rows of A (0 by default; a re-linearized contact has them)."""
+    """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, c_i - A_i x)``
+    per contact (a one-sided limit, with no rows, is a non-negative slack),
+    ``c_i`` its centre (``BallStack.centre``). Its dual is ``(lam_i, f_i)``."""
     n_eq, n_cones, n_rows = Eq.shape[0], len(stack.k), stack.A.shape[0]
     n_all = n_eq + n_rows + n_cones
     b = np.zeros(n_all)
@@ -82,8 +80,8 @@ def cone_program(
     soc_first = n_eq + stack.start + np.arange(n_cones)
     ball_rows = n_eq + np.arange(n_rows) + np.repeat(np.arange(1, n_cones + 1), stack.k)
     b[soc_first] = stack.r
-    if shift is not None:
-        b[ball_rows] = -shift
+    if stack.centre is not None:
+        b[ball_rows] = stack.centre
     order = np.empty(n_all, dtype=np.intp)  # row of the program -> row of (Eq; A; B)
     order[:n_eq] = np.arange(n_eq)
     order[ball_rows] = n_eq + np.arange(n_rows)

@@ -141,8 +141,8 @@ def _contact_parts(asm: Assembly, x: FloatArray) -> _Parts:
     for c in (*asm.balls, *asm.fixed):
         if c.joint_index not in relative:
             relative[c.joint_index] = relative_in_joint(asm, place, c.joint_index)
-        a, b = c.contact.exact_parts(*relative[c.joint_index])
-        (fixed if c.is_fixed else balls).append((np.asarray(a, dtype=float), b))
+        a, b = c.exact_parts(asm.s, *relative[c.joint_index])
+        (fixed if c.is_fixed else balls).append((a, b))
     return _Parts(balls, fixed)
 
 
@@ -227,7 +227,9 @@ def _step(
         cursor += len(a) + 1
     stack = ws.stack
     assert np.array_equal(k, stack.k), "the exact parts follow the assembly's cones"
-    linear = BallStack(J[vector], stack.start, k, stack.r - now[scalar], stack.spring, J[scalar])
+    linear = BallStack(
+        J[vector], stack.start, k, stack.r - now[scalar], stack.spring, J[scalar], -now[vector]
+    )
     # free motions of the current placement (no cone or fixed row moves them):
     # the step leaves them alone, as the small-displacement answer did
     _, sv, Vt = np.linalg.svd(J, full_matrices=True)
@@ -241,7 +243,6 @@ def _step(
         Eq,
         e,
         linear,
-        shift=now[vector],
         tolerance=st.fine_ipm_tolerance,
         max_iter=st.exact_ipm_iterations,
     )
@@ -303,8 +304,8 @@ def _build(
                 fi = f[f_start[i] : f_start[i + 1]]
                 wrench = -(G[: c.k].T @ fi + lam[i] * G[c.k])
                 local_point = c.contact.acting_point(fi, float(lam[i]))
-                level = c.contact.exact_level(R_rel, phi, t_rel)
-                r = c.contact.radius
+                level = c.exact_level(asm.s, R_rel, phi, t_rel)
+                r = c.radius * asm.s
                 reached = level >= -st.zero_play_reach
                 gap = float(np.clip(level / r, 0.0, 1.0)) if r > 0 else float(reached)
                 touching = gap >= st.touching

@@ -54,7 +54,7 @@ class Face:
     ``surface``: cones on their curved surface, ``|A_i x| + B_i x = r_i``
     with ``A_i x != 0`` (their force is along ``A_i x``). ``linear``: cones
     whose rows all hold as equalities: one-sided limits (no rows) and faces
-    resting flat at their apex (``A_i x = 0``, ``B_i x = r_i``; their force
+    resting flat at their apex (``A_i x = c_i``, ``B_i x = r_i``; their force
     vector is free inside ``|f_i| <= lam_i``). The linear cones' rows ``L x = l``
     join the equalities; ``lam_rows`` are the rows of L that carry a cone's
     ``lam`` (and its compliance), ``f_rows`` the rows that carry its ``f``.
@@ -108,6 +108,7 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
         order[lam_rows] = n_f + np.arange(len(k))
         L = linalg.vstack([lin.A, lin.B], ws.m)[order]
         rhs[lam_rows] = lin.r
+        rhs[f_rows] = lin.centres()
         tilting = bool(np.any(sub.has_offset & (sub.k > 0)))
 
         def determined(L: Matrix = L, sub: BallStack = sub) -> bool | None:

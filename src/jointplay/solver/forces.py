@@ -136,10 +136,11 @@ def least_squares_rows(
     near: tuple[FloatArray, FloatArray],
     apex_level: float,
     settings: SolverSettings,
+    centres: FloatArray | None = None,
 ) -> tuple[NDArray[np.bool_], FloatArray, FloatArray, FloatArray]:
     """``least_squares_split`` of B answers at once (rows of ``x``, ``lam``,
-    ``f``, ``g_hat``, each with its own cone ``radii``; dense models), on
-    the cone limits that bind a split ``near`` it.
+    ``f``, ``g_hat``, each with its own cone ``radii`` and, if given,
+    ``centres``; dense models), on the cone limits that bind a split ``near`` it.
 
     ``near = (lam, f)``: rows of a split close to each row's, such as the
     cone program's answer or a neighbouring sample's split. Its touching
@@ -155,7 +156,7 @@ def least_squares_rows(
     ``(lam, f, nu)`` (the rule's where the mask holds)."""
     stack = asm.stack
     B, n_e = x.shape[0], asm.E.shape[0]
-    surface, apex, u = _classes(stack, x, radii, apex_level, settings)
+    surface, apex, u = _classes(stack, x, radii, apex_level, settings, centres)
     keep_lam, keep_f = _compliant(stack, lam, f)
     b = g_hat - stack.adjoint(keep_f, keep_lam)
     ok = np.zeros(B, dtype=bool)
@@ -287,13 +288,18 @@ def _split_newton(
 
 
 def _classes(
-    stack: BallStack, x: FloatArray, radii: FloatArray, apex_level: float, settings: SolverSettings
+    stack: BallStack,
+    x: FloatArray,
+    radii: FloatArray,
+    apex_level: float,
+    settings: SolverSettings,
+    centres: FloatArray | None = None,
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], FloatArray]:
     """Which hard contacts touch on their cone's surface, and which rest at
     its apex (a one-sided limit, a face flat, a ball centred: ``|A_i x|`` at
     or below ``apex_level``); and each cone's direction of contact ``u``.
-    One answer (m,) or rows (B, m) with their ``radii``."""
-    v, rho, level = stack.levels(x)
+    One answer (m,) or rows (B, m) with their ``radii`` (and ``centres``)."""
+    v, rho, level = stack.levels(x, centres)
     touching = (stack.spring == 0) & (stack.gap_used(level, radii) >= settings.touching)
     apex = touching & ((stack.k == 0) | (rho <= apex_level))
     safe = np.where(rho > 0, rho, 1.0)

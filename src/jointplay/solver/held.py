@@ -70,7 +70,7 @@ def driven_motion(ws: Workspace, g: FloatArray, fallback: FloatArray) -> FloatAr
                 work = float(g @ sd)
                 if work <= best_work:
                     continue
-                _, _, level = stack.levels(sd)
+                _, _, level = stack.homogeneous.levels(sd)
                 if len(level) and float(np.max(level)) > tol:
                     continue
                 if ws.E.shape[0] and float(np.max(np.abs(ws.E @ sd))) > tol:

@@ -151,7 +151,7 @@ def newton(
     """Newton's method on the KKT equations of an active set.
 
     Stationarity ``P x + q + sum lam_i (A_i^T u_i + B_i) + Eq^T nu = 0``,
-    active contacts on their surface ``|A_i x| + B_i x = r_i + soft_i lam_i``
+    active contacts on their surface ``|A_i x - c_i| + B_i x = r_i + soft_i lam_i``
     (``soft``: compliance, default 0), equalities ``Eq x = e + eq_soft nu``.
     A singular system (statically indeterminate contact forces) takes
     least-squares steps. ``prox`` > 0: the steps are proximal ones
@@ -163,6 +163,7 @@ def newton(
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
+    centre = stack.centres()
     sparse = linalg.is_sparse(A) or linalg.is_sparse(Eq)
     x, lam = x0.copy(), lam0.astype(float).copy()
     soft_na = np.zeros(na) if soft is None else soft
@@ -183,7 +184,7 @@ def newton(
         if P is not None:
             grad = grad + P @ x
         if na:
-            v = linalg.times(A, x)
+            v = linalg.times(A, x) - centre
             rho = np.sqrt(np.add.reduceat(v * v, start))
             if float(np.min(rho)) == 0.0:
                 return None

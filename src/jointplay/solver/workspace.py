@@ -89,20 +89,25 @@ class Workspace:
 
         return pipeline.solve_loads(self, loads, exact=exact)
 
-    def solve_batch(self, work: FloatArray, radii: FloatArray | None = None) -> BatchSolution:
+    def solve_batch(
+        self, work: FloatArray, radii: FloatArray | None = None, centres: FloatArray | None = None
+    ) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of
         the loads' work per sample (build rows with ``Assembly.wrench_work``).
         ``radii`` (B, n): each sample's own plays, as scaled cone radii in the
-        order of ``Assembly.balls`` (``variation.PlayMap.radii`` builds them)."""
+        order of ``Assembly.balls`` (``variation.PlayMap.radii`` builds them).
+        ``centres`` (B, rows): each sample's cone centres, stacked like the
+        rows of ``stack.A`` (``deviations.DeviationMap`` builds them)."""
         from jointplay.solver.batch import solve_batch
 
-        return solve_batch(self, work, radii)
+        return solve_batch(self, work, radii, centres)
 
-    def with_radii(self, radii: FloatArray) -> Workspace:
+    def with_radii(self, radii: FloatArray, centre: FloatArray | None = None) -> Workspace:
         """A workspace of the same mechanism with other plays: ``radii`` are
-        the scaled cone radii (``Assembly.balls`` order); scales, free motions
-        and unknowns stay those of this one, so answers compare row by row."""
-        return Workspace(self.asm.with_radii(radii), self.settings)
+        the scaled cone radii (``Assembly.balls`` order) and ``centre`` the
+        cones' centres (stacked like the rows of ``stack.A``); scales, free
+        motions and unknowns stay those of this one, so answers compare row by row."""
+        return Workspace(self.asm.with_radii(radii, centre), self.settings)
 
     def softness(self, g_norm: float | FloatArray) -> FloatArray:
         """Compliant contacts: the elastic energy k p^2 / 2 (p in mm) becomes

@@ -31,7 +31,7 @@ from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.parallel import run_chunks
-from jointplay.studies.variation import load_map, play_map
+from jointplay.studies.variation import deviation_map, load_map, play_map
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -104,6 +104,7 @@ class _Chunk:
     index: int
     plays: FloatArray  # (n, nv) mm
     loads: FloatArray  # (n, nl) N or N*mm: the load components that vary
+    deviations: FloatArray  # (n, nd) mm or rad: the deviations' components
     displacement: FloatArray  # (n, points, 3) mm
     batched: int
     full_solves: int
@@ -135,11 +136,16 @@ def _waves(
 def _study_inputs(model: Model, case: str | None, source: str) -> None:
     check_case(model, case, source)
     asm = assemble(model)
-    if not play_map(asm, source).variables and not load_map(asm, case).variables:
+    if (
+        not play_map(asm, source).variables
+        and not load_map(asm, case).variables
+        and not deviation_map(asm).variables
+    ):
         raise ModelError(
             "no play varies from part to part, so every sample would be the same; give a "
             "joint's clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
-            "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12})",
+            "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12}, "
+            "or a joint a deviation zone, deviation: {position: '0.02 mm'})",
             source=source,
             entry="joints",
         )
@@ -157,12 +163,20 @@ def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
     asm = assemble(model)
     pmap = play_map(asm, model.name or "<model>")
     lmap = load_map(asm, mc.case)
+    dmap = deviation_map(asm)
     rng = np.random.default_rng([mc.seed, index])
     plays = pmap.sample(rng, size)
-    loads = lmap.sample(rng, size)  # after the plays: draws nothing when no load varies
+    # after the plays, loads, then deviations: each draws nothing when none
+    # varies, so a study without them keeps its random stream
+    loads = lmap.sample(rng, size)
+    deviations = dmap.sample(rng, size)
     work = lmap.work(loads) if lmap.variables else np.tile(lmap.g0, (size, 1))
     ws = Workspace(asm)
-    batch = ws.solve_batch(work, pmap.radii(plays))
+    radii, centres = pmap.radii(plays), None
+    if dmap.variables:
+        radii = radii + dmap.radii_shift(deviations)
+        centres = dmap.centres(deviations)
+    batch = ws.solve_batch(work, radii, centres)
     displacement = np.zeros((size, len(model.points), 3))
     for p, point in enumerate(model.points):
         motion = batch.body_displacement(point.body)
@@ -172,6 +186,7 @@ def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
         index,
         plays,
         loads,
+        deviations,
         displacement,
         int(np.sum(batch.batched)),
         batch.full_solves,
@@ -296,6 +311,9 @@ class MonteCarloResult:
     load_labels: tuple[str, ...] = ()
     loads: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))  # (N, nl)
     loads_described: dict[str, str] = field(default_factory=dict)
+    deviation_labels: tuple[str, ...] = ()
+    deviations: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))  # (N, nd)
+    deviations_described: dict[str, str] = field(default_factory=dict)
 
     @property
     def samples(self) -> int:
@@ -311,6 +329,7 @@ class MonteCarloResult:
             "case": self.settings.case,
             "plays": self.plays_described,
             "loads": self.loads_described,
+            "deviations": self.deviations_described,
             "points": {n: p.to_dict() for n, p in self.points.items()},
             "requirements": [r.to_dict() for r in self.requirements],
             "confidence": self.settings.confidence,
@@ -325,7 +344,8 @@ class MonteCarloResult:
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per sample: the plays (mm), the varying load components (N,
-        N*mm) and each point's displacement (mm)."""
+        N*mm), the deviations' components (mm, rad) and each point's
+        displacement (mm)."""
         import pandas as pd
 
         columns: dict[str, FloatArray] = {}
@@ -333,6 +353,8 @@ class MonteCarloResult:
             columns[label] = self.plays[:, j]
         for j, label in enumerate(self.load_labels):
             columns[label] = self.loads[:, j]
+        for j, label in enumerate(self.deviation_labels):
+            columns[label] = self.deviations[:, j]
         for p, name in enumerate(self.point_names):
             for c, axis in enumerate("xyz"):
                 columns[f"{name}.d{axis}"] = self.displacement[:, p, c]
@@ -357,6 +379,7 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
     asm = assemble(model)
     pmap = play_map(asm, model.name or "<model>")
     lmap = load_map(asm, mc.case)
+    dmap = deviation_map(asm)
     plays = np.concatenate([c.plays for c in parts])
     d = np.concatenate([c.displacement for c in parts])
     points = {}
@@ -398,6 +421,9 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
         lmap.labels,
         np.concatenate([c.loads for c in parts]),
         {v.label: v.value.describe() for v in lmap.variables},
+        dmap.labels,
+        np.concatenate([c.deviations for c in parts]),
+        {v.label: v.describe() for v in dmap.variables},
     )
 
 

@@ -20,9 +20,10 @@ from numpy.typing import NDArray
 from jointplay.assembly import Assembly
 from jointplay.errors import ModelError
 from jointplay.geometry import FloatArray
+from jointplay.model.deviations import Zone
 from jointplay.model.joints import Joint
 from jointplay.model.mechanism import Load, Model
-from jointplay.model.tolerance import Toleranced
+from jointplay.model.tolerance import Distribution, Toleranced
 
 
 @dataclass(frozen=True)
@@ -210,3 +211,113 @@ def _cones_with(joint: Joint, field: str, value: float, source: str, entry: str)
             entry=entry,
         ) from None
     return other.cones
+
+
+@dataclass(frozen=True)
+class DeviationVariable:
+    """One component of a joint's deviation that varies: ``l2``'s position
+    along y (mm) or tilt about z (rad), drawn with the others of its zone."""
+
+    joint: str
+    zone: Zone
+    axis: int  # 0-5: the torsor component (t x, y, z mm; w x, y, z rad)
+    mean: float
+    distribution: Distribution
+
+    @property
+    def label(self) -> str:
+        kind = "position" if self.axis < 3 else "orientation"
+        return f"{self.joint}.deviation.{kind}.{'xyz'[self.axis % 3]}"
+
+    @property
+    def unit(self) -> str:
+        return self.zone.unit
+
+    def describe(self) -> str:
+        shape = {1: "within", 2: "in a disc of radius", 3: "in a ball of radius"}
+        return (
+            f"{self.distribution} {shape[len(self.zone.axes)]} {self.zone.radius:.6g} "
+            f"{self.unit} around {self.mean:.6g} ({self.zone.name} zone)"
+        )
+
+
+@dataclass(frozen=True)
+class DeviationMap:
+    """Cone centres and radii as affine functions of the joints' deviations:
+    ``centres = c0 + (values - nominal) @ C`` (stacked like the rows of
+    ``stack.A``) and ``radii += (values - nominal) @ D`` (``Assembly.balls``
+    order; a face's limit along its normal), all scaled."""
+
+    variables: tuple[DeviationVariable, ...]
+    nominal: FloatArray  # (nd,) the means (mm or rad), which the model holds
+    c0: FloatArray  # (rows,)
+    C: FloatArray  # (nd, rows)
+    D: FloatArray  # (nd, n)
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return tuple(v.label for v in self.variables)
+
+    def centres(self, values: FloatArray) -> FloatArray:
+        """(B, rows) scaled centres for (B, nd) deviations."""
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        return np.asarray(self.c0 + (values - self.nominal) @ self.C)
+
+    def radii_shift(self, values: FloatArray) -> FloatArray:
+        """(B, n) what the deviations add to the scaled radii."""
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        return np.asarray((values - self.nominal) @ self.D)
+
+    def sample(self, rng: np.random.Generator, n: int) -> FloatArray:
+        """(n, nd) deviations of ``n`` sets of real parts: each zone drawn
+        whole (a disc by area), in joint order."""
+        out = np.tile(self.nominal, (n, 1))
+        j = 0
+        while j < len(self.variables):
+            var = self.variables[j]
+            width = len(var.zone.axes)
+            out[:, j : j + width] += var.zone.sample(rng, n, var.distribution)
+            j += width
+        return out
+
+
+def deviation_map(asm: Assembly) -> DeviationMap:
+    """The ``DeviationMap`` of every zone of ``asm``'s joints that has a size."""
+    model: Model = asm.model
+    stack = asm.stack
+    where = {(c.joint_index, c.contact_index): i for i, c in enumerate(asm.balls)}
+    variables: list[DeviationVariable] = []
+    C_rows, D_rows = [], []
+    for jdx, joint in enumerate(model.joints):
+        if joint.deviation is None:
+            continue
+        mean = joint.deviation.mean()
+        for zone in joint.deviation.zones(joint.type_name == "spherical"):
+            if zone.radius == 0.0:
+                continue
+            for axis in zone.axes:
+                variables.append(
+                    DeviationVariable(
+                        joint.name, zone, axis, float(mean[axis]), joint.deviation.distribution
+                    )
+                )
+                move = np.eye(6)[axis]
+                c_row, d_row = np.zeros(stack.A.shape[0]), np.zeros(len(asm.balls))
+                for cdx, contact in enumerate(joint.cones):
+                    i = where.get((jdx, cdx))
+                    if i is None:
+                        continue
+                    rows = slice(stack.start[i], stack.start[i] + stack.k[i])
+                    c_row[rows] = (contact.rows @ move) / asm.s
+                    if contact.offset is not None:
+                        d_row[i] = float(contact.offset @ move) / asm.s
+                C_rows.append(c_row)
+                D_rows.append(d_row)
+    nd = len(variables)
+    return DeviationMap(
+        tuple(variables),
+        np.array([v.mean for v in variables]),
+        stack.centres().copy(),
+        np.array(C_rows).reshape(nd, stack.A.shape[0]),
+        np.array(D_rows).reshape(nd, len(asm.balls)),
+    )

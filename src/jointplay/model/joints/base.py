@@ -24,6 +24,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, model_validator
 
 from jointplay.geometry import FloatArray, is_parallel, joint_frame, left_jacobian_inverse, skew
+from jointplay.model.deviations import Deviation
 from jointplay.model.fields import Direction, Name, Play, Point, PositiveStiffness
 from jointplay.model.tolerance import PLAY_FIELDS
 
@@ -142,6 +143,9 @@ class Joint(BaseModel):
     #: Contact stiffness (N/mm), per contact point: a contact may go past its
     #: clearance by p at the cost of an elastic energy k p^2 / 2. None: rigid.
     stiffness: PositiveStiffness | None = None
+    #: Where the features really are: a position and an orientation zone
+    #: (``deviations.py``). None: on their nominal geometry.
+    deviation: Deviation | None = None
 
     @classmethod
     def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
@@ -158,6 +162,45 @@ class Joint(BaseModel):
                 f"up {list(self.up)} is parallel to axis {list(self.axis)}; "
                 "give an 'up' vector across the axis, or leave it out"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _check_deviation(self) -> Joint:
+        if self.deviation is None:
+            return self
+        cones = self.contacts()
+        # every deviating direction must move some play's centre, and no fixed row
+        moves = [self.deviation.mean()] + [
+            np.eye(6)[a]
+            for zone in self.deviation.zones(self.type_name == "spherical")
+            for a in zone.axes
+        ]
+        names = {3: "turn about x", 4: "tilt about y", 5: "tilt about z"}
+        for move in moves:
+            if not np.any(move):
+                continue
+            which = ", ".join(
+                names[int(a)] if a >= 3 else f"shift along {'xyz'[a]}" for a in np.flatnonzero(move)
+            )
+            for c in cones:
+                seen = np.any(np.abs(c.rows @ move) > 0.0) or (
+                    c.offset is not None and c.offset @ move != 0.0
+                )
+                if c.kind == "fixed" and seen:
+                    raise ValueError(
+                        f"deviation: a {which} of this joint's features meets its rigid "
+                        f"contact '{c.name}', which has no play to take it; give the "
+                        "deviation to a joint with play in that direction"
+                    )
+            if not any(
+                np.any(c.rows @ move != 0.0) or (c.offset is not None and c.offset @ move != 0.0)
+                for c in cones
+                if c.kind == "ball"
+            ):
+                raise ValueError(
+                    f"deviation: a {which} of this joint's features moves none of its "
+                    "contacts (the joint leaves that motion free); leave it out"
+                )
         return self
 
     @cached_property

@@ -1,0 +1,250 @@
+"""Deviations of a joint's features: where its play is really centred.
+
+A real bore is off its true position and its axis is tilted: position,
+parallelism and perpendicularity tolerances (ISO 1101, ASME Y14.5) bound
+that. For the joint it is one small torsor ``delta = (t, w)`` of its
+clearance domain, in the joint frame at the joint centre: the deviation of
+the features on a's side minus those on b's side, combined. Every contact
+``|rows @ tau| + offset @ tau <= r`` of the joint becomes
+
+    |rows @ (tau - delta)| + offset @ (tau - delta) <= r,
+
+so b, centred in its play, sits at ``delta``. It enters the cone program as
+data, like the plays (``BallStack.centre`` and the radii).
+
+A deviation has a ``position`` zone and an ``orientation`` zone::
+
+    deviation:
+      position: "0.02 mm"                  # a diameter: a disc across the axis
+                                           # (a ball for a spherical joint)
+      position: {diameter: "20 um", mean: [0, "3 um", 0]}
+      position: {y: {min: -0.01, max: 0.01}, x: {min: 0, max: 0.005}}
+      orientation: {tolerance: "0.01 mm", over: "40 mm"}   # the axis tilts by
+      orientation: "0.2 mrad"                              # at most t / L
+      distribution: normal                 # uniform (default) or normal
+
+A zone is centred on its ``mean`` (0 by default: the process's mean shift).
+``uniform`` fills the zone evenly (a disc by area, not by radius);
+``normal`` puts the zone's edge at 3 sigma in each direction and redraws the
+few draws outside it. A single solve takes every deviation at its mean.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Self
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from jointplay.model.fields import Length, NonNegativeLength, PositiveLength, Vec3, _vector
+from jointplay.model.tolerance import Distribution
+from jointplay.units import shown, to_base
+
+FloatArray = NDArray[np.float64]
+
+_AXES = "xyz"
+
+
+class Limits(BaseModel):
+    """A range of one component: ``{min, max}``."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    min: Length
+    max: Length
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Self:
+        if self.min > self.max:
+            raise ValueError(f"min {self.min:g} is above max {self.max:g}; swap them")
+        return self
+
+
+class PositionZone(BaseModel):
+    """Where the joint centre (or axis) may be: a ``diameter`` (a disc
+    across the joint's axis, or a ball for a spherical joint) around
+    ``mean``, or limits per joint-frame direction ``x``, ``y``, ``z``."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    diameter: NonNegativeLength | None = None
+    x: Limits | None = None
+    y: Limits | None = None
+    z: Limits | None = None
+    mean: Vec3 = Field(default=(0.0, 0.0, 0.0))
+
+    @model_validator(mode="before")
+    @classmethod
+    def _plain_diameter(cls, value: Any) -> Any:
+        if isinstance(value, Mapping):
+            out = dict(value)
+            if "mean" in out:
+                out["mean"] = _vector("length")(out["mean"])
+            return out
+        return {"diameter": value}
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> Self:
+        limits = [a for a in _AXES if getattr(self, a) is not None]
+        if self.diameter is not None and limits:
+            raise ValueError(
+                "give the position zone as a diameter or as limits per direction "
+                f"({', '.join(limits)}), not both"
+            )
+        if self.diameter is None and not limits:
+            raise ValueError(
+                "a position zone needs a diameter (e.g. '0.02 mm') or limits per "
+                "direction, e.g. {y: {min: -0.01, max: 0.01}}"
+            )
+        if limits and any(self.mean):
+            raise ValueError(
+                "a zone given by limits is centred between them: leave out 'mean', or "
+                "shift the limits"
+            )
+        return self
+
+
+class OrientationZone(BaseModel):
+    """How far the joint's axis may tilt (about its y and z axes): an angle,
+    or a tolerance ``t`` over a length ``L`` (the axis within a cylinder of
+    diameter t over L, so a tilt of at most t / L); around ``mean`` (rad,
+    joint frame, no component about the axis)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    angle: float | None = None
+    tolerance: NonNegativeLength | None = None
+    over: PositiveLength | None = None
+    mean: Vec3 = Field(default=(0.0, 0.0, 0.0))
+
+    @model_validator(mode="before")
+    @classmethod
+    def _plain_angle(cls, value: Any) -> Any:
+        if not isinstance(value, Mapping):
+            value = {"angle": value}
+        out = dict(value)
+        if out.get("angle") is not None:
+            angle = to_base(out["angle"], "angle")
+            if angle < 0:
+                raise ValueError(f"angle: expected a value >= 0, got {shown(out['angle'])}")
+            out["angle"] = angle
+        if "mean" in out:
+            out["mean"] = _vector("angle")(out["mean"])
+        return out
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> Self:
+        given = (self.tolerance is not None) + (self.over is not None)
+        if self.angle is not None and given:
+            raise ValueError("give the orientation zone as an angle or as {tolerance, over}")
+        if self.angle is None and given != 2:
+            raise ValueError(
+                "an orientation zone needs an angle (e.g. '0.2 mrad') or a tolerance over "
+                "a length, e.g. {tolerance: '0.01 mm', over: '40 mm'}"
+            )
+        if self.mean[0] != 0.0:
+            raise ValueError(
+                "mean: a tilt has no component about the joint's axis (x); give [0, y, z]"
+            )
+        return self
+
+    @property
+    def radius(self) -> float:
+        """The largest tilt (rad)."""
+        if self.angle is not None:
+            return self.angle
+        assert self.tolerance is not None and self.over is not None
+        return self.tolerance / self.over
+
+
+class Deviation(BaseModel):
+    """The deviation of a joint's features (module doc)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    position: PositionZone | None = None
+    orientation: OrientationZone | None = None
+    distribution: Distribution = "uniform"
+
+    @model_validator(mode="after")
+    def _something(self) -> Self:
+        if self.position is None and self.orientation is None:
+            raise ValueError("a deviation needs a 'position' zone, an 'orientation' zone or both")
+        return self
+
+    def mean(self) -> FloatArray:
+        """The mean torsor ``(t mm, w rad)`` in the joint frame."""
+        out = np.zeros(6)
+        if self.position is not None:
+            out[:3] = self.position.mean
+            for a, axis in enumerate(_AXES):
+                limits = getattr(self.position, axis)
+                if limits is not None:
+                    out[a] = (limits.min + limits.max) / 2.0
+        if self.orientation is not None:
+            out[3:] = self.orientation.mean
+        return out
+
+    def zones(self, ball: bool) -> tuple[Zone, ...]:
+        """The zones to draw from (``ball``: a diameter is a ball, else a disc
+        across the axis x)."""
+        out: list[Zone] = []
+        if self.position is not None:
+            p = self.position
+            if p.diameter is not None:
+                axes = (0, 1, 2) if ball else (1, 2)
+                out.append(Zone("position", axes, p.diameter / 2.0))
+            else:
+                for a, axis in enumerate(_AXES):
+                    limits = getattr(p, axis)
+                    if limits is not None:
+                        half = (limits.max - limits.min) / 2.0
+                        out.append(Zone(f"position.{axis}", (a,), half))
+        if self.orientation is not None:
+            out.append(Zone("orientation", (4, 5), self.orientation.radius))
+        return tuple(out)
+
+
+@dataclass(frozen=True)
+class Zone:
+    """One zone of a deviation: the torsor components ``axes`` (0-2 the
+    translation, 3-5 the rotation) lie within ``radius`` of their mean (a
+    segment, a disc or a ball)."""
+
+    name: str
+    axes: tuple[int, ...]
+    radius: float
+
+    @property
+    def unit(self) -> str:
+        return "rad" if self.axes[0] >= 3 else "mm"
+
+    def sample(self, rng: np.random.Generator, n: int, distribution: Distribution) -> FloatArray:
+        """(n, len(axes)) draws around 0: uniform over the zone, or normal
+        with its edge at 3 sigma per direction, redrawn where outside."""
+        d, R = len(self.axes), self.radius
+        if R == 0.0:
+            return np.zeros((n, d))
+        if distribution == "uniform":
+            if d == 1:
+                return np.asarray(rng.uniform(-R, R, (n, 1)))
+            u = rng.normal(size=(n, d))
+            u /= np.linalg.norm(u, axis=1, keepdims=True)
+            return np.asarray(u * (R * rng.uniform(size=(n, 1)) ** (1.0 / d)))
+        out = rng.normal(0.0, R / 3.0, (n, d))
+        bad = np.linalg.norm(out, axis=1) > R
+        while np.any(bad):
+            out[bad] = rng.normal(0.0, R / 3.0, (int(np.sum(bad)), d))
+            bad = np.linalg.norm(out, axis=1) > R
+        return out
+
+
+def measured(t: Vec3 | None, w: Vec3 | None) -> Deviation:
+    """A deviation known exactly (an as-measured part): zones of size 0
+    centred on the measured translation ``t`` (mm) and tilt ``w`` (rad)."""
+    position = None if t is None else PositionZone(diameter=0.0, mean=t)
+    orientation = None if w is None else OrientationZone(angle=0.0, mean=w)
+    return Deviation(position=position, orientation=orientation)
