@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -12,6 +13,7 @@ from conftest import MM, RAD
 from jointplay.studies.montecarlo import MonteCarlo
 
 J = 0.1  # the bore's diametral play (mm)
+EXAMPLE = Path(__file__).parents[1] / "examples" / "studies" / "shaft_deviations.yaml"
 
 
 def pivoted_shaft(ball: dict[str, Any] | None = None, bore: dict[str, Any] | None = None) -> Any:
@@ -172,3 +174,103 @@ def test_bad_deviations_are_named(joint: str, deviation: dict[str, Any], words: 
     key = {"ball": "ball", "bore": "bore"}[joint]
     with pytest.raises(jointplay.ModelError, match=words):
         pivoted_shaft(**{key: {"deviation": deviation}})
+
+
+def test_a_zone_contributes_its_gradient_and_the_worst_case_is_exact_over_the_disc() -> None:
+    from jointplay.studies.contributions import Contributions
+    from jointplay.studies.tolerances import Tolerances
+
+    R = 0.01
+    model = pivoted_shaft(bore={"deviation": {"position": "20 um"}}).replace(
+        requirements=[{"point": "T", "max_displacement": 0.08}]
+    )
+    linear = Contributions().run(model)
+    i = linear.plays.index("l2.deviation.position")
+    k = linear.measures.index("|d T|")
+    # |d T| = 1.5 |(dy - J/2, dz)|: its gradient at 0 is 1.5 (1, 0)
+    assert linear.sensitivity[k, i] == pytest.approx(1.5, rel=1e-9)
+    assert linear.width[i] == pytest.approx(2 * R, rel=1e-12)
+    assert linear.sigma[i] == pytest.approx(R / 2, rel=1e-12)  # a disc, uniform
+    side = Tolerances(samples=2_000).run(model).requirements[0]
+    # the worst case over the disc: 1.5 (J/2 -/+ R), exact for this measure
+    assert side.worst_low == pytest.approx(1.5 * (J / 2 - R), abs=MM)
+    assert side.worst_high == pytest.approx(1.5 * (J / 2 + R), abs=MM)
+    assert side.rss_sigma == pytest.approx(1.5 * R / 2, rel=1e-9)
+
+
+def two_balls(zone: str) -> Any:
+    """A ball held by two spherical joints at one point: a tight one, and one
+    whose position zone is a ball. The parts go together only if the second
+    ball's centre is within the sum of the two radii of play of the first."""
+    joint = {"type": "spherical", "between": ["S0", "S1"], "at": [0, 0, 0], "clearance": 0.02}
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
+            "joints": [
+                {"name": "a", **joint},
+                {"name": "b", **joint, "deviation": {"position": zone}},
+            ],
+            "loads": [{"body": "S1", "at": [0, 0, 0], "force": [0, -1, 0]}],
+            "points": [{"name": "P", "body": "S1", "at": [0, 0, 0]}],
+            "requirements": [{"point": "P", "max_displacement": 1.0}],
+        }
+    )
+
+
+def test_parts_whose_deviations_leave_no_room_are_counted_as_not_assembled() -> None:
+    mc = MonteCarlo(samples=4_000, seed=2).run(two_balls("0.06 mm"))
+    d = np.linalg.norm(mc.deviations, axis=1)  # the second ball's centre, radius 0.03
+    assembled = ~np.isnan(mc.displacement[:, 0, 0])
+    clear = np.abs(d - 0.02) > 1e-9  # away from the edge of the lens, to round-off
+    assert np.array_equal(assembled[clear], d[clear] <= 0.02)
+    assert mc.unassembled == int(np.sum(~assembled))
+    # a ball of radius 0.03 drawn uniformly: 1 - (2/3)^3 of the draws fall outside
+    p = 1 - (0.02 / 0.03) ** 3
+    assert abs(mc.unassembled / 4_000 - p) < 5 * np.sqrt(p * (1 - p) / 4_000)
+    # they miss every requirement; the points' figures are of the others
+    assert mc.requirements[0].outside == mc.unassembled
+    assert np.all(np.isfinite(mc.points["P"].mean))
+
+
+def test_a_measured_part_that_cannot_be_assembled_is_named() -> None:
+    model = jointplay.with_deviations(two_balls("0.06 mm"), {"b": {"position": [0, 0.03, 0]}})
+    with pytest.raises(jointplay.ModelError, match=r"cannot be assembled.*'a', 'b'"):
+        jointplay.solve(model)
+
+
+def test_a_measured_deviation_replaces_its_zone() -> None:
+    model = pivoted_shaft(bore={"deviation": {"position": "20 um"}})
+    measured = jointplay.with_deviations(model, {"l2": {"position": [0, "4 um", "-2 um"]}})
+    assert np.allclose(tip(measured), 1.5 * np.array([0, 0.004 - J / 2, -0.002]), atol=MM, rtol=0)
+    with pytest.raises(jointplay.ModelError, match="no joint 'l9'"):
+        jointplay.with_deviations(model, {"l9": {"position": [0, 0, 0]}})
+    with pytest.raises(jointplay.ModelError, match="'tilt' is no deviation"):
+        jointplay.with_deviations(model, {"l2": {"tilt": [0, 0, 0]}})
+
+
+def test_the_example_with_a_position_zone_and_a_parallelism_runs_every_study(
+    tmp_path: Any,
+) -> None:
+    from jointplay.studies.tolerances import Tolerances
+
+    model = jointplay.load(EXAMPLE)
+    result = jointplay.solve(model)
+    result.check()
+    side = Tolerances(samples=2_000).run(model)
+    assert side.montecarlo.deviation_labels == (
+        "l2.deviation.position.y",
+        "l2.deviation.position.z",
+        "l2.deviation.orientation.y",
+        "l2.deviation.orientation.z",
+    )
+    assert set(side.linear.plays) == {
+        "l2.clearance",
+        "l2.deviation.position",
+        "l2.deviation.orientation",
+    }
+    # the linear (RSS) sigma and the sampled one agree: 2,000 samples give the
+    # sampled sigma to about 1.6 % (one standard error), and |d B| bends over
+    # the zones (its curvature, not a bound: see the envelope for one)
+    r = side.requirements[0]
+    assert r.mc_sigma == pytest.approx(r.rss_sigma, rel=0.1)
+    assert 0 < r.mc_ppm < 1e6

@@ -153,7 +153,7 @@ def test_a_model_without_points_or_tolerances_says_why_no_study() -> None:
     assert "The model has no functional points, so there is nothing to study" in html
     html = Report().render(jointplay.load(STUDIES / "rotating_unbalance.yaml"), "unbalance")
     assert "Worst-case envelope of point &#x27;B&#x27;" in html
-    assert "No play or load varies from part to part" in html
+    assert "No play, load or deviation varies from part to part" in html
 
 
 @pytest.mark.parametrize(

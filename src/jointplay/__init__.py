@@ -18,7 +18,7 @@ from jointplay.errors import (
 from jointplay.version import __version__
 
 if TYPE_CHECKING:
-    from jointplay.io.modelfile import load, model_from_dict
+    from jointplay.io.modelfile import load, model_from_dict, with_deviations
     from jointplay.model.joints import JOINT_TYPES, Joint
     from jointplay.model.mechanism import Body, Load, Model
     from jointplay.present.report import Report
@@ -47,6 +47,7 @@ if TYPE_CHECKING:
 _LAZY = {
     "load": "io.modelfile",
     "model_from_dict": "io.modelfile",
+    "with_deviations": "io.modelfile",
     "JOINT_TYPES": "model.joints",
     "Joint": "model.joints",
     "Body": "model.mechanism",
@@ -151,4 +152,5 @@ __all__ = [
     "model_from_dict",
     "solve",
     "solve_cases",
+    "with_deviations",
 ]

@@ -16,7 +16,13 @@ import typer
 from rich.console import Console
 
 from jointplay import __version__
-from jointplay.errors import JointplayError, ModelError, OptionError, UnboundedMechanismError
+from jointplay.errors import (
+    JointplayError,
+    ModelError,
+    OptionError,
+    UnassembledError,
+    UnboundedMechanismError,
+)
 from jointplay.units import LIMITS
 
 app = typer.Typer(
@@ -119,6 +125,28 @@ def _sweep_settings(
         raise OptionError(str(exc), source=source) from None
 
 
+def _measured(options: list[str], source: str) -> dict[str, dict[str, Any]]:
+    """``--deviations`` options as ``{joint: {kind: [x, y, z]}}``."""
+    import yaml
+
+    out: dict[str, dict[str, Any]] = {}
+    for option in options:
+        name, eq, text = option.partition("=")
+        joint, dot, kind = name.strip().rpartition(".")
+        try:
+            value = yaml.safe_load(text) if eq else None
+        except yaml.YAMLError:
+            value = None
+        if not (eq and dot and joint) or not isinstance(value, list):
+            raise OptionError(
+                f"--deviations {option!r}: write JOINT.position=[x, y, z] or "
+                "JOINT.orientation=[0, wy, wz], e.g. 'l2.position=[0, 5 um, -3 um]'",
+                source=source,
+            )
+        out.setdefault(joint, {})[kind] = value
+    return out
+
+
 def _version(value: bool) -> None:
     if value:
         typer.echo(f"jointplay {__version__}")
@@ -158,6 +186,16 @@ def solve(
             "solution of any load case (after printing everything): a gate for CI.",
         ),
     ] = False,
+    deviations: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--deviations",
+            metavar="JOINT.KIND=[..]",
+            help="A joint's deviation as measured on a part, in its joint frame: "
+            "'l2.position=[0, 5 um, -3 um]' or 'l2.orientation=[0, 0.1 mrad, 0]' "
+            "(repeat for more). Without it every deviation is at its mean.",
+        ),
+    ] = None,
 ) -> None:
     """Solve the equilibrium of MODEL: joints, contacts, forces and bodies, and
     each requirement's pass or fail.
@@ -175,16 +213,24 @@ def solve(
         from jointplay.model.mechanism import check_case
 
         model = load(model_path)
+        if deviations:
+            from jointplay.io.modelfile import with_deviations
+
+            measured = _measured(deviations, str(model_path))
+            model = with_deviations(model, measured, source=str(model_path))
         check_case(model, case, str(model_path))
         ws = Workspace.of(model)
         if model.case_names:
             names: list[str | None] = [case] if case is not None else list(model.case_names)
         else:
             names = [None]
-        results = {
-            name: ws.solve(loads=None if name is None else model.loads_of(name), exact=exact)
-            for name in names
-        }
+        try:
+            results = {
+                name: ws.solve(loads=None if name is None else model.loads_of(name), exact=exact)
+                for name in names
+            }
+        except UnassembledError as exc:  # the model's own parts: name its file
+            raise UnassembledError(exc.problem, joints=exc.joints, source=str(model_path)) from None
         failed = any(not r.passed for result in results.values() for r in result.requirements)
         docs = {name: result.to_dict() for name, result in results.items()}
         if as_json:

@@ -37,6 +37,17 @@ class OptionError(ModelError):
     labelled 'invalid option'."""
 
 
+class UnassembledError(ModelError):
+    """The joints' deviations leave no position inside every clearance: the
+    parts cannot be put together. ``joints`` names those the solver's
+    certificate of infeasibility involves. Exit code 2, like a model error:
+    the model's own numbers contradict each other."""
+
+    def __init__(self, message: str, *, joints: tuple[str, ...], source: str | None = None):
+        self.joints = joints
+        super().__init__(message, source=source)
+
+
 class UnboundedMechanismError(JointplayError):
     """The loads drive a motion that no joint limits: there is no equilibrium.
 

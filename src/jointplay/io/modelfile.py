@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import re
 import tomllib
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -510,6 +511,41 @@ def model_from_dict(data: Any, *, source: str = "<model>") -> Model:
         raise _to_model_error(exc, data, source) from None
     except RecursionError:
         raise ModelError(_too_deep(), source=source) from None
+
+
+def with_deviations(
+    model: Model, measured: Mapping[str, Mapping[str, Any]], *, source: str = "<model>"
+) -> Model:
+    """``model`` with some joints' deviations known, as measured on a part:
+    ``{joint: {"position": [x, y, z], "orientation": [0, wy, wz]}}`` in the
+    joint frame (mm and rad, or strings with units). A given zone becomes
+    that value exactly; the joint's other zone stays as the model has it."""
+    names = [j.name for j in model.joints]
+    data = model.model_dump(by_alias=True, exclude_none=True)
+    for name, given in measured.items():
+        if name not in names:
+            raise ModelError(
+                f"there is no joint {shown(name)}; the joints are "
+                + ", ".join(shown(n) for n in names),
+                source=source,
+                entry="--deviations",
+            )
+        unknown = sorted(set(given) - {"position", "orientation"})
+        if unknown:
+            raise ModelError(
+                f"joint {shown(name)}: {shown(unknown[0])} is no deviation; give "
+                "'position' ([x, y, z], mm) or 'orientation' ([0, wy, wz], rad)",
+                source=source,
+                entry="--deviations",
+            )
+        joint = data["joints"][names.index(name)]
+        deviation = dict(joint.get("deviation") or {})
+        if "position" in given:
+            deviation["position"] = {"diameter": 0, "mean": given["position"]}
+        if "orientation" in given:
+            deviation["orientation"] = {"angle": 0, "mean": given["orientation"]}
+        joint["deviation"] = deviation
+    return model_from_dict(data, source=source)
 
 
 def _check_sizes(data: dict[str, Any], source: str) -> None:

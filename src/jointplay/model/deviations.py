@@ -175,6 +175,29 @@ class Deviation(BaseModel):
             raise ValueError("a deviation needs a 'position' zone, an 'orientation' zone or both")
         return self
 
+    def describe(self, ball: bool) -> str:
+        """In words: 'position: a disc of diameter 0.02 mm ...; uniform'."""
+        parts = []
+        if self.position is not None:
+            p = self.position
+            if p.diameter is not None:
+                shape = "a ball" if ball else "a disc across the axis"
+                parts.append(f"position in {shape} of diameter {p.diameter:.6g} mm")
+            else:
+                parts += [
+                    f"position {axis} in [{lim.min:.6g}, {lim.max:.6g}] mm"
+                    for axis in _AXES
+                    if (lim := getattr(p, axis)) is not None
+                ]
+            if any(p.mean):
+                parts.append(f"centred at [{', '.join(f'{v:.6g}' for v in p.mean)}] mm")
+        if self.orientation is not None:
+            o = self.orientation
+            parts.append(f"tilt up to {o.radius:.6g} rad")
+            if any(o.mean):
+                parts.append(f"centred at [{', '.join(f'{v:.6g}' for v in o.mean)}] rad")
+        return ", ".join(parts) + f"; {self.distribution}"
+
     def mean(self) -> FloatArray:
         """The mean torsor ``(t mm, w rad)`` in the joint frame."""
         out = np.zeros(6)
@@ -221,6 +244,14 @@ class Zone:
     @property
     def unit(self) -> str:
         return "rad" if self.axes[0] >= 3 else "mm"
+
+    def sigma(self, distribution: Distribution) -> float:
+        """The standard deviation of each component (in ``unit``): uniform
+        over a segment R/sqrt(3), a disc R/2, a ball R/sqrt(5); normal R/3,
+        before truncation (as for plays, ``Toleranced.sigma``)."""
+        if distribution == "normal":
+            return self.radius / 3.0
+        return float(self.radius / np.sqrt(len(self.axes) + 2.0))
 
     def sample(self, rng: np.random.Generator, n: int, distribution: Distribution) -> FloatArray:
         """(n, len(axes)) draws around 0: uniform over the zone, or normal

@@ -653,9 +653,11 @@ def _bins(values: FloatArray) -> int:
 
 
 def contributions_figure(result: ContributionsResult) -> Figure:
-    """Per measure, each play's share of the worst-case and of the
-    statistical (RSS) stack; a hatched bar is a kink (the contacts change
-    at the nominal: the slope is one of two)."""
+    """Per measure, a Pareto of the variables (plays, loads, deviation
+    zones): each one's share of the worst-case and of the statistical (RSS)
+    stack, the largest worst-case share first, with the cumulative worst-case
+    share as a line; a hatched bar is a kink (the contacts change at the
+    nominal: the slope is one of two)."""
     M = len(result.measures)
     fig, axes = plt.subplots(
         M,
@@ -667,11 +669,13 @@ def contributions_figure(result: ContributionsResult) -> Figure:
     y = np.arange(len(result.plays))
     wc, rss = result.worst_case, result.rss
     for k, (ax, measure) in enumerate(zip(axes[:, 0], result.measures, strict=True)):
-        for i in range(len(result.plays)):
+        order = np.argsort(-wc[k], kind="stable")
+        for row, i in enumerate(order):
             hatch = "//" if result.kink[k, i] else None
-            ax.barh(y[i] - 0.2, wc[k, i], height=0.38, color="#2f6db5", hatch=hatch)
-            ax.barh(y[i] + 0.2, rss[k, i], height=0.38, color="#f28e2b", hatch=hatch)
-        ax.set_yticks(y, labels=_plain_labels(result.plays))
+            ax.barh(y[row] - 0.2, wc[k, i], height=0.38, color="#2f6db5", hatch=hatch)
+            ax.barh(y[row] + 0.2, rss[k, i], height=0.38, color="#f28e2b", hatch=hatch)
+        ax.plot(np.cumsum(wc[k, order]), y, color="black", marker="o", markersize=3, lw=0.8)
+        ax.set_yticks(y, labels=_plain_labels([result.plays[i] for i in order]))
         ax.invert_yaxis()
         ax.set_xlim(0, 105)
         ax.set_xlabel("contribution (%)")
@@ -685,8 +689,11 @@ def contributions_figure(result: ContributionsResult) -> Figure:
         Rectangle((0, 0), 1, 1, color="#2f6db5", label="worst case"),
         Rectangle((0, 0), 1, 1, color="#f28e2b", label="RSS"),
         Rectangle((0, 0), 1, 1, facecolor="white", edgecolor="black", hatch="//", label="kink"),
+        Line2D(
+            [0], [0], color="black", marker="o", markersize=3, lw=0.8, label="cumulative worst case"
+        ),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=8)
+    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8)
     fig.suptitle(f"{result.model_name or 'mechanism'}: contributions")
     return fig
 

@@ -137,8 +137,9 @@ class Report:
                 )
         if not _varies(model, self.case, source):
             page.paragraph(
-                "No play or load varies from part to part, so there is no Monte Carlo study "
-                "and no contributions: give clearances as limits or ISO fits to see them."
+                "No play, load or deviation varies from part to part, so there is no Monte "
+                "Carlo study and no contributions: give clearances as limits or ISO fits, or "
+                "joints deviation zones, to see them."
             )
             return
         say(f"Monte Carlo, {self.samples} sets of parts")
@@ -155,10 +156,14 @@ class Report:
 
 def _varies(model: Model, case: str | None, source: str) -> bool:
     from jointplay.assembly import assemble
-    from jointplay.studies.variation import load_map, play_map
+    from jointplay.studies.variation import deviation_map, load_map, play_map
 
     asm = assemble(model)
-    return bool(play_map(asm, source).variables or load_map(asm, case).variables)
+    return bool(
+        play_map(asm, source).variables
+        or load_map(asm, case).variables
+        or deviation_map(asm).variables
+    )
 
 
 # -- the interactive view --------------------------------------------------------
@@ -681,7 +686,7 @@ class _Page:
         wc, rss = co.worst_case, co.rss
         self.parts.append(
             _table(
-                ["measure", "play", "sensitivity", "worst case", "RSS", "note"],
+                ["measure", "variable", "sensitivity", "worst case", "RSS", "note"],
                 [
                     (
                         m,
@@ -813,6 +818,8 @@ def _joint_sizes(joint: Any) -> str:
         parts.append(f"{field} {text}")
     if getattr(joint, "along", None) is not None:
         parts.append(f"along {_vec(np.asarray(joint.along, dtype=float))}")
+    if joint.deviation is not None:
+        parts.append(f"deviation: {joint.deviation.describe(joint.type_name == 'spherical')}")
     return ", ".join(parts)
 
 

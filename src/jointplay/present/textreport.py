@@ -189,10 +189,19 @@ def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -
         f"imbalance {result.equilibrium_residual:.1e} "
         f"({result.batched:,} by batched Newton, {result.full_solves} full solves)\n"
     )
-    plays = Table(title="plays and loads drawn", title_justify="left", show_edge=False)
+    if result.unassembled:
+        head.append(
+            f"{result.unassembled:,} sets of parts cannot be assembled: their deviations leave "
+            "no position inside every clearance; they are left out of the points' figures "
+            "and count as missing every requirement\n",
+            style="bold",
+        )
+    drawn = "plays, loads and deviations" if result.deviations_described else "plays and loads"
+    plays = Table(title=f"{drawn} drawn", title_justify="left", show_edge=False)
     plays.add_column("variable")
     plays.add_column("limits and law")
-    for label, words in (result.plays_described | result.loads_described).items():
+    described = result.plays_described | result.loads_described | result.deviations_described
+    for label, words in described.items():
         plays.add_row(label, words)
     points = Table(
         title="functional points: size of the displacement (mm)",
@@ -342,7 +351,8 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         head.append(f"  {play}: {words}\n")
     head.append(
         "sensitivity s: mm of the measure per mm of play (per rad of a backlash, per N or "
-        "N*mm of a load), at "
+        "N*mm of a load; for a deviation zone the size of the gradient, per mm or rad "
+        "in its worst direction, T its diameter), at "
         "the nominal (mean) values; worst case: |s| T of the stack sum |s| T, T the "
         "tolerance; RSS: (s sigma)^2 of sum (s sigma)^2"
     )
@@ -357,8 +367,13 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
             title_justify="left",
             show_edge=False,
         )
+        widest = max((len(p) for p in result.plays), default=8)
         for name in ("variable", "tolerance T", "sensitivity s", "worst case", "RSS", ""):
-            table.add_column(name, justify="left" if name in ("variable", "") else "right")
+            table.add_column(
+                name,
+                justify="left" if name in ("variable", "") else "right",
+                min_width=widest + 2 if name == "variable" else None,
+            )
         order = np.argsort(-rss[k], kind="stable")
         notes = Text()
         for i in order:
@@ -396,6 +411,13 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
         f"ppm with its {result.settings.confidence:.0%} interval. Cp/Pp only for a two-sided "
         "requirement (a component along a direction)"
     )
+    if mc.unassembled:
+        head.append(
+            f"\n{mc.unassembled:,} of the sets of parts cannot be assembled (their deviations "
+            "leave no position inside every clearance): Monte Carlo counts them out of "
+            "every limit and leaves them out of its mean and sigma",
+            style="bold",
+        )
     parts: list[Table | Text] = [head]
     for r in result.requirements:
         low, high = r.limits

@@ -20,6 +20,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from jointplay.assembly import Assembly, BallStack, IntArray
+from jointplay.errors import UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import solve_rows
@@ -45,6 +46,9 @@ class BatchSolution:
     ``x``: scaled unknowns (B, m). ``forces``: ball-contact forces (B, n) in N,
     in the order of ``Assembly.balls``. ``batched[i]`` says whether sample i
     was solved by the batched Newton path (else by the full solver).
+    ``assembled[i]`` is False for a sample whose own deviations leave no
+    position inside every clearance (its parts cannot be put together): its
+    rows are NaN.
     """
 
     asm: Assembly
@@ -55,6 +59,7 @@ class BatchSolution:
     equilibrium_residual: FloatArray  # (B,) relative
     batched: BoolArray  # (B,)
     full_solves: int
+    assembled: BoolArray  # (B,)
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
@@ -153,6 +158,7 @@ def _solve_batch(
     lam = np.zeros((B, n_balls))
     f = np.zeros((B, ws.stack.A.shape[0]))
     batched = np.zeros(B, dtype=bool)
+    assembled = np.ones(B, dtype=bool)
     feas = np.zeros(B)  # each row's certificate, where it was certified
     residual = np.zeros(B)
     pending = np.flatnonzero(norms > 0)
@@ -210,8 +216,14 @@ def _solve_batch(
         solver = ws.with_radii(r[first], c[first]) if varied else ws
         if dense:
             solver.last = None  # a warm start would retry the set the batch gave up on
-        point = pipeline.optimum(solver, g_hat[first], sigma[first])
         full += 1
+        try:
+            point = pipeline.optimum(solver, g_hat[first], sigma[first])
+        except UnassembledError:
+            if not varied:
+                raise  # the model's own parts
+            assembled[first] = False
+            continue
         x[first], lam[first], f[first] = point.x, point.lam, point.f
         assert point.certificate is not None  # optimum certifies or raises
         feas[first] = point.certificate.feasibility_mm / ws.asm.s
@@ -220,6 +232,8 @@ def _solve_batch(
         if seed is not None and dense:
             solved_by_set.setdefault(seed, []).append(np.array([first]))
 
+    x[~assembled] = np.nan
+    lam[~assembled] = np.nan
     return BatchSolution(
         asm=ws.asm,
         x=x,
@@ -229,6 +243,7 @@ def _solve_batch(
         equilibrium_residual=residual,
         batched=batched,
         full_solves=full,
+        assembled=assembled,
     )
 
 

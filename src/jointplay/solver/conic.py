@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from jointplay.assembly import BallStack, IntArray
-from jointplay.errors import SolverError
+from jointplay.errors import SolverError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
@@ -153,12 +153,36 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
     if outcome(sol) == "unbounded":  # a one-sided motion (_check_driven took the rest)
         motion = held.driven_motion(ws, -q[: ws.m], np.asarray(sol.x))
         raise held.unbounded(ws.asm, motion, one_way=True)
-    if not has_answer(sol):  # our programs are feasible (x = 0): numerical trouble
+    if outcome(sol) == "infeasible":  # deviations that no position fits (else x = 0 would)
+        raise unassembled(ws, prog, np.asarray(sol.z))
+    if not has_answer(sol):  # feasible programs: numerical trouble
         raise SolverError(
             f"the cone solver stopped with status {status_name(sol)} on this model. "
             + held.weak_hint(ws)
         )
     return sol
+
+
+def unassembled(ws: Workspace, prog: ConeProgram, ray: FloatArray) -> UnassembledError:
+    """The error for a program with no feasible point, naming the joints
+    whose cones carry Clarabel's certificate of infeasibility ``ray`` (the
+    forces that, pushing together, would have to do work from nothing)."""
+    lam = ray[prog.soc_first]
+    top = float(np.max(np.abs(lam), initial=0.0))
+    cones = np.flatnonzero(np.abs(lam) > ws.settings.noise_force * top if top > 0 else 0 * lam)
+    model = ws.asm.model
+    balls = ws.balls
+    joints = tuple(
+        dict.fromkeys(model.joints[balls[int(i)].joint_index].name for i in cones if i < len(balls))
+    )
+    named = ", ".join(f"'{j}'" for j in joints) or "the joints"
+    return UnassembledError(
+        f"the parts cannot be assembled: with the joints' deviations, no position of the "
+        f"bodies lies inside the clearances of {named} at once. Check the deviations' "
+        "sizes and means against the plays (a tilted bore far from the next joint needs "
+        "that joint's play times the lever).",
+        joints=joints,
+    )
 
 
 @dataclass(frozen=True)

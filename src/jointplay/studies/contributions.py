@@ -1,7 +1,7 @@
 """Which play drives the functional deviation: sensitivities and contributions.
 
 (Load components that vary, ``force: [{min: 8, max: 12}, 0, 0]``, take part
-like plays.)
+like plays, and so do the joints' deviation zones: see below.)
 
 For each functional measure y (a point's displacement size |d|, or its
 component along a requirement's ``along``) and each toleranced play p_i,
@@ -22,6 +22,16 @@ From the slopes, the two contributions tolerance analysts use:
 - statistical (RSS): ``(s_i sigma_i)^2 / sum_k (s_k sigma_k)^2``, with
   sigma_i the play's standard deviation (uniform: T/sqrt(12); normal: T/6; a
   fit: the hole's and the shaft's zones combined).
+
+A deviation zone that is a disc or a ball of radius R (a position or an
+orientation zone) counts as one variable: its components' slopes form a
+gradient s, the measure's worst case over the zone is ``R |s|`` (the linear
+worst case exactly, where the per-component sum would overstate it), and its
+variance ``(sigma |s|)^2`` with sigma each component's standard deviation
+(the zone's draws are isotropic). So its sensitivity is ``|s|`` (mm per mm,
+or per rad, in its worst direction) and its tolerance T = 2R; both stacks
+keep their formulas. A zone of limits per direction is one variable per
+direction, as a play.
 """
 
 from __future__ import annotations
@@ -36,7 +46,14 @@ from jointplay.errors import ModelError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
 from jointplay.solver.workspace import Workspace
-from jointplay.studies.variation import LoadVariable, PlayVariable, load_map, play_map
+from jointplay.studies.variation import (
+    DeviationMap,
+    LoadVariable,
+    PlayVariable,
+    deviation_map,
+    load_map,
+    play_map,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -87,31 +104,42 @@ class Contributions:
         pmap = play_map(asm, source)
         check_case(model, self.case, source)
         lmap = load_map(asm, self.case)
+        dmap = deviation_map(asm)
         variables: list[PlayVariable | LoadVariable] = [*pmap.variables, *lmap.variables]
-        if not variables:
+        if not variables and not dmap.variables:
             raise ModelError(
                 "no play varies from part to part, so none contributes; give a joint's "
                 "clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
-                "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12})",
+                "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12}, "
+                "or a joint a deviation zone, deviation: {position: '0.02 mm'})",
                 source=source,
                 entry="joints",
             )
         measures = _measures(model, source)
-        nv = len(variables)
-        width = np.array([v.value.high - v.value.low for v in variables])
-        sigma = np.array([v.value.sigma for v in variables])
+        nv = len(variables) + len(dmap.variables)
+        width = np.array(
+            [v.value.high - v.value.low for v in variables]
+            + [2.0 * v.zone.radius for v in dmap.variables]
+        )
+        sigma = np.array(
+            [v.value.sigma for v in variables]
+            + [v.zone.sigma(v.distribution) for v in dmap.variables]
+        )
         h = self.step * width
         # rows: the nominal, then each variable up and down by h, then by h / 2
-        nominal = np.concatenate([pmap.nominal, lmap.nominal])
+        nominal = np.concatenate([pmap.nominal, lmap.nominal, dmap.nominal])
         eye = np.eye(nv)
         values = np.vstack(
             [nominal[None, :]]
             + [nominal + sign * frac * eye * h for frac in (1.0, 0.5) for sign in (1, -1)]
         )
-        n_plays = len(pmap.variables)
-        work = lmap.work(values[:, n_plays:])
+        n_plays, n_loads = len(pmap.variables), len(lmap.variables)
+        work = lmap.work(values[:, n_plays : n_plays + n_loads])
+        deviations = values[:, n_plays + n_loads :]
+        radii = pmap.radii(values[:, :n_plays]) + dmap.radii_shift(deviations)
+        centres = dmap.centres(deviations) if dmap.variables else None
         ws = Workspace(asm)
-        batch = ws.solve_batch(work, pmap.radii(values[:, :n_plays]))
+        batch = ws.solve_batch(work, radii, centres)
         names = [p.name for p in model.points]
         y = np.zeros((len(measures), len(values)))
         for k, m in enumerate(measures):
@@ -134,14 +162,25 @@ class Contributions:
         kink = (jump_half > 0.75 * jump_h) & (
             jump_half > KINK * np.maximum(np.abs(up), np.abs(down)) + 1e-9
         )
+        sensitivity = np.where(kink, central_half, slope)
+        labels = [v.label for v in variables]
+        described = {v.label: v.value.describe() for v in variables}
+        groups = [[i] for i in range(len(variables))]
+        for first, label, text in _zones(dmap):
+            groups.append(list(range(len(variables) + first, len(variables) + first + len(text))))
+            labels.append(label)
+            described[label] = text[0]
+        sensitivity, up, down, kink = _grouped(groups, sensitivity, up, down, kink)
+        width = np.array([width[g[0]] for g in groups])
+        sigma = np.array([sigma[g[0]] for g in groups])
         return ContributionsResult(
             self,
             model.name,
             tuple(m.label for m in measures),
-            tuple(v.label for v in variables),
-            {v.label: v.value.describe() for v in variables},
+            tuple(labels),
+            described,
             y[:, 0],
-            np.where(kink, central_half, slope),
+            sensitivity,
             up,
             down,
             kink,
@@ -150,6 +189,37 @@ class Contributions:
             float(np.max(batch.feasibility_mm, initial=0.0)),
             float(np.max(batch.equilibrium_residual, initial=0.0)),
         )
+
+
+def _zones(dmap: DeviationMap) -> list[tuple[int, str, list[str]]]:
+    """Each deviation zone: its first component in ``dmap``, its label (a
+    disc or ball: ``l2.deviation.position``; a direction's limits: with the
+    direction) and its components' descriptions."""
+    out: list[tuple[int, str, list[str]]] = []
+    j = 0
+    while j < len(dmap.variables):
+        var = dmap.variables[j]
+        width = len(var.zone.axes)
+        label = var.label if width == 1 else var.label.rsplit(".", 1)[0]
+        out.append((j, label, [v.describe() for v in dmap.variables[j : j + width]]))
+        j += width
+    return out
+
+
+def _grouped(
+    groups: list[list[int]], *slopes_and_kink: Any
+) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray[Any, np.dtype[np.bool_]]]:
+    """Per group of components (a zone's), the slopes' norm (one component:
+    the signed slope) and whether any has a kink."""
+    sensitivity, up, down, kink = slopes_and_kink
+    out = []
+    for slope in (sensitivity, up, down):
+        cols = [
+            slope[:, g[0]] if len(g) == 1 else np.linalg.norm(slope[:, g], axis=1) for g in groups
+        ]
+        out.append(np.column_stack(cols) if cols else slope[:, :0])
+    kinks = [np.any(kink[:, g], axis=1) for g in groups]
+    return out[0], out[1], out[2], np.column_stack(kinks) if kinks else kink[:, :0]
 
 
 def _measures(model: Model, source: str) -> list[Measure]:
@@ -278,9 +348,12 @@ def _percent(part: FloatArray) -> FloatArray:
 
 def unit_of(variable: str) -> str:
     """The unit of a varying play or load component, from its label:
-    ``l2.clearance`` mm, ``motor.backlash`` rad, ``loads[0].force[1]`` N."""
+    ``l2.clearance`` mm, ``motor.backlash`` rad, ``loads[0].force[1]`` N,
+    ``l2.deviation.position`` mm, ``l2.deviation.orientation`` rad."""
     from jointplay.model.tolerance import play_unit
 
+    if ".deviation." in variable:
+        return "rad" if ".deviation.orientation" in variable else "mm"
     last = variable.rsplit(".", 1)[-1]
     if last.startswith("force["):
         return "N"

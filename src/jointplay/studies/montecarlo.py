@@ -212,9 +212,12 @@ def _z(confidence: float) -> float:
 
 
 def _outside(req: Requirement, model: Model, displacement: FloatArray) -> FloatArray:
-    """(n,) bool: the samples whose point misses the requirement."""
+    """(n,) bool: the samples whose point misses the requirement; a set of
+    parts that cannot be assembled (NaN) misses every requirement."""
     p = [pt.name for pt in model.points].index(req.point)
-    return np.asarray(req.measure(displacement[:, p]) > req.max_displacement)
+    d = displacement[:, p]
+    with np.errstate(invalid="ignore"):
+        return np.asarray((req.measure(d) > req.max_displacement) | np.isnan(d[:, 0]))
 
 
 def _converged(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> bool:
@@ -235,6 +238,8 @@ def _rel_errors(model: Model, displacement: FloatArray, confidence: float) -> Fl
             out.append(z * math.sqrt(p * (1 - p) / n) / p if p > 0 else math.inf)
     else:
         size = np.linalg.norm(displacement, axis=2)
+        size = size[~np.isnan(size[:, 0])] if size.shape[1] else size  # assembled parts
+        n = len(size)
         mean, std = np.mean(size, axis=0), np.std(size, axis=0, ddof=1) if n > 1 else 0.0
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = np.where(mean > 0, z * std / np.sqrt(n) / mean, math.inf)
@@ -314,6 +319,10 @@ class MonteCarloResult:
     deviation_labels: tuple[str, ...] = ()
     deviations: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))  # (N, nd)
     deviations_described: dict[str, str] = field(default_factory=dict)
+    #: Sets of parts whose deviations leave no position inside every
+    #: clearance: they cannot be assembled. Their displacements are NaN, the
+    #: points' statistics leave them out, and they miss every requirement.
+    unassembled: int = 0
 
     @property
     def samples(self) -> int:
@@ -324,6 +333,7 @@ class MonteCarloResult:
             "study": "montecarlo",
             "model": self.model_name,
             "samples": self.samples,
+            "unassembled": self.unassembled,
             "seed": self.settings.seed,
             "chunk": self.settings.chunk,
             "case": self.settings.case,
@@ -382,9 +392,10 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
     dmap = deviation_map(asm)
     plays = np.concatenate([c.plays for c in parts])
     d = np.concatenate([c.displacement for c in parts])
+    assembled = ~np.isnan(d[:, 0, 0]) if model.points else np.ones(len(d), dtype=bool)
     points = {}
     for p, point in enumerate(model.points):
-        dp = d[:, p]
+        dp = d[assembled, p]  # the statistics of the parts that can be put together
         size = np.linalg.norm(dp, axis=1)
         pct = np.percentile(dp, PERCENTILES, axis=0)
         spct = np.percentile(size, PERCENTILES)
@@ -424,6 +435,7 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
         dmap.labels,
         np.concatenate([c.deviations for c in parts]),
         {v.label: v.describe() for v in dmap.variables},
+        int(np.sum(~assembled)),
     )
 
 

@@ -201,10 +201,13 @@ def _one(
     sigma = _spread(float(linear.rss_sigma[k]), y0, high)
     cp, cpk = _capability(low, high, y0, sigma)
     y = measure.of(mc.displacement[:, mc.point_names.index(req.point)])
-    mean = float(np.mean(y))
-    spread = _spread(float(np.std(y, ddof=1)) if len(y) > 1 else 0.0, mean, high)
+    assembled = ~np.isnan(y)  # parts that cannot be assembled miss the requirement
+    mean = float(np.mean(y[assembled]))
+    n = int(np.sum(assembled))
+    spread = _spread(float(np.std(y[assembled], ddof=1)) if n > 1 else 0.0, mean, high)
     pp, ppk = _capability(low, high, mean, spread)
-    outside = (np.abs(y) > high) if two_sided else (y > high)
+    with np.errstate(invalid="ignore"):
+        outside = ((np.abs(y) > high) if two_sided else (y > high)) | ~assembled
     return RequirementTolerances(
         req,
         two_sided,
@@ -241,6 +244,7 @@ class TolerancesResult:
             "study": "tolerances",
             "model": self.model_name,
             "samples": self.montecarlo.samples,
+            "unassembled": self.montecarlo.unassembled,
             "seed": self.settings.seed,
             "case": self.settings.case,
             "confidence": self.settings.confidence,
