@@ -161,7 +161,7 @@ def test_a_zone_of_no_size_draws_nothing_so_a_study_keeps_its_random_stream() ->
 @pytest.mark.parametrize(
     ("joint", "deviation", "words"),
     [
-        ("ball", {"orientation": "1 mrad"}, "moves none of its contacts"),
+        ("ball", {"orientation": "1 mrad"}, "moves none of"),
         ("ball", {"position": {"diameter": 0.01, "y": {"min": 0, "max": 0.01}}}, "not both"),
         ("bore", {"position": {"y": {"min": 0.01, "max": 0}}}, "swap them"),
         ("bore", {}, "needs a 'position' zone"),
@@ -274,3 +274,92 @@ def test_the_example_with_a_position_zone_and_a_parallelism_runs_every_study(
     r = side.requirements[0]
     assert r.mc_sigma == pytest.approx(r.rss_sigma, rel=0.1)
     assert 0 < r.mc_ppm < 1e6
+
+
+def two_bores(deviations: list[dict[str, Any]], own: dict[str, Any] | None = None) -> Any:
+    """A shaft in two bores at x = 100 and 300 (a ball in each), pressed down
+    at x = 200: both balls rest on their bores' bottoms."""
+    bore = {"type": "sphere_in_cylinder", "between": ["S0", "S1"], "axis": [1, 0, 0]}
+    joints = [
+        {"name": "front", **bore, "at": [100, 0, 0], "clearance": J, "deviation": "setup"},
+        {"name": "rear", **bore, "at": [300, 0, 0], "clearance": J, "deviation": "setup"},
+    ]
+    if own is not None:
+        for joint in joints:
+            joint["deviation"] = own
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
+            "joints": joints,
+            "deviations": deviations,
+            "loads": [{"body": "S1", "at": [200, 0, 0], "force": [0, -1, 0]}],
+            "points": [{"name": "M", "body": "S1", "at": [200, 0, 0]}],
+        }
+    )
+
+
+def test_a_shared_deviation_moves_both_bores_as_one_rigid_group() -> None:
+    dy, wz = 0.01, 1e-4
+    setup = {
+        "name": "setup",
+        "at": [200, 0, 0],
+        "axis": [1, 0, 0],
+        "position": {"diameter": 0, "mean": [0, dy, 0]},
+        "orientation": {"angle": 0, "mean": [0, 0, wz]},
+    }
+    result = jointplay.solve(two_bores([setup]))
+    result.check()
+    # each bore moves by dy + w x (c - at): -100 wz at the front, +100 wz at the rear
+    assert np.allclose(result.bodies["S1"].rotation, [0, 0, wz], atol=RAD, rtol=0)
+    assert np.allclose(result.points["M"].displacement, [0, dy - J / 2, 0], atol=MM, rtol=0)
+
+
+def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
+    setup = {"name": "setup", "at": [200, 0, 0], "axis": [1, 0, 0], "position": "20 um"}
+    shared = MonteCarlo(samples=1_000, seed=4).run(two_bores([setup]))
+    assert shared.deviation_labels == ("setup.deviation.position.y", "setup.deviation.position.z")
+    d = shared.deviations
+    # both bores shifted by the same draw: the shaft follows it without turning
+    expected = np.column_stack([np.zeros(len(d)), d[:, 0] - J / 2, d[:, 1]])
+    assert np.allclose(shared.displacement[:, 0], expected, atol=MM, rtol=0)
+    # each bore with its own zone instead: two draws per shaft, a different spread
+    own = MonteCarlo(samples=1_000, seed=4).run(two_bores([], own={"position": "20 um"}))
+    assert len(own.deviation_labels) == 4
+    d = own.deviations
+    middle = np.column_stack(
+        [np.zeros(len(d)), (d[:, 0] + d[:, 2]) / 2 - J / 2, (d[:, 1] + d[:, 3]) / 2]
+    )
+    assert np.allclose(own.displacement[:, 0], middle, atol=MM, rtol=0)
+
+
+@pytest.mark.parametrize(
+    ("deviations", "words"),
+    [
+        ([], "unknown shared deviation 'setup'"),
+        (
+            [
+                {"name": "setup", "at": [0, 0, 0], "position": "1 um"},
+                {"name": "other", "at": [0, 0, 0], "position": "1 um"},
+            ],
+            "no joint names it",
+        ),
+        (
+            [{"name": "setup", "at": [0, 0, 0], "orientation": "1 mrad"}],
+            "give the deviation an 'axis'",
+        ),
+        (
+            [
+                {
+                    "name": "setup",
+                    "at": [0, 0, 0],
+                    "axis": [1, 0, 0],
+                    "position": {"x": {"min": 0, "max": 0.01}},
+                }
+            ],
+            "moves none of",
+        ),
+    ],
+)
+def test_bad_shared_deviations_are_named(deviations: list[dict[str, Any]], words: str) -> None:
+    with pytest.raises(jointplay.ModelError, match=words):
+        two_bores(deviations)

@@ -642,6 +642,12 @@ def assemble(model: Model) -> Assembly:
     turn = s / lever
 
     G_list = _joint_maps(joints, side_a, side_b, centre, body_ref, s, turn, m)
+    # each deviated joint's torsor at its mean (its own deviation, or its share of a group's)
+    deviated: dict[int, FloatArray] = {}
+    for source in model.deviation_sources():
+        for jdx in source.joints:
+            mean = source.torsor_at(joints[jdx]) @ source.deviation.mean()
+            deviated[jdx] = deviated.get(jdx, np.zeros(6)) + mean
     contacts: list[ContactRows] = []
     for jdx, (joint, G) in enumerate(zip(joints, G_list, strict=True)):
         cones = joint.cones
@@ -650,14 +656,14 @@ def assemble(model: Model) -> Assembly:
         blocks = (np.vstack([c.rows for c in cones]) / s) @ G.block
         spring = joint.stiffness or 0.0
         # a deviation moves each play's centre, and a face's limit along its normal
-        delta = np.zeros(6) if joint.deviation is None else joint.deviation.mean()
+        delta = deviated.get(jdx, np.zeros(6))
         at = 0
         for cdx, contact in enumerate(cones):
             k = contact.rows.shape[0]
             offset = None if contact.offset is None else (contact.offset / s) @ G.block
-            deviated = joint.deviation is not None and contact.kind == "ball"
+            moved = jdx in deviated and contact.kind == "ball"
             radius = contact.radius
-            if deviated and contact.offset is not None:
+            if moved and contact.offset is not None:
                 radius += float(contact.offset @ delta)
             contacts.append(
                 ContactRows(
@@ -674,7 +680,7 @@ def assemble(model: Model) -> Assembly:
                     if contact.stiffness is None
                     else contact.stiffness,
                     offset,
-                    centre=(contact.rows @ delta) / s if deviated else None,
+                    centre=(contact.rows @ delta) / s if moved else None,
                 )
             )
             at += k

@@ -23,6 +23,11 @@ A deviation has a ``position`` zone and an ``orientation`` zone::
       orientation: "0.2 mrad"                              # at most t / L
       distribution: normal                 # uniform (default) or normal
 
+Features made together (two bores bored in one setup) share one deviation:
+a ``SharedDeviation`` in the model's ``deviations`` section, with its own
+point and axis, named by each joint (``deviation: setup``); each joint sees
+it at its own centre, in its own frame (``transport``).
+
 A zone is centred on its ``mean`` (0 by default: the process's mean shift).
 ``uniform`` fills the zone evenly (a disc by area, not by radius);
 ``normal`` puts the zone's edge at 3 sigma in each direction and redraws the
@@ -33,19 +38,51 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Self
+from typing import Annotated, Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema, model_validator
 
-from jointplay.model.fields import Length, NonNegativeLength, PositiveLength, Vec3, _vector
+from jointplay.geometry import joint_frame, skew
+from jointplay.model.fields import (
+    Direction,
+    Length,
+    Name,
+    NonNegativeLength,
+    Point,
+    PositiveLength,
+    Vec3,
+    _quantity_schema,
+    _vector,
+    _vector_of,
+)
 from jointplay.model.tolerance import Distribution
 from jointplay.units import shown, to_base
 
 FloatArray = NDArray[np.float64]
 
 _AXES = "xyz"
+#: The components of a small torsor (t, w) of a joint's features, in words.
+MOTION_WORDS = (
+    "shift along x",
+    "shift along y",
+    "shift along z",
+    "turn about x",
+    "tilt about y",
+    "tilt about z",
+)
+
+
+def _or_plain(dimension: str) -> Any:
+    """A zone's schema: its object, or a plain quantity (a diameter, an angle)."""
+
+    def extra(schema: dict[str, Any]) -> None:
+        whole = dict(schema)
+        schema.clear()
+        schema["anyOf"] = [_quantity_schema(dimension), whole]
+
+    return extra
 
 
 class Limits(BaseModel):
@@ -68,13 +105,13 @@ class PositionZone(BaseModel):
     across the joint's axis, or a ball for a spherical joint) around
     ``mean``, or limits per joint-frame direction ``x``, ``y``, ``z``."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", json_schema_extra=_or_plain("length"))
 
     diameter: NonNegativeLength | None = None
     x: Limits | None = None
     y: Limits | None = None
     z: Limits | None = None
-    mean: Vec3 = Field(default=(0.0, 0.0, 0.0))
+    mean: Annotated[Vec3, _vector_of("length")] = Field(default=(0.0, 0.0, 0.0))
 
     @model_validator(mode="before")
     @classmethod
@@ -113,12 +150,12 @@ class OrientationZone(BaseModel):
     diameter t over L, so a tilt of at most t / L); around ``mean`` (rad,
     joint frame, no component about the axis)."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", json_schema_extra=_or_plain("angle"))
 
-    angle: float | None = None
+    angle: Annotated[float | None, WithJsonSchema(_quantity_schema("angle"))] = None
     tolerance: NonNegativeLength | None = None
     over: PositiveLength | None = None
-    mean: Vec3 = Field(default=(0.0, 0.0, 0.0))
+    mean: Annotated[Vec3, _vector_of("angle")] = Field(default=(0.0, 0.0, 0.0))
 
     @model_validator(mode="before")
     @classmethod
@@ -279,3 +316,47 @@ def measured(t: Vec3 | None, w: Vec3 | None) -> Deviation:
     position = None if t is None else PositionZone(diameter=0.0, mean=t)
     orientation = None if w is None else OrientationZone(angle=0.0, mean=w)
     return Deviation(position=position, orientation=orientation)
+
+
+class SharedDeviation(Deviation):
+    """A deviation of several joints' features made together (two bores
+    bored in one setup): one small torsor of the whole group, at ``at`` in
+    the frame of ``axis`` (and ``up``), taken by every joint that names it.
+    Each joint sees it moved to its own centre and turned into its own frame:
+    a tilt ``w`` of the group shifts a joint at ``c`` by ``w x (c - at)``.
+    A ``diameter`` is a disc across ``axis``, or a ball without an axis."""
+
+    name: Name
+    at: Point
+    axis: Direction | None = None
+    up: Direction | None = None
+
+    @model_validator(mode="after")
+    def _axis_for_a_tilt(self) -> Self:
+        if self.axis is None and self.orientation is not None:
+            raise ValueError(
+                "an orientation zone tilts an axis: give the deviation an 'axis' (and the "
+                "joints' features share its tilt)"
+            )
+        return self
+
+    @property
+    def R(self) -> FloatArray:
+        """Its frame's axes (x = ``axis``) as columns, in global axes."""
+        if self.axis is None:
+            return np.eye(3)
+        return joint_frame(self.axis, self.up)
+
+
+def transport(
+    R_from: FloatArray, at: FloatArray, R_to: FloatArray, centre: FloatArray
+) -> FloatArray:
+    """(6, 6): a small torsor (t, w) at ``at`` in the frame ``R_from`` as
+    seen at ``centre`` in the frame ``R_to``: t' = R_to^T (R_from t + R_from w x
+    (centre - at)), w' = R_to^T R_from w."""
+    T = np.zeros((6, 6))
+    lever = np.asarray(centre, dtype=float) - np.asarray(at, dtype=float)
+    T[:3, :3] = R_to.T @ R_from
+    T[:3, 3:] = -R_to.T @ skew(lever) @ R_from
+    T[3:, 3:] = R_to.T @ R_from
+    return T

@@ -10,6 +10,7 @@ import difflib
 import math
 from collections import deque
 from collections.abc import Iterable
+from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
@@ -24,6 +25,8 @@ from pydantic import (
     model_validator,
 )
 
+from jointplay.geometry import FloatArray
+from jointplay.model.deviations import MOTION_WORDS, Deviation, SharedDeviation, transport
 from jointplay.model.fields import (
     AccelerationVector,
     Direction,
@@ -205,6 +208,8 @@ class Model(BaseModel):
     gravity: AccelerationVector | None = None  # mm/s^2 as plain numbers; "9.81 m/s^2"
     points: tuple[FunctionalPoint, ...] = ()
     requirements: tuple[Requirement, ...] = ()
+    #: Deviations shared by several joints' features (``deviations.SharedDeviation``).
+    deviations: tuple[SharedDeviation, ...] = ()
 
     @field_serializer("gravity")
     def _gravity_with_its_unit(self, gravity: tuple[float, float, float] | None) -> Any:
@@ -307,6 +312,7 @@ class Model(BaseModel):
                     )
                 )
         found += _check_smallest_plays(self)
+        found += _check_shared_deviations(self)
         # with no ground, or a joint to an unknown body, it would only repeat those
         unreached = (
             _unreached_from_ground(names, grounds, [j.between for j in self.joints])
@@ -408,6 +414,23 @@ class Model(BaseModel):
                     )
         return tuple(out)
 
+    def deviation_sources(self) -> tuple[DeviationSource, ...]:
+        """Every deviation, a joint's own or shared, with the joints it moves."""
+        out = []
+        shared = {d.name: d for d in self.deviations}
+        users: dict[str, list[int]] = {name: [] for name in shared}
+        for jdx, joint in enumerate(self.joints):
+            if isinstance(joint.deviation, str):
+                users.setdefault(joint.deviation, []).append(jdx)
+            elif joint.deviation is not None:
+                ball = joint.type_name == "spherical"
+                frame = (joint.R_world_joint, joint.centre)
+                out.append(DeviationSource(joint.name, joint.deviation, *frame, (jdx,), ball))
+        for name, dev in shared.items():
+            at = np.asarray(dev.at, dtype=float)
+            out.append(DeviationSource(name, dev, dev.R, at, tuple(users[name]), dev.axis is None))
+        return tuple(out)
+
     def body(self, name: str) -> Body:
         for b in self.bodies:
             if b.name == name:
@@ -425,6 +448,68 @@ class Model(BaseModel):
         data = self.model_dump(by_alias=True, exclude_none=True)
         data.update(changes)
         return Model.model_validate(data)
+
+
+@dataclass(frozen=True)
+class DeviationSource:
+    """One deviation (a joint's own, or shared: ``label`` names it) in its
+    frame ``R`` at ``at``, and the joints it moves (model order)."""
+
+    label: str
+    deviation: Deviation
+    R: FloatArray
+    at: FloatArray
+    joints: tuple[int, ...]
+    ball: bool  # a diameter is a ball (else a disc across the frame's x)
+
+    def torsor_at(self, joint: Joint) -> FloatArray:
+        """(6, 6): this deviation's torsor as the joint sees it (its centre, frame)."""
+        return transport(self.R, self.at, joint.R_world_joint, joint.centre)
+
+
+def _check_shared_deviations(model: Model) -> list[EntryError]:
+    """Shared deviations: named by a joint, their names known, and every
+    direction they move taken by some contact of each joint, none rigid."""
+    found: list[EntryError] = []
+    names = [d.name for d in model.deviations]
+    found += _check_unique(names, "deviations", "deviation")
+    used = set()
+    for i, joint in enumerate(model.joints):
+        if isinstance(joint.deviation, str):
+            used.add(joint.deviation)
+            if joint.deviation not in names:
+                known = listing(f"'{n}'" for n in names) if names else "none"
+                found.append(
+                    EntryError(
+                        f"joints[{i}] '{joint.name}'",
+                        f"deviation: unknown shared deviation '{joint.deviation}'; the "
+                        f"'deviations' section has {known}." + suggest(joint.deviation, names),
+                    )
+                )
+    for k, dev in enumerate(model.deviations):
+        entry = f"deviations[{k}] '{dev.name}'"
+        if dev.name not in used:
+            found.append(
+                EntryError(entry, "no joint names it; give joints 'deviation: " + dev.name + "'")
+            )
+            continue
+        source = next(s for s in model.deviation_sources() if s.deviation is dev)
+        axes = [a for z in dev.zones(source.ball) for a in z.axes]
+        seen = [(model.joints[jdx], source.torsor_at(model.joints[jdx])) for jdx in source.joints]
+        problems = [
+            problem
+            for joint, T in seen
+            for move in [dev.mean(), *np.eye(6)[axes]]
+            if (problem := joint.rigid_problem(T @ move))
+        ]
+        unseen = [a for a in axes if not any(joint.takes(T[:, a]) for joint, T in seen)]
+        if unseen:
+            problems.append(
+                f"a {MOTION_WORDS[unseen[0]]} of its frame moves none of the contacts of its "
+                "joints (they leave that motion free); leave it out"
+            )
+        found += [EntryError(entry, problem) for problem in problems[:1]]
+    return found
 
 
 def check_case(model: Model, case: str | None, source: str) -> None:

@@ -819,7 +819,10 @@ def _joint_sizes(joint: Any) -> str:
     if getattr(joint, "along", None) is not None:
         parts.append(f"along {_vec(np.asarray(joint.along, dtype=float))}")
     if joint.deviation is not None:
-        parts.append(f"deviation: {joint.deviation.describe(joint.type_name == 'spherical')}")
+        if isinstance(joint.deviation, str):
+            parts.append(f"deviation: shared '{joint.deviation}'")
+        else:
+            parts.append(f"deviation: {joint.deviation.describe(joint.type_name == 'spherical')}")
     return ", ".join(parts)
 
 

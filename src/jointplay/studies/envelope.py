@@ -43,7 +43,7 @@ part's own plays).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -110,7 +110,18 @@ class Envelope:
 
     def run(self, model: Model, *, source: str | None = None) -> EnvelopeResult:
         """``source``: the model file's name, for messages."""
-        source = source or model.name or "<model>"
+        result = self._run(model, source=source or model.name or "<model>")
+        zones = [j.name for j in model.joints if j.deviation is not None]
+        if zones:  # said, never silent: the zones' spread is not in this envelope yet
+            result = replace(
+                result,
+                over=f"{result.over}; with the deviations of {', '.join(zones)} at their "
+                "means (their zones are not part of this envelope: the Monte Carlo and "
+                "tolerance studies draw them)",
+            )
+        return result
+
+    def _run(self, model: Model, *, source: str) -> EnvelopeResult:
         names = [p.name for p in model.points]
         if self.point not in names:
             known = ", ".join(names) if names else "none; add a 'points' section"

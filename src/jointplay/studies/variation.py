@@ -215,10 +215,11 @@ def _cones_with(joint: Joint, field: str, value: float, source: str, entry: str)
 
 @dataclass(frozen=True)
 class DeviationVariable:
-    """One component of a joint's deviation that varies: ``l2``'s position
-    along y (mm) or tilt about z (rad), drawn with the others of its zone."""
+    """One component of a deviation that varies: joint ``l2``'s (or shared
+    deviation ``setup``'s) position along y (mm) or tilt about z (rad), in
+    its frame, drawn with the others of its zone."""
 
-    joint: str
+    owner: str  # the joint, or the shared deviation
     zone: Zone
     axis: int  # 0-5: the torsor component (t x, y, z mm; w x, y, z rad)
     mean: float
@@ -227,7 +228,7 @@ class DeviationVariable:
     @property
     def label(self) -> str:
         kind = "position" if self.axis < 3 else "orientation"
-        return f"{self.joint}.deviation.{kind}.{'xyz'[self.axis % 3]}"
+        return f"{self.owner}.deviation.{kind}.{'xyz'[self.axis % 3]}"
 
     @property
     def unit(self) -> str:
@@ -282,35 +283,35 @@ class DeviationMap:
 
 
 def deviation_map(asm: Assembly) -> DeviationMap:
-    """The ``DeviationMap`` of every zone of ``asm``'s joints that has a size."""
+    """The ``DeviationMap`` of every zone with a size, of the joints' own
+    deviations and the shared ones (``Model.deviation_sources``)."""
     model: Model = asm.model
     stack = asm.stack
     where = {(c.joint_index, c.contact_index): i for i, c in enumerate(asm.balls)}
     variables: list[DeviationVariable] = []
     C_rows, D_rows = [], []
-    for jdx, joint in enumerate(model.joints):
-        if joint.deviation is None:
-            continue
-        mean = joint.deviation.mean()
-        for zone in joint.deviation.zones(joint.type_name == "spherical"):
+    for source in model.deviation_sources():
+        dev = source.deviation
+        mean = dev.mean()
+        seen = [(jdx, source.torsor_at(model.joints[jdx])) for jdx in source.joints]
+        for zone in dev.zones(source.ball):
             if zone.radius == 0.0:
                 continue
             for axis in zone.axes:
                 variables.append(
-                    DeviationVariable(
-                        joint.name, zone, axis, float(mean[axis]), joint.deviation.distribution
-                    )
+                    DeviationVariable(source.label, zone, axis, float(mean[axis]), dev.distribution)
                 )
-                move = np.eye(6)[axis]
                 c_row, d_row = np.zeros(stack.A.shape[0]), np.zeros(len(asm.balls))
-                for cdx, contact in enumerate(joint.cones):
-                    i = where.get((jdx, cdx))
-                    if i is None:
-                        continue
-                    rows = slice(stack.start[i], stack.start[i] + stack.k[i])
-                    c_row[rows] = (contact.rows @ move) / asm.s
-                    if contact.offset is not None:
-                        d_row[i] = float(contact.offset @ move) / asm.s
+                for jdx, T in seen:
+                    move = T[:, axis]  # the unit component, as this joint sees it
+                    for cdx, contact in enumerate(model.joints[jdx].cones):
+                        i = where.get((jdx, cdx))
+                        if i is None:
+                            continue
+                        rows = slice(stack.start[i], stack.start[i] + stack.k[i])
+                        c_row[rows] += (contact.rows @ move) / asm.s
+                        if contact.offset is not None:
+                            d_row[i] += float(contact.offset @ move) / asm.s
                 C_rows.append(c_row)
                 D_rows.append(d_row)
     nd = len(variables)

@@ -24,9 +24,10 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, model_validator
 
 from jointplay.geometry import FloatArray, is_parallel, joint_frame, left_jacobian_inverse, skew
-from jointplay.model.deviations import Deviation
+from jointplay.model.deviations import MOTION_WORDS, Deviation
 from jointplay.model.fields import Direction, Name, Play, Point, PositiveStiffness
 from jointplay.model.tolerance import PLAY_FIELDS
+from jointplay.settings import DEFAULT
 
 ContactKind = Literal["ball", "fixed"]
 #: A cone's vector part (k,) and scalar part.
@@ -116,6 +117,19 @@ class Contact:
         return self.point + self.lever @ (np.asarray(f) / lam)
 
 
+def _moves(c: Contact, move: FloatArray, scale: float) -> bool:
+    """Whether ``move`` changes contact ``c``'s rows or its face's limit."""
+    return bool(np.any(np.abs(c.rows @ move) > scale)) or (
+        c.offset is not None and abs(float(c.offset @ move)) > scale
+    )
+
+
+def _motion_words(move: FloatArray) -> str:
+    """'shift along y and tilt about z': the components of a small torsor."""
+    scale = DEFAULT.round_off * float(np.max(np.abs(move), initial=0.0))
+    return " and ".join(MOTION_WORDS[int(a)] for a in np.flatnonzero(np.abs(move) > scale))
+
+
 def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:
     """Rows of ``delta(p) = t + w x p = [I, -[p]x] @ tau`` for the chosen joint axes."""
     px, py, pz = (float(c) for c in p)
@@ -145,7 +159,8 @@ class Joint(BaseModel):
     stiffness: PositiveStiffness | None = None
     #: Where the features really are: a position and an orientation zone
     #: (``deviations.py``). None: on their nominal geometry.
-    deviation: Deviation | None = None
+    #: A shared deviation is named (``deviation: setup``, see ``SharedDeviation``).
+    deviation: Deviation | Name | None = None
 
     @classmethod
     def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
@@ -166,42 +181,40 @@ class Joint(BaseModel):
 
     @model_validator(mode="after")
     def _check_deviation(self) -> Joint:
-        if self.deviation is None:
-            return self
-        cones = self.contacts()
-        # every deviating direction must move some play's centre, and no fixed row
-        moves = [self.deviation.mean()] + [
-            np.eye(6)[a]
-            for zone in self.deviation.zones(self.type_name == "spherical")
-            for a in zone.axes
-        ]
-        names = {3: "turn about x", 4: "tilt about y", 5: "tilt about z"}
-        for move in moves:
-            if not np.any(move):
-                continue
-            which = ", ".join(
-                names[int(a)] if a >= 3 else f"shift along {'xyz'[a]}" for a in np.flatnonzero(move)
-            )
-            for c in cones:
-                seen = np.any(np.abs(c.rows @ move) > 0.0) or (
-                    c.offset is not None and c.offset @ move != 0.0
-                )
-                if c.kind == "fixed" and seen:
-                    raise ValueError(
-                        f"deviation: a {which} of this joint's features meets its rigid "
-                        f"contact '{c.name}', which has no play to take it; give the "
-                        "deviation to a joint with play in that direction"
-                    )
-            if not any(
-                np.any(c.rows @ move != 0.0) or (c.offset is not None and c.offset @ move != 0.0)
-                for c in cones
-                if c.kind == "ball"
-            ):
+        if not isinstance(self.deviation, Deviation):
+            return self  # a shared one's name: the model checks it
+        deviation = self.deviation
+        axes = [a for z in deviation.zones(self.type_name == "spherical") for a in z.axes]
+        for move in [deviation.mean(), *np.eye(6)[axes]]:
+            problem = self.rigid_problem(move)
+            if problem:
+                raise ValueError(f"deviation: {problem}")
+        for a in axes:
+            if not self.takes(np.eye(6)[a]):
                 raise ValueError(
-                    f"deviation: a {which} of this joint's features moves none of its "
-                    "contacts (the joint leaves that motion free); leave it out"
+                    f"deviation: a {_motion_words(np.eye(6)[a])} of the features moves none of "
+                    "the joint's contacts (the joint leaves that motion free); leave it out"
                 )
         return self
+
+    def takes(self, move: FloatArray) -> bool:
+        """Whether the deviation ``move`` (a torsor in the joint frame) moves
+        some clearance contact of the joint."""
+        scale = DEFAULT.round_off * float(np.max(np.abs(move), initial=0.0))  # zero, to round-off
+        return any(_moves(c, move, scale) for c in self.cones if c.kind == "ball")
+
+    def rigid_problem(self, move: FloatArray) -> str | None:
+        """Why the deviation ``move`` cannot be this joint's: it meets a rigid
+        row, which has no play to take it. None if it does not."""
+        scale = DEFAULT.round_off * float(np.max(np.abs(move), initial=0.0))
+        for c in self.cones:
+            if c.kind == "fixed" and _moves(c, move, scale):
+                return (
+                    f"a {_motion_words(move)} of the features of joint '{self.name}' meets its "
+                    f"rigid contact '{c.name}', which has no play to take it; give the "
+                    "deviation to a joint with play in that direction"
+                )
+        return None
 
     @cached_property
     def R_world_joint(self) -> FloatArray:
