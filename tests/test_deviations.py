@@ -363,3 +363,41 @@ def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
 def test_bad_shared_deviations_are_named(deviations: list[dict[str, Any]], words: str) -> None:
     with pytest.raises(jointplay.ModelError, match=words):
         two_bores(deviations)
+
+
+def test_a_sweep_moves_a_deviation_through_its_mean() -> None:
+    from jointplay.studies.sweep import Sweep, Vary
+
+    model = pivoted_shaft(bore={"deviation": {"position": {"diameter": 0}}})
+    path = "joints[l2].deviation.position.mean[1]"
+    table = Sweep((Vary(path, ("0 um", "5 um", "10 um")),)).run(model)
+    tips = table.points[:, table.point_names.index("T")]
+    expected = [[0, 1.5 * (dy - J / 2), 0] for dy in (0.0, 0.005, 0.010)]
+    assert np.allclose(tips, expected, atol=MM, rtol=0)
+
+
+def test_solve_takes_a_measured_deviation_on_the_command_line(tmp_path: Path) -> None:
+    import json
+
+    from typer.testing import CliRunner
+
+    from jointplay.cli import app
+
+    path = tmp_path / "shaft.yaml"
+    path.write_text(EXAMPLE.read_text())
+    given = [
+        "--deviations",
+        "l2.position=[0, 5 um, -3 um]",
+        "--deviations",
+        "l2.orientation=[0, 0, 0]",
+    ]
+    run = CliRunner().invoke(app, ["solve", str(path), "--json", *given])
+    assert run.exit_code == 0, run.output
+    measured = jointplay.with_deviations(
+        jointplay.load(EXAMPLE), {"l2": {"position": [0, 0.005, -0.003], "orientation": [0, 0, 0]}}
+    )
+    expected = jointplay.solve(measured).points["B"].displacement
+    assert np.allclose(json.loads(run.output)["points"]["B"]["displacement"], expected, atol=MM)
+    bad = CliRunner().invoke(app, ["solve", str(path), "--deviations", "l2.position=0"])
+    assert bad.exit_code == 2 and "JOINT.position=[x, y, z]" in bad.output
+    assert "Traceback" not in bad.output
