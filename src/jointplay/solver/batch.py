@@ -167,6 +167,9 @@ def _solve_batch(
     # again after ``batch_give_up`` failures (else every full solve would
     # re-run Newton on every pending row: time quadratic in the samples)
     failures: dict[FaceKey, IntArray] = {}
+    # active set -> each row's distance to the start it was last tried from
+    start_distance: dict[FaceKey, FloatArray] = {}
+    queried: dict[FaceKey, int] = {}  # active set -> its solved rows already queried
     give_up = ws.settings.batch_give_up
     full = 0
     # the batched Newton works on dense stacks; a large (sparse) mechanism's
@@ -183,11 +186,19 @@ def _solve_batch(
             progress = False
             for active, rows in solved_by_set.items():
                 failed = failures.setdefault(active, np.zeros(B, dtype=np.intp))
-                tried = pending[failed[pending] < give_up]
-                if not tried.size:
-                    continue
+                start_distance.setdefault(active, np.full(B, np.inf))
                 ref = np.concatenate(rows)
-                nearest = ref[cKDTree(features[ref]).query(features[tried])[1]]
+                # a row that failed on this set is tried again only from a nearer
+                # start: one among the rows solved on it since it was last tried
+                new = ref[queried.get(active, 0) :]
+                queried[active] = len(ref)
+                tried = pending[failed[pending] < give_up]
+                if not tried.size or not new.size:
+                    continue
+                dist, at = cKDTree(features[new]).query(features[tried])
+                closer = dist < start_distance[active][tried]
+                tried, dist, nearest = tried[closer], dist[closer], new[at[closer]]
+                start_distance[active][tried] = dist
                 for part in range(0, len(tried), chunk):
                     now, near = tried[part : part + chunk], nearest[part : part + chunk]
                     ok, xs, lams, fs, checks = _newton_batch(

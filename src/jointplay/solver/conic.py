@@ -153,14 +153,30 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
     if outcome(sol) == "unbounded":  # a one-sided motion (_check_driven took the rest)
         motion = held.driven_motion(ws, -q[: ws.m], np.asarray(sol.x))
         raise held.unbounded(ws.asm, motion, one_way=True)
-    if outcome(sol) == "infeasible":  # deviations that no position fits (else x = 0 would)
-        raise unassembled(ws, prog, np.asarray(sol.z))
+    if outcome(sol) == "infeasible":
+        ray = infeasibility(ws)
+        if ray is not None:
+            raise unassembled(ws, ws.interior_program, ray)
     if not has_answer(sol):  # feasible programs: numerical trouble
         raise SolverError(
             f"the cone solver stopped with status {status_name(sol)} on this model. "
             + held.weak_hint(ws)
         )
     return sol
+
+
+def infeasibility(ws: Workspace) -> FloatArray | None:
+    """Clarabel's certificate that no position lies inside every clearance,
+    or None if some does. Without deviations x = 0 does; with them the plain
+    cone program with no loads decides (an "infeasible" status of another
+    program, a tie's say, is round-off)."""
+    if ws.stack.centre is None:
+        return None
+    prog = ws.interior_program
+    sol = clarabel.DefaultSolver(
+        prog.P, np.zeros(prog.A.shape[1]), prog.A, prog.b, prog.cones, prog.settings
+    ).solve()
+    return np.asarray(sol.z) if outcome(sol) == "infeasible" else None
 
 
 def unassembled(ws: Workspace, prog: ConeProgram, ray: FloatArray) -> UnassembledError:
