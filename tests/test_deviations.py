@@ -421,3 +421,41 @@ def test_the_batch_tries_a_failed_row_again_only_from_a_nearer_start(monkeypatch
     mc = MonteCarlo(samples=3_000, seed=5).run(jointplay.load(EXAMPLE))
     assert mc.batched > 2_900  # the study is batched
     assert len(tries) == len(set(tries))  # no row twice on one set from one start
+
+
+def test_the_envelope_over_a_position_zone_is_exact_and_holds_every_sample() -> None:
+    from jointplay.studies.envelope import Envelope
+
+    R = 0.01
+    model = pivoted_shaft(bore={"deviation": {"position": "20 um"}})
+    env = Envelope("T").run(model)
+    assert "exact" in env.over
+    # a push along y or z takes the bore to the edge of its zone and the ball to its play
+    far = 1.5 * (J / 2 + R)
+    assert np.allclose(env.extent[1:], [[-far, far], [-far, far]], atol=MM, rtol=0)
+    assert env.largest == pytest.approx(far, abs=MM)
+    mc = MonteCarlo(samples=2_000, seed=6).run(model)
+    assert np.all(env.contains(mc.displacement[:, 0], tol=MM))
+
+
+def test_the_example_s_envelope_holds_every_sample_of_its_study() -> None:
+    from jointplay.studies.envelope import Envelope
+
+    model = jointplay.load(EXAMPLE)
+    env = Envelope("B").run(model)
+    mc = MonteCarlo(samples=3_000, seed=7).run(model)
+    assert np.all(env.contains(mc.displacement[:, 0], tol=MM))
+    # the largest sample reaches close to the envelope (within 20 % of it)
+    assert np.max(np.linalg.norm(mc.displacement[:, 0], axis=1)) > 0.8 * env.largest
+
+
+def test_under_the_model_s_loads_the_zone_envelope_is_an_upper_bound() -> None:
+    from jointplay.studies.envelope import Envelope
+
+    model = pivoted_shaft(bore={"deviation": {"position": "20 um"}}).replace(
+        load_cases={"down": [{"body": "S1", "at": [300, 0, 0], "force": [0, -1, 0]}]}
+    )
+    env = Envelope("T").run(model)
+    assert "upper bound" in env.over
+    mc = MonteCarlo(samples=1_000, seed=8, case="down").run(model)
+    assert np.all(env.contains(mc.displacement[:, 0], tol=MM))

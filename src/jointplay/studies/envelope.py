@@ -29,6 +29,12 @@ Over which loads (``Envelope.loads``):
 * ``auto`` (the default): ``model`` if the model has load cases or varying
   load components, else ``probes``.
 
+With deviation zones (``deviations.py``) the envelope is the support of
+every position the plays and the zones allow (``_ZoneProgram``: one cone
+program per direction, over the positions and the deviations together):
+exact under probes without standing loads, an upper bound under the model's
+loads or against standing loads (said in ``over``).
+
 The envelope is that of the plays alone: a contact's stiffness, and a
 drive's, are left out (they would let the point go further the harder it is
 pushed). With toleranced plays it is taken at their upper limits
@@ -43,19 +49,19 @@ part's own plays).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from jointplay.assembly import assemble
-from jointplay.errors import OptionError, UnboundedMechanismError
-from jointplay.geometry import FloatArray
+from jointplay.errors import OptionError, SolverError, UnboundedMechanismError
+from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model
 from jointplay.model.tolerance import Toleranced
 from jointplay.settings import DEFAULT
 from jointplay.solver.workspace import Workspace
-from jointplay.studies.variation import load_map, play_map
+from jointplay.studies.variation import deviation_map, load_map, play_map
 from jointplay.units import LIMITS
 
 if TYPE_CHECKING:
@@ -110,16 +116,7 @@ class Envelope:
 
     def run(self, model: Model, *, source: str | None = None) -> EnvelopeResult:
         """``source``: the model file's name, for messages."""
-        result = self._run(model, source=source or model.name or "<model>")
-        zones = [j.name for j in model.joints if j.deviation is not None]
-        if zones:  # said, never silent: the zones' spread is not in this envelope yet
-            result = replace(
-                result,
-                over=f"{result.over}; with the deviations of {', '.join(zones)} at their "
-                "means (their zones are not part of this envelope: the Monte Carlo and "
-                "tolerance studies draw them)",
-            )
-        return result
+        return self._run(model, source=source or model.name or "<model>")
 
     def _run(self, model: Model, *, source: str) -> EnvelopeResult:
         names = [p.name for p in model.points]
@@ -169,6 +166,9 @@ class Envelope:
                 (),
             )
         at = np.asarray(point.at)
+        dmap = deviation_map(asm)
+        if dmap.variables:
+            return self._over_zones(rigid, ws, dmap, point.body, at, directions, mode)
 
         def motion_of(work: FloatArray) -> FloatArray:
             motion = ws.solve_batch(work).body_displacement(point.body)
@@ -265,6 +265,72 @@ class Envelope:
             + (f", {each}" if varied else "")
         )
         return np.vstack(parts), over, tuple(not_held)
+
+    def _over_zones(
+        self,
+        model: Model,
+        ws: Workspace,
+        dmap: Any,
+        body: str,
+        at: FloatArray,
+        directions: FloatArray,
+        mode: str,
+    ) -> EnvelopeResult:
+        """With deviation zones: the support of every position the plays and
+        the zones allow (``_ZoneProgram``), in the held directions. Exact for
+        probes without standing loads; under loads that hold parts against
+        some limits, an upper bound."""
+        asm = ws.asm
+        program = _ZoneProgram(ws, dmap, _point_map(asm, body, at))
+        standing = model.weights() + tuple(ld for ld in model.loads if ld.standing)
+        g0 = asm.work_of(standing)
+        W = asm.wrench_work(body, tuple(at))[:, :3]
+        held_dirs, not_held, why = _held_directions(ws, g0, W, directions, self.directions)
+        if not len(held_dirs):
+            raise _none_held(self.point, not_held, why)
+        found = [(u, program.support(u)) for u in held_dirs]
+        lost = [u for u, d in found if d is None]
+        if lost:
+            not_held.append(
+                f"{len(lost)} of {len(held_dirs)} directions lead the point on for ever (a "
+                f"part lifting off its supports), e.g. along {_words(lost[0])}"
+            )
+        kept = [(u, d) for u, d in found if d is not None]
+        if not kept:
+            raise OptionError(
+                "no direction of the point is bounded by the clearances and the deviation "
+                "zones; give the mechanism supports that hold it",
+            )
+        held_dirs = np.array([u for u, _ in kept])
+        d = np.array([dd for _, dd in kept])
+        size = np.linalg.norm(d, axis=1)
+        far_d = d[int(np.argmax(size))]
+        for start in np.argsort(size)[-4:]:  # climb to the largest displacement
+            cur = d[start]
+            for _ in range(CLIMB_STEPS):
+                n = float(np.linalg.norm(cur))
+                nxt = program.support(cur / n) if n > 0 else None
+                if nxt is None or float(np.linalg.norm(nxt)) <= n * (1 + 1e-13):
+                    break
+                cur = nxt
+            if np.linalg.norm(cur) > np.linalg.norm(far_d):
+                far_d = cur
+        h = np.einsum("ij,ij->i", held_dirs, d)
+        exact = mode == "probes" and not np.any(g0)
+        over = (
+            f"a push at the point in {len(held_dirs)} directions and every deviation within "
+            "its zone (one cone program per direction, over the positions and the deviations "
+            "together): "
+            + (
+                "exact"
+                if exact
+                else "an upper bound for the "
+                + ("model's loads" if mode == "model" else "standing loads")
+                + ", which may keep the point from part of it"
+            )
+        )
+        largest = float(np.linalg.norm(far_d))
+        return EnvelopeResult(self, body, held_dirs, h, d, far_d, largest, over, tuple(not_held))
 
     def _probed(
         self,
@@ -489,3 +555,90 @@ def point_envelopes(
         except UnboundedMechanismError as exc:
             missing[point.name] = str(exc)
     return found, missing
+
+
+class _ZoneProgram:
+    """The cone program of every position the plays and the deviation zones
+    allow, over positions x and deviations e (from their means) together:
+    each contact ``|A_i x - c0_i - C_i e| + B_i x <= r_i + D_i e``, each zone
+    ``|e_z| <= R_z``, and the equalities (rigid rows, free motions at 0).
+    Its support ``max u . P x`` is, for a unit push along u at the point,
+    the farthest equilibrium over every deviation (with rigid contacts a push
+    goes to the edge of the clearances; section 3a of docs/formulation.md)."""
+
+    def __init__(self, ws: Workspace, dmap: Any, P: FloatArray):
+        import clarabel
+        import scipy.sparse as sp
+
+        from jointplay.numerics import linalg
+        from jointplay.solver import conic
+
+        stack, m = ws.stack, ws.m
+        nd = len(dmap.variables)
+        self.m, self.P = m, P
+        self.zero = DEFAULT.round_off * ws.asm.s
+        A, B = linalg.dense(stack.A), linalg.dense(stack.B)
+        Eq = linalg.dense(ws.Eq)
+        blocks: list[FloatArray] = [np.hstack([Eq, np.zeros((len(Eq), nd))])]
+        b: list[FloatArray] = [np.zeros(len(Eq))]
+        cones: list[Any] = [clarabel.ZeroConeT(len(Eq))] if len(Eq) else []
+        c0, C, D = stack.centres(), dmap.C, dmap.D
+        for i, k in enumerate(stack.k):
+            rows = slice(stack.start[i], stack.start[i] + k)
+            blocks.append(np.hstack([B[i : i + 1], -D[:, i][None, :]]))
+            b.append(np.array([stack.r[i]]))
+            blocks.append(np.hstack([A[rows], -C[:, rows].T]))
+            b.append(c0[rows])
+            cones.append(
+                clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
+            )
+        j = 0
+        while j < nd:  # each zone: |e_z| <= R_z
+            zone = dmap.variables[j].zone
+            w = len(zone.axes)
+            pick = np.zeros((w + 1, m + nd))
+            pick[1:, m + j : m + j + w] = -np.eye(w)
+            blocks.append(pick)
+            b.append(np.r_[zone.radius, np.zeros(w)])
+            cones.append(clarabel.SecondOrderConeT(w + 1))
+            j += w
+        self.A = conic.csc(np.vstack(blocks))
+        self.b = np.concatenate(b)
+        self.cones = cones
+        self.Pq = sp.csc_matrix((m + nd, m + nd))
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        tol = ws.settings.ipm_tolerance
+        settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
+        self.settings = settings
+
+    def support(self, u: FloatArray) -> FloatArray | None:
+        """The support point d (mm) in direction u, or None if the point goes
+        on for ever along u (a part lifting off its one-sided supports)."""
+        import clarabel
+
+        from jointplay.solver import conic
+
+        q = np.zeros(self.A.shape[1])
+        q[: self.m] = -(u @ self.P)
+        sol = clarabel.DefaultSolver(self.Pq, q, self.A, self.b, self.cones, self.settings).solve()
+        if conic.outcome(sol) == "unbounded":
+            return None
+        if conic.outcome(sol) != "optimal":
+            raise SolverError(
+                f"the envelope over the deviation zones: the cone solver stopped with status "
+                f"{conic.status_name(sol)}"
+            )
+        d = np.asarray(self.P @ np.asarray(sol.x)[: self.m])
+        d[np.abs(d) < self.zero] = 0.0  # round-off of exact zeros
+        return d
+
+
+def _point_map(asm: Any, body: str, at: FloatArray) -> FloatArray:
+    """(3, m): the point's displacement (mm) per scaled unknown."""
+    i = asm.body_index[body]
+    P = np.zeros((3, asm.m))
+    P[:, 6 * i : 6 * i + 3] = asm.s * np.eye(3)
+    lever = np.asarray(at, dtype=float) - asm.body_ref[i]
+    P[:, 6 * i + 3 : 6 * i + 6] = -asm.turn[i] * skew(lever)
+    return P
