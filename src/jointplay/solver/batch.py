@@ -23,7 +23,7 @@ from jointplay.assembly import Assembly, BallStack, IntArray
 from jointplay.errors import UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
-from jointplay.numerics.linalg import solve_rows
+from jointplay.numerics.linalg import Matrix, solve_rows
 from jointplay.settings import TINY
 from jointplay.solver import certificate, faces, forces, held, pipeline
 
@@ -211,6 +211,7 @@ def _solve_batch(
                         f[near],
                         r[now],
                         c[now],
+                        (r[near], c[near]),
                     )
                     failed[now[~ok]] += 1
                     if np.any(ok):
@@ -278,11 +279,13 @@ def _newton_batch(
     f0: FloatArray,
     r: FloatArray,
     c: FloatArray,
+    near: tuple[FloatArray, FloatArray] | None = None,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
     each from its own start (rows of ``x0``, ``lam0``, ``f0``: the nearest
     solved sample's answer and split) and with its own cone radii (rows of
-    ``r``) and centres (rows of ``c``).
+    ``r``) and centres (rows of ``c``); ``near``: the start's own radii and
+    centres (default: the same as the rows').
 
     Returns (accepted mask, x, full multipliers, force vectors, their
     certificate); a row is accepted only if it converged and passes the
@@ -309,6 +312,8 @@ def _newton_batch(
     e_rows[:, ne0 + face.f_rows] = c[:, face.linear_rows]
     r_surface = r[:, list(surface)]
     c_surface = c[:, face.surface_rows]
+    if near is not None and tie is None:
+        x = _predicted(face, Eq, x0, e_rows, r_surface, c_surface, near, ne0)
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
     # (the same positions); the forces are split afterwards
@@ -376,6 +381,37 @@ def _newton_batch(
         strict &= np.all(inside, axis=1)
     checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
     return conv & strict & checks.passed(ws.settings, ws.max_radius), x, lam, f, checks
+
+
+def _predicted(
+    face: Face,
+    Eq: Matrix,
+    x0: FloatArray,
+    e_rows: FloatArray,
+    r_surface: FloatArray,
+    c_surface: FloatArray,
+    near: tuple[FloatArray, FloatArray],
+    ne0: int,
+) -> FloatArray:
+    """Newton's start for each row: its neighbour's position ``x0`` moved so
+    that each active cone keeps the neighbour's direction of contact while
+    its centre and radius become the row's (least squares over the face's
+    rows). Where the samples move the clearances' centres (deviations), the
+    contacts' directions follow the loads rather than the positions, and
+    Newton from there takes one or two steps instead of five to seven."""
+    r0, c0 = near
+    sub = face.stack
+    surface, linear = face.key
+    v, rho = sub.norms(x0, c0[:, face.surface_rows])
+    u = v / np.repeat(np.where(rho > 0, rho, 1.0), sub.k, axis=1)
+    moved = c_surface - c0[:, face.surface_rows]
+    moved += np.repeat(r_surface - r0[:, list(surface)], sub.k, axis=1) * u
+    e_near = e_rows.copy()
+    e_near[:, ne0 + face.lam_rows] = r0[:, list(linear)]
+    e_near[:, ne0 + face.f_rows] = c0[:, face.linear_rows]
+    M = np.vstack([linalg.dense(sub.A), linalg.dense(Eq)])
+    step = np.hstack([moved, e_rows - e_near]) @ np.linalg.pinv(M).T
+    return np.asarray(x0 + step)
 
 
 def _newton_rows(
