@@ -168,6 +168,8 @@ def test_a_zone_of_no_size_draws_nothing_so_a_study_keeps_its_random_stream() ->
         ("bore", {"orientation": {"tolerance": 0.01}}, "tolerance over a length"),
         ("bore", {"orientation": {"angle": "1 mrad", "mean": [1e-4, 0, 0]}}, "about the joint"),
         ("bore", {"position": "2 percent"}, "length"),
+        ("bore", {"orientation": "10 deg"}, "beyond the 0.1 rad"),
+        ("bore", {"position": {"diameter": 0.01, "extra": 1}}, "extra"),
     ],
 )
 def test_bad_deviations_are_named(joint: str, deviation: dict[str, Any], words: str) -> None:
@@ -211,7 +213,11 @@ def two_balls(zone: str) -> Any:
                 {"name": "b", **joint, "deviation": {"position": zone}},
             ],
             "loads": [{"body": "S1", "at": [0, 0, 0], "force": [0, -1, 0]}],
-            "points": [{"name": "P", "body": "S1", "at": [0, 0, 0]}],
+            # a point of the ground first: it never moves, assembled or not
+            "points": [
+                {"name": "G", "body": "S0", "at": [0, 0, 0]},
+                {"name": "P", "body": "S1", "at": [0, 0, 0]},
+            ],
             "requirements": [{"point": "P", "max_displacement": 1.0}],
         }
     )
@@ -220,7 +226,8 @@ def two_balls(zone: str) -> Any:
 def test_parts_whose_deviations_leave_no_room_are_counted_as_not_assembled() -> None:
     mc = MonteCarlo(samples=4_000, seed=2).run(two_balls("0.06 mm"))
     d = np.linalg.norm(mc.deviations, axis=1)  # the second ball's centre, radius 0.03
-    assembled = ~np.isnan(mc.displacement[:, 0, 0])
+    assembled = ~np.isnan(mc.displacement[:, 1, 0])
+    assert np.array_equal(assembled, ~np.isnan(mc.displacement[:, 0, 0]))
     clear = np.abs(d - 0.02) > 1e-9  # away from the edge of the lens, to round-off
     assert np.array_equal(assembled[clear], d[clear] <= 0.02)
     assert mc.unassembled == int(np.sum(~assembled))
@@ -230,6 +237,29 @@ def test_parts_whose_deviations_leave_no_room_are_counted_as_not_assembled() -> 
     # they miss every requirement; the points' figures are of the others
     assert mc.requirements[0].outside == mc.unassembled
     assert np.all(np.isfinite(mc.points["P"].mean))
+    assert np.array_equal(mc.points["G"].mean, np.zeros(3))
+
+
+def test_studies_of_parts_that_never_go_together_say_so() -> None:
+    from jointplay.studies.contributions import Contributions
+    from jointplay.studies.envelope import Envelope
+
+    never = two_balls({"diameter": 0.0, "mean": [0, 0.05, 0]})  # 0.05 apart, 0.02 of play
+    with pytest.raises(jointplay.ModelError, match="cannot be assembled"):
+        jointplay.solve(never)
+    zoned = two_balls({"diameter": "0.02 mm", "mean": [0, 0.05, 0]})
+    with pytest.raises(jointplay.ModelError, match="none of the 200 sets of parts"):
+        MonteCarlo(samples=200, seed=1).run(zoned)
+    with pytest.raises(jointplay.ModelError, match=r"at the nominal .* cannot be assembled"):
+        Contributions().run(zoned)
+    with pytest.raises(jointplay.ModelError, match="no set of parts within the deviation zones"):
+        Envelope("P").run(zoned)
+    # no load: the rest position is the least-norm one, where the centres put it
+    loose = two_balls({"diameter": 0.0, "mean": [0, 0.015, 0]}).replace(loads=[])
+    rest = jointplay.solve(loose)
+    rest.check()
+    # the nearest point to 0 of the second ball (0.01 around 0.015), inside the first
+    assert np.allclose(rest.points["P"].displacement, [0, 0.005, 0], atol=MM, rtol=0)
 
 
 def test_a_measured_part_that_cannot_be_assembled_is_named() -> None:
@@ -242,7 +272,7 @@ def test_a_measured_deviation_replaces_its_zone() -> None:
     model = pivoted_shaft(bore={"deviation": {"position": "20 um"}})
     measured = jointplay.with_deviations(model, {"l2": {"position": [0, "4 um", "-2 um"]}})
     assert np.allclose(tip(measured), 1.5 * np.array([0, 0.004 - J / 2, -0.002]), atol=MM, rtol=0)
-    with pytest.raises(jointplay.ModelError, match="no joint 'l9'"):
+    with pytest.raises(jointplay.ModelError, match=r"no joint or shared deviation .l9."):
         jointplay.with_deviations(model, {"l9": {"position": [0, 0, 0]}})
     with pytest.raises(jointplay.ModelError, match="'tilt' is no deviation"):
         jointplay.with_deviations(model, {"l2": {"tilt": [0, 0, 0]}})
@@ -302,6 +332,7 @@ def test_a_shared_deviation_moves_both_bores_as_one_rigid_group() -> None:
     dy, wz = 0.01, 1e-4
     setup = {
         "name": "setup",
+        "body": "S0",
         "at": [200, 0, 0],
         "axis": [1, 0, 0],
         "position": {"diameter": 0, "mean": [0, dy, 0]},
@@ -314,8 +345,38 @@ def test_a_shared_deviation_moves_both_bores_as_one_rigid_group() -> None:
     assert np.allclose(result.points["M"].displacement, [0, dy - J / 2, 0], atol=MM, rtol=0)
 
 
+def test_a_shared_deviation_keeps_its_body_s_side_whatever_the_joints_order() -> None:
+    setup = {
+        "name": "setup",
+        "body": "S0",
+        "at": [200, 0, 0],
+        "axis": [1, 0, 0],
+        "position": {"diameter": 0, "mean": [0, 0.01, 0]},
+        "orientation": {"angle": 0, "mean": [0, 0, 1e-4]},
+    }
+    model = two_bores([setup])
+    data = model.model_dump(by_alias=True, exclude_none=True)
+    data["joints"][1]["between"] = ["S1", "S0"]  # the same bore, written from the shaft
+    flipped = jointplay.model_from_dict(data)
+    a, b = jointplay.solve(model), jointplay.solve(flipped)
+    assert np.allclose(a.points["M"].displacement, b.points["M"].displacement, atol=MM, rtol=0)
+    assert np.allclose(a.bodies["S1"].rotation, b.bodies["S1"].rotation, atol=RAD, rtol=0)
+    # a model with a shared deviation compares and sweeps like any other
+    from jointplay.studies.sweep import Sweep, Vary
+
+    assert model == two_bores([setup])
+    swept = Sweep((Vary("loads[0].force[1]", (-1.0, -2.0)),)).run(model)
+    assert np.allclose(swept.points[:, 0], a.points["M"].displacement, atol=MM, rtol=0)
+
+
 def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
-    setup = {"name": "setup", "at": [200, 0, 0], "axis": [1, 0, 0], "position": "20 um"}
+    setup = {
+        "name": "setup",
+        "body": "S0",
+        "at": [200, 0, 0],
+        "axis": [1, 0, 0],
+        "position": "20 um",
+    }
     shared = MonteCarlo(samples=1_000, seed=4).run(two_bores([setup]))
     assert shared.deviation_labels == ("setup.deviation.position.y", "setup.deviation.position.z")
     d = shared.deviations
@@ -338,25 +399,47 @@ def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
         ([], "unknown shared deviation 'setup'"),
         (
             [
-                {"name": "setup", "at": [0, 0, 0], "position": "1 um"},
-                {"name": "other", "at": [0, 0, 0], "position": "1 um"},
+                {"name": "setup", "body": "S0", "at": [0, 0, 0], "position": "1 um"},
+                {"name": "other", "body": "S0", "at": [0, 0, 0], "position": "1 um"},
             ],
             "no joint names it",
         ),
         (
-            [{"name": "setup", "at": [0, 0, 0], "orientation": "1 mrad"}],
+            [{"name": "setup", "body": "S0", "at": [0, 0, 0], "orientation": "1 mrad"}],
             "give the deviation an 'axis'",
         ),
         (
             [
                 {
                     "name": "setup",
+                    "body": "S0",
                     "at": [0, 0, 0],
                     "axis": [1, 0, 0],
                     "position": {"x": {"min": 0, "max": 0.01}},
                 }
             ],
             "moves none of",
+        ),
+        (
+            [{"name": "setup", "body": "S9", "at": [0, 0, 0], "position": "1 um"}],
+            "the features are made on 'S9'",
+        ),
+        (
+            [
+                {
+                    "name": "setup",
+                    "body": "S0",
+                    "at": [0, 0, 0],
+                    "axis": [1, 0, 0],
+                    "up": [2, 0, 0],
+                    "position": "1 um",
+                }
+            ],
+            "parallel to axis",
+        ),
+        (
+            [{"name": "setup", "body": "S0", "at": [0, 0, 0], "up": [0, 1, 0], "position": "1 um"}],
+            "give the axis too",
         ),
     ],
 )

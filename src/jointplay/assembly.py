@@ -243,15 +243,16 @@ class BallStack:
             None if self.centre is None else self.centre[rows],
         )
 
-    def with_limits(self, rows: Matrix) -> BallStack:
-        """This stack and the one-sided limits ``rows @ x <= 0`` (one per row)."""
+    def with_limits(self, rows: Matrix, bounds: FloatArray | None = None) -> BallStack:
+        """This stack and the one-sided limits ``rows @ x <= bounds`` (one
+        per row; 0 by default)."""
         n = rows.shape[0]
         total = np.full(n, int(np.sum(self.k)), dtype=np.intp)
         return BallStack(
             self.A,
             np.concatenate([self.start, total]),
             np.concatenate([self.k, np.zeros(n, dtype=np.intp)]),
-            np.concatenate([self.r, np.zeros(n)]),
+            np.concatenate([self.r, np.zeros(n) if bounds is None else bounds]),
             np.concatenate([self.spring, np.zeros(n)]),
             linalg.vstack([self.B, rows], self.m),
             self.centre,
@@ -646,7 +647,7 @@ def assemble(model: Model) -> Assembly:
     deviated: dict[int, FloatArray] = {}
     for source in model.deviation_sources():
         for jdx in source.joints:
-            mean = source.torsor_at(joints[jdx]) @ source.deviation.mean()
+            mean = source.torsor_at(jdx, joints[jdx]) @ source.deviation.mean()
             deviated[jdx] = deviated.get(jdx, np.zeros(6)) + mean
     contacts: list[ContactRows] = []
     for jdx, (joint, G) in enumerate(zip(joints, G_list, strict=True)):

@@ -191,7 +191,7 @@ def solve(
         typer.Option(
             "--deviations",
             metavar="JOINT.KIND=[..]",
-            help="A joint's deviation as measured on a part, in its joint frame: "
+            help="A joint's (or a shared) deviation as measured on a part, in its frame: "
             "'l2.position=[0, 5 um, -3 um]' or 'l2.orientation=[0, 0.1 mrad, 0]' "
             "(repeat for more). Without it every deviation is at its mean.",
         ),

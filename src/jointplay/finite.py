@@ -112,7 +112,7 @@ def linearization(asm: Assembly, x: FloatArray, reach_mm: FloatArray) -> Lineari
             play = 0.0
         else:
             past = max(c.exact_level(asm.s, R_rel, phi, t_rel) - float(reach_mm[i]), 0.0)
-            play = 2.0 * c.contact.radius
+            play = 2.0 * c.radius * asm.s  # its deviation's shift included
         if past > worst:
             worst, where = past, (joint.name, c.contact.name)
         limit = WARN_SHARE * (play if play > 0 else largest_play)

@@ -13,12 +13,13 @@ import re
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args
 
 import yaml
-from pydantic import ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, ValidationError
 
 from jointplay.errors import ModelError
+from jointplay.model.deviations import SharedDeviation
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import (
     Body,
@@ -516,35 +517,46 @@ def model_from_dict(data: Any, *, source: str = "<model>") -> Model:
 def with_deviations(
     model: Model, measured: Mapping[str, Mapping[str, Any]], *, source: str = "<model>"
 ) -> Model:
-    """``model`` with some joints' deviations known, as measured on a part:
+    """``model`` with some deviations known, as measured on a part:
     ``{joint: {"position": [x, y, z], "orientation": [0, wy, wz]}}`` in the
-    joint frame (mm and rad, or strings with units). A given zone becomes
-    that value exactly; the joint's other zone stays as the model has it."""
+    joint frame (mm and rad, or strings with units), or the same for a shared
+    deviation by its name, in its own frame. A given zone becomes that value
+    exactly; the other zone stays as the model has it."""
     names = [j.name for j in model.joints]
+    shared = [d.name for d in model.deviations]
     data = model.model_dump(by_alias=True, exclude_none=True)
     for name, given in measured.items():
-        if name not in names:
+        if name not in names and name not in shared:
+            known = ", ".join(shown(n) for n in [*names, *shared])
             raise ModelError(
-                f"there is no joint {shown(name)}; the joints are "
-                + ", ".join(shown(n) for n in names),
+                f"there is no joint or shared deviation {shown(name)}; there are {known}",
                 source=source,
                 entry="--deviations",
             )
         unknown = sorted(set(given) - {"position", "orientation"})
         if unknown:
             raise ModelError(
-                f"joint {shown(name)}: {shown(unknown[0])} is no deviation; give "
+                f"{shown(name)}: {shown(unknown[0])} is no deviation; give "
                 "'position' ([x, y, z], mm) or 'orientation' ([0, wy, wz], rad)",
                 source=source,
                 entry="--deviations",
             )
-        joint = data["joints"][names.index(name)]
-        deviation = dict(joint.get("deviation") or {})
+        if name in shared:
+            entry = data["deviations"][shared.index(name)]
+        else:
+            entry = data["joints"][names.index(name)].setdefault("deviation", {})
+            if entry.get("shared") is not None:
+                raise ModelError(
+                    f"joint {shown(name)} takes the shared deviation "
+                    f"{shown(entry['shared'])}: measure the group, "
+                    f"{entry['shared']}.position=[...], in its own frame",
+                    source=source,
+                    entry="--deviations",
+                )
         if "position" in given:
-            deviation["position"] = {"diameter": 0, "mean": given["position"]}
+            entry["position"] = {"diameter": 0, "mean": given["position"]}
         if "orientation" in given:
-            deviation["orientation"] = {"angle": 0, "mean": given["orientation"]}
-        joint["deviation"] = deviation
+            entry["orientation"] = {"angle": 0, "mean": given["orientation"]}
     return model_from_dict(data, source=source)
 
 
@@ -793,6 +805,23 @@ def _lookup(data: Any, loc: list[Any]) -> Any:
     return value
 
 
+def _nested_keys(model: Any, path: list[Any]) -> set[str]:
+    """The keys of the entry at ``path`` (field names) inside ``model``: a
+    joint's, or of a mapping nested in it (a deviation's zone)."""
+    for name in path:
+        field = model.model_fields.get(name)
+        nested = [
+            t
+            for t in (field.annotation, *get_args(field.annotation))
+            if field is not None
+            if isinstance(t, type) and issubclass(t, BaseModel)
+        ]
+        if not nested:
+            return set()
+        model = nested[0]
+    return set(model.model_fields)
+
+
 def _allowed_keys(loc: list[Any], data: dict[str, Any]) -> set[str]:
     if len(loc) == 1:
         return _SECTION_KEYS["top"]
@@ -800,9 +829,11 @@ def _allowed_keys(loc: list[Any], data: dict[str, Any]) -> set[str]:
     if section == "joints" and len(loc) >= 3:
         tag = loc[2] if isinstance(loc[2], str) and loc[2] in JOINT_TYPES else None
         if tag is not None:
-            return set(JOINT_TYPES[tag].model_fields)
+            return _nested_keys(JOINT_TYPES[tag], loc[3:-1])
         if len(loc) == 3:  # a joint of unknown type: the keys of any type
             return _JOINT_KEYS
+    if section == "deviations" and len(loc) >= 3:
+        return _nested_keys(SharedDeviation, loc[2:-1])
     if section in _SECTION_KEYS and len(loc) == 3:
         return _SECTION_KEYS[section]
     if section == "load_cases" and len(loc) == 4:

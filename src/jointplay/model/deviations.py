@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema, model_validator
 
-from jointplay.geometry import joint_frame, skew
+from jointplay.geometry import is_parallel, joint_frame, skew
 from jointplay.model.fields import (
     Direction,
     Length,
@@ -63,6 +63,9 @@ from jointplay.units import shown, to_base
 FloatArray = NDArray[np.float64]
 
 _AXES = "xyz"
+#: The largest tilt a zone may reach (rad, about 6 degrees): beyond it a tilt
+#: is no small displacement (its linear model is off by over half a percent).
+LARGEST_TILT = 0.1
 #: The components of a small torsor (t, w) of a joint's features, in words.
 MOTION_WORDS = (
     "shift along x",
@@ -186,6 +189,13 @@ class OrientationZone(BaseModel):
             raise ValueError(
                 "mean: a tilt has no component about the joint's axis (x); give [0, y, z]"
             )
+        reach = self.radius + float(np.linalg.norm(self.mean))
+        if reach > LARGEST_TILT:
+            raise ValueError(
+                f"the axis would tilt by up to {reach:.3g} rad, beyond the {LARGEST_TILT:g} rad "
+                "that small displacements describe; an orientation tolerance is a small angle "
+                "(a tolerance over a length: check the units)"
+            )
         return self
 
     @property
@@ -197,8 +207,8 @@ class OrientationZone(BaseModel):
         return self.tolerance / self.over
 
 
-class Deviation(BaseModel):
-    """The deviation of a joint's features (module doc)."""
+class Zones(BaseModel):
+    """A deviation's zones, a joint's own or shared (module doc)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
@@ -208,9 +218,13 @@ class Deviation(BaseModel):
 
     @model_validator(mode="after")
     def _something(self) -> Self:
-        if self.position is None and self.orientation is None:
+        if self.position is None and self.orientation is None and not self.names_shared:
             raise ValueError("a deviation needs a 'position' zone, an 'orientation' zone or both")
         return self
+
+    @property
+    def names_shared(self) -> bool:
+        return False
 
     def describe(self, ball: bool) -> str:
         """In words: 'position: a disc of diameter 0.02 mm ...; uniform'."""
@@ -318,7 +332,42 @@ def measured(t: Vec3 | None, w: Vec3 | None) -> Deviation:
     return Deviation(position=position, orientation=orientation)
 
 
-class SharedDeviation(Deviation):
+def _by_name(schema: dict[str, Any]) -> None:
+    """A joint's deviation in the schema: its zones, or a shared one's name."""
+    whole = dict(schema)
+    schema.clear()
+    schema["anyOf"] = [{"type": "string", "description": "a shared deviation's name"}, whole]
+
+
+class Deviation(Zones):
+    """A joint's deviation: its own zones, or ``shared``, the name of a
+    deviation of the model's ``deviations`` section (written ``deviation:
+    setup`` in a file)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", json_schema_extra=_by_name)
+
+    shared: Name | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _a_name(cls, value: Any) -> Any:
+        return {"shared": value} if isinstance(value, str) else value
+
+    @model_validator(mode="after")
+    def _zones_or_name(self) -> Self:
+        if self.shared is not None and (self.position or self.orientation):
+            raise ValueError(
+                f"the joint takes the zones of the shared deviation '{self.shared}': leave "
+                "out its own 'position' and 'orientation'"
+            )
+        return self
+
+    @property
+    def names_shared(self) -> bool:
+        return self.shared is not None
+
+
+class SharedDeviation(Zones):
     """A deviation of several joints' features made together (two bores
     bored in one setup): one small torsor of the whole group, at ``at`` in
     the frame of ``axis`` (and ``up``), taken by every joint that names it.
@@ -327,6 +376,8 @@ class SharedDeviation(Deviation):
     A ``diameter`` is a disc across ``axis``, or a ball without an axis."""
 
     name: Name
+    #: The body on which the features were made (one side of every joint naming it).
+    body: Name
     at: Point
     axis: Direction | None = None
     up: Direction | None = None
@@ -337,6 +388,17 @@ class SharedDeviation(Deviation):
             raise ValueError(
                 "an orientation zone tilts an axis: give the deviation an 'axis' (and the "
                 "joints' features share its tilt)"
+            )
+        if self.axis is None and self.up is not None:
+            raise ValueError("'up' turns the frame about its 'axis': give the axis too")
+        if (
+            self.axis is not None
+            and self.up is not None
+            and is_parallel(np.array(self.up), np.array(self.axis))
+        ):
+            raise ValueError(
+                f"up {list(self.up)} is parallel to axis {list(self.axis)}; give an 'up' "
+                "vector across the axis, or leave it out"
             )
         return self
 

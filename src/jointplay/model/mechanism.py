@@ -25,8 +25,8 @@ from pydantic import (
     model_validator,
 )
 
-from jointplay.geometry import FloatArray
-from jointplay.model.deviations import MOTION_WORDS, Deviation, SharedDeviation, transport
+from jointplay.geometry import FloatArray, joint_frame
+from jointplay.model.deviations import MOTION_WORDS, SharedDeviation, Zones, transport
 from jointplay.model.fields import (
     AccelerationVector,
     Direction,
@@ -420,15 +420,21 @@ class Model(BaseModel):
         shared = {d.name: d for d in self.deviations}
         users: dict[str, list[int]] = {name: [] for name in shared}
         for jdx, joint in enumerate(self.joints):
-            if isinstance(joint.deviation, str):
-                users.setdefault(joint.deviation, []).append(jdx)
+            if joint.deviation is not None and joint.deviation.shared is not None:
+                users.setdefault(joint.deviation.shared, []).append(jdx)
             elif joint.deviation is not None:
                 ball = joint.type_name == "spherical"
-                frame = (joint.R_world_joint, joint.centre)
-                out.append(DeviationSource(joint.name, joint.deviation, *frame, (jdx,), ball))
+                frame = (joint_frame(joint.axis, joint.up), np.asarray(joint.at, dtype=float))
+                own = DeviationSource(joint.name, joint.deviation, *frame, (jdx,), (1.0,), ball)
+                out.append(own)
         for name, dev in shared.items():
             at = np.asarray(dev.at, dtype=float)
-            out.append(DeviationSource(name, dev, dev.R, at, tuple(users[name]), dev.axis is None))
+            joints = tuple(users[name])
+            # the group's features are on ``body``: a joint's deviation is its a-side's
+            # features minus its b-side's, so a joint with the group on its b side
+            # takes it with the sign turned
+            signs = tuple(-1.0 if self.joints[j].between[1] == dev.body else 1.0 for j in joints)
+            out.append(DeviationSource(name, dev, dev.R, at, joints, signs, dev.axis is None))
         return tuple(out)
 
     def body(self, name: str) -> Body:
@@ -456,15 +462,19 @@ class DeviationSource:
     frame ``R`` at ``at``, and the joints it moves (model order)."""
 
     label: str
-    deviation: Deviation
+    deviation: Zones
     R: FloatArray
     at: FloatArray
     joints: tuple[int, ...]
+    signs: tuple[float, ...]  # per joint: +1 if the features are on its a side
     ball: bool  # a diameter is a ball (else a disc across the frame's x)
 
-    def torsor_at(self, joint: Joint) -> FloatArray:
-        """(6, 6): this deviation's torsor as the joint sees it (its centre, frame)."""
-        return transport(self.R, self.at, joint.R_world_joint, joint.centre)
+    def torsor_at(self, jdx: int, joint: Joint) -> FloatArray:
+        """(6, 6): this deviation's torsor as joint ``jdx`` sees it (at its
+        centre, in its frame, a's features minus b's)."""
+        R = joint_frame(joint.axis, joint.up)  # not the cached frame: see Joint.takes
+        T = transport(self.R, self.at, R, np.asarray(joint.at, dtype=float))
+        return self.signs[self.joints.index(jdx)] * T
 
 
 def _check_shared_deviations(model: Model) -> list[EntryError]:
@@ -475,15 +485,16 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
     found += _check_unique(names, "deviations", "deviation")
     used = set()
     for i, joint in enumerate(model.joints):
-        if isinstance(joint.deviation, str):
-            used.add(joint.deviation)
-            if joint.deviation not in names:
+        shared = None if joint.deviation is None else joint.deviation.shared
+        if shared is not None:
+            used.add(shared)
+            if shared not in names:
                 known = listing(f"'{n}'" for n in names) if names else "none"
                 found.append(
                     EntryError(
                         f"joints[{i}] '{joint.name}'",
-                        f"deviation: unknown shared deviation '{joint.deviation}'; the "
-                        f"'deviations' section has {known}." + suggest(joint.deviation, names),
+                        f"deviation: unknown shared deviation '{shared}'; the "
+                        f"'deviations' section has {known}." + suggest(shared, names),
                     )
                 )
     for k, dev in enumerate(model.deviations):
@@ -495,7 +506,19 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
             continue
         source = next(s for s in model.deviation_sources() if s.deviation is dev)
         axes = [a for z in dev.zones(source.ball) for a in z.axes]
-        seen = [(model.joints[jdx], source.torsor_at(model.joints[jdx])) for jdx in source.joints]
+        seen = [(model.joints[j], source.torsor_at(j, model.joints[j])) for j in source.joints]
+        outside = [model.joints[j] for j in source.joints]
+        outside = [joint for joint in outside if dev.body not in joint.between]
+        if outside:
+            found.append(
+                EntryError(
+                    entry,
+                    f"body: the features are made on '{dev.body}', but joint "
+                    f"'{outside[0].name}' is between {list(outside[0].between)}; give the "
+                    "body that carries the features, one side of every joint that names it",
+                )
+            )
+            continue
         problems = [
             problem
             for joint, T in seen

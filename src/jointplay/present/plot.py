@@ -620,12 +620,14 @@ def montecarlo_figure(result: MonteCarloResult) -> Figure:
         title = (
             f"{req.describe()}\n{stats.outside} of {result.samples} parts outside "
             f"({100 * stats.fraction:.3g} %)"
+            + (f", {result.unassembled} not assembled" if result.unassembled else "")
         )
         panels.append((title, measure, req.max_displacement, unit))
     cols = min(len(panels), 3) or 1
     rows = max(math.ceil(len(panels) / cols), 1)
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
-    for ax, (title, values, limit, unit) in zip(axes.flat, panels, strict=False):
+    for ax, (title, every, limit, unit) in zip(axes.flat, panels, strict=False):
+        values = every[~np.isnan(every)]  # the parts that can be assembled
         ax.hist(values, bins=_bins(values), color="#6f9fd8", edgecolor="white", linewidth=0.3)
         if limit is not None:
             ax.axvline(limit, color=TOUCHING, linewidth=1.5, label=f"limit {limit:g} mm")

@@ -640,11 +640,21 @@ class _Page:
         self.subsection(f"Monte Carlo: {mc.samples} sets of parts (seed {mc.settings.seed})")
         self.parts.append(
             _table(
-                ["play or load", "distribution"],
-                [*mc.plays_described.items(), *mc.loads_described.items()],
+                ["play, load or deviation", "distribution"],
+                [
+                    *mc.plays_described.items(),
+                    *mc.loads_described.items(),
+                    *mc.deviations_described.items(),
+                ],
                 "What varies",
             )
         )
+        if mc.unassembled:
+            self.paragraph(
+                f"{mc.unassembled} of the {mc.samples} sets of parts cannot be assembled: their "
+                "deviations leave no position inside every clearance. They are left out of the "
+                "points' figures and counted as missing every requirement."
+            )
         self.parts.append(
             _table(
                 ["point", "mean |d| (mm)", "σ |d| (mm)", "99.865 % (+3σ) (mm)", "largest (mm)"],
@@ -819,8 +829,8 @@ def _joint_sizes(joint: Any) -> str:
     if getattr(joint, "along", None) is not None:
         parts.append(f"along {_vec(np.asarray(joint.along, dtype=float))}")
     if joint.deviation is not None:
-        if isinstance(joint.deviation, str):
-            parts.append(f"deviation: shared '{joint.deviation}'")
+        if joint.deviation.shared is not None:
+            parts.append(f"deviation: shared '{joint.deviation.shared}'")
         else:
             parts.append(f"deviation: {joint.deviation.describe(joint.type_name == 'spherical')}")
     return ", ".join(parts)

@@ -244,6 +244,15 @@ def _solve_batch(
         if seed is not None and dense:
             solved_by_set.setdefault(seed, []).append(np.array([first]))
 
+    if centres is not None:  # with no load, the rest position: where the centres put it
+        for row in np.flatnonzero(norms == 0):
+            try:
+                rest = pipeline.rest_position(ws.with_radii(r[row], c[row]))
+            except UnassembledError:
+                assembled[row] = False
+            else:
+                x[row] = rest.x
+            full += 1
     x[~assembled] = np.nan
     lam[~assembled] = np.nan
     return BatchSolution(

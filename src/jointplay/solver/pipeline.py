@@ -149,9 +149,7 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
     with contact softness ``sigma`` (default: every contact hard)."""
     sigma = np.zeros(len(ws.balls)) if sigma is None else sigma
     if not np.any(g_hat):
-        point = faces.Point(
-            np.zeros(ws.m), np.zeros(len(ws.balls)), np.zeros(ws.stack.A.shape[0]), method="no load"
-        )
+        point = rest_position(ws)
     else:
         warmed = warm(ws, g_hat, sigma) if ws.settings.warm_start else None
         point = warmed if warmed is not None else interior_point(ws, g_hat, sigma)
@@ -183,6 +181,24 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
         )
     point.certificate = cert
     return point
+
+
+def rest_position(ws: Workspace) -> faces.Point:
+    """The answer with no load: every feasible position is optimal, so the
+    least-norm one (the tie rule): 0, unless deviations move the clearances
+    off it; then one cone program on the whole feasible set, polished."""
+    lam, f = np.zeros(len(ws.balls)), np.zeros(ws.stack.A.shape[0])
+    zero = np.zeros(ws.m)
+    if np.all(ws.stack.levels(zero)[2] <= ws.stack.r):  # 0 fits: no deviation, or small ones
+        return faces.Point(zero, lam, f, method="no load")
+    e = np.zeros(ws.Eq.shape[0])
+    prog = conic.cone_program(ws, ws.asm.metric_matrix, ws.Eq, e, ws.stack)
+    sol = conic.run(ws, prog, np.zeros(ws.m))  # no position at all: UnassembledError
+    z = np.asarray(sol.z)
+    x = ties.polish_least_norm(
+        ws, np.asarray(sol.x), z[prog.soc_first], z[prog.f_rows], ws.stack, ws.Eq, e
+    )
+    return faces.Point(x, lam, f, method="no load: the least-norm position")
 
 
 def interior_point(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:

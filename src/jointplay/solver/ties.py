@@ -27,27 +27,30 @@ def face_equalities(
     ws: Workspace, stack: BallStack, which: faces.FaceKey, x: FloatArray, reach: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Linear rows that keep the cones ``which`` where they are at ``x``:
-    a surface cone keeps its direction ``u`` (``A_i x`` along ``u`` and
-    ``u . A_i x + B_i x = reach_i``); a linear cone ``A_i x = 0``,
+    a surface cone keeps its direction ``u`` (``A_i x - c_i`` along ``u`` and
+    ``u . (A_i x - c_i) + B_i x = reach_i``); a linear cone ``A_i x = c_i``,
     ``B_i x = reach_i``. ``reach`` is per cone of ``which`` (surface first)."""
     surface, linear = which
     rows: list[Matrix] = []
     rhs: list[FloatArray] = []
     v, rho = stack.norms(x)
+    centres = stack.centres()
     for j, i in enumerate((*surface, *linear)):
         Ai = stack.cone_rows(i)
+        c = centres[stack.start[i] : stack.start[i] + stack.k[i]]
         if j < len(surface) and stack.k[i]:
             u = v[stack.start[i] : stack.start[i] + stack.k[i]] / max(rho[i], TINY)
             if not stack.has_offset[i]:
                 rows.append(Ai)
-                rhs.append(reach[j] * u)
+                rhs.append(c + reach[j] * u)
                 continue
             across = np.linalg.svd(u[None, :])[2][1:]  # directions across u
             M = linalg.dense(stack.face_rows(i))
             rows.append(np.vstack([across @ M[:-1], u @ M[:-1] + M[-1]]))
+            rhs.append(np.append(across @ c, reach[j] + u @ c))
         else:
             rows.append(stack.face_rows(i))
-        rhs.append(np.append(np.zeros(rows[-1].shape[0] - 1), reach[j]))
+            rhs.append(np.append(c, reach[j]))
     if not rows:
         return np.zeros((0, ws.m)), np.zeros(0)
     return linalg.vstack(rows, ws.m), np.concatenate(rhs)
@@ -67,16 +70,16 @@ def least_norm(
     )
     rest_index = [i for i in range(len(ws.balls)) if i not in set(both)]
     rest = ws.stack.take(rest_index)
-    # a tilting face stays on the side it leans to: u . A_i x >= 0
-    v, rho = ws.stack.norms(point.x)
-    lean = [
-        -(v[ws.stack.start[i] : ws.stack.start[i] + ws.stack.k[i]] / rho[i])
-        @ linalg.dense(ws.stack.cone_rows(i))
-        for i in surface
-        if ws.stack.k[i] and ws.stack.has_offset[i] and rho[i] > 0
-    ]
+    # a tilting face stays on the side it leans to: u . (A_i x - c_i) >= 0
+    stack = ws.stack
+    v, rho = stack.norms(point.x)
+    leaning = [i for i in surface if stack.k[i] and stack.has_offset[i] and rho[i] > 0]
+    rows = [slice(stack.start[i], stack.start[i] + stack.k[i]) for i in leaning]
+    lean = [-(v[k] / rho[i]) @ linalg.dense(stack.A[k]) for i, k in zip(leaning, rows, strict=True)]
     if lean:
-        rest = rest.with_limits(np.array(lean))
+        centres = stack.centres()
+        bound = [-(v[k] / rho[i]) @ centres[k] for i, k in zip(leaning, rows, strict=True)]
+        rest = rest.with_limits(np.array(lean), np.array(bound))
     metric = ws.asm.metric_matrix
     prog = conic.cone_program(ws, metric, Eq, e, rest)
     try:

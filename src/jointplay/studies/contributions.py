@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.assembly import assemble
-from jointplay.errors import ModelError
+from jointplay.errors import ModelError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
 from jointplay.solver.workspace import Workspace
@@ -147,6 +147,21 @@ class Contributions:
             motion = batch.body_displacement(point.body)
             d = motion[:, :3] + np.cross(motion[:, 3:], np.asarray(point.at))
             y[k] = m.of(d)
+        if np.isnan(y[:, 0]).any():
+            raise UnassembledError(
+                "the parts at the nominal (the deviations' means) cannot be assembled, so "
+                "nothing contributes; check the deviations' means against the plays",
+                joints=(),
+                source=source,
+            )
+        if np.isnan(y).any():
+            raise UnassembledError(
+                f"parts within {self.step:g} of a tolerance of the nominal cannot be "
+                "assembled: the nominal sits on the edge of assembly, where no slope is "
+                "defined; move the deviations' means inward",
+                joints=(),
+                source=source,
+            )
         y0 = y[:, :1]
         up_h, down_h, up_half, down_half = (y[:, 1 + q * nv : 1 + (q + 1) * nv] for q in range(4))
         safe = np.where(h > 0, h, 1.0)

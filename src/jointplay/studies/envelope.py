@@ -55,7 +55,12 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from jointplay.assembly import assemble
-from jointplay.errors import OptionError, SolverError, UnboundedMechanismError
+from jointplay.errors import (
+    OptionError,
+    SolverError,
+    UnassembledError,
+    UnboundedMechanismError,
+)
 from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model
 from jointplay.model.tolerance import Toleranced
@@ -624,6 +629,12 @@ class _ZoneProgram:
         sol = clarabel.DefaultSolver(self.Pq, q, self.A, self.b, self.cones, self.settings).solve()
         if conic.outcome(sol) == "unbounded":
             return None
+        if conic.outcome(sol) == "infeasible":
+            raise UnassembledError(
+                "no set of parts within the deviation zones can be assembled: the zones "
+                "leave no position inside every clearance; check them against the plays",
+                joints=(),
+            )
         if conic.outcome(sol) != "optimal":
             raise SolverError(
                 f"the envelope over the deviation zones: the cone solver stopped with status "

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.assembly import assemble
-from jointplay.errors import ModelError
+from jointplay.errors import ModelError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.solver.workspace import Workspace
@@ -182,6 +182,7 @@ def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
         motion = batch.body_displacement(point.body)
         at = np.asarray(point.at)
         displacement[:, p] = motion[:, :3] + np.cross(motion[:, 3:], at)
+    displacement[~batch.assembled] = np.nan  # every point, those on the ground too
     return _Chunk(
         index,
         plays,
@@ -393,6 +394,13 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
     plays = np.concatenate([c.plays for c in parts])
     d = np.concatenate([c.displacement for c in parts])
     assembled = ~np.isnan(d[:, 0, 0]) if model.points else np.ones(len(d), dtype=bool)
+    if not np.any(assembled):
+        raise UnassembledError(
+            f"none of the {len(d):,} sets of parts can be assembled: their deviations leave "
+            "no position inside every clearance. Check the deviation zones against the plays",
+            joints=(),
+            source=model.name,
+        )
     points = {}
     for p, point in enumerate(model.points):
         dp = d[assembled, p]  # the statistics of the parts that can be put together

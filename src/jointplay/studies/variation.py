@@ -293,7 +293,7 @@ def deviation_map(asm: Assembly) -> DeviationMap:
     for source in model.deviation_sources():
         dev = source.deviation
         mean = dev.mean()
-        seen = [(jdx, source.torsor_at(model.joints[jdx])) for jdx in source.joints]
+        seen = [(jdx, source.torsor_at(jdx, model.joints[jdx])) for jdx in source.joints]
         for zone in dev.zones(source.ball):
             if zone.radius == 0.0:
                 continue

@@ -160,7 +160,7 @@ class Joint(BaseModel):
     #: Where the features really are: a position and an orientation zone
     #: (``deviations.py``). None: on their nominal geometry.
     #: A shared deviation is named (``deviation: setup``, see ``SharedDeviation``).
-    deviation: Deviation | Name | None = None
+    deviation: Deviation | None = None
 
     @classmethod
     def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
@@ -181,8 +181,8 @@ class Joint(BaseModel):
 
     @model_validator(mode="after")
     def _check_deviation(self) -> Joint:
-        if not isinstance(self.deviation, Deviation):
-            return self  # a shared one's name: the model checks it
+        if self.deviation is None or self.deviation.shared is not None:
+            return self  # a shared one: the model checks it
         deviation = self.deviation
         axes = [a for z in deviation.zones(self.type_name == "spherical") for a in z.axes]
         for move in [deviation.mean(), *np.eye(6)[axes]]:
@@ -201,13 +201,15 @@ class Joint(BaseModel):
         """Whether the deviation ``move`` (a torsor in the joint frame) moves
         some clearance contact of the joint."""
         scale = DEFAULT.round_off * float(np.max(np.abs(move), initial=0.0))  # zero, to round-off
-        return any(_moves(c, move, scale) for c in self.cones if c.kind == "ball")
+        # contacts(), not the cached cones: a validator must leave no arrays on
+        # the model (pydantic's equality compares them)
+        return any(_moves(c, move, scale) for c in self.contacts() if c.kind == "ball")
 
     def rigid_problem(self, move: FloatArray) -> str | None:
         """Why the deviation ``move`` cannot be this joint's: it meets a rigid
         row, which has no play to take it. None if it does not."""
         scale = DEFAULT.round_off * float(np.max(np.abs(move), initial=0.0))
-        for c in self.cones:
+        for c in self.contacts():
             if c.kind == "fixed" and _moves(c, move, scale):
                 return (
                     f"a {_motion_words(move)} of the features of joint '{self.name}' meets its "
