@@ -322,7 +322,21 @@ def _newton_batch(
     r_surface = r[:, list(surface)]
     c_surface = c[:, face.surface_rows]
     if near is not None and tie is None:
-        x = _predicted(face, Eq, x0, e_rows, r_surface, c_surface, near, ne0)
+        # only where the centres moved: rows whose plays alone differ keep the
+        # neighbour's position, so that rows posing one problem stay equal to
+        # the last digit (the force split solves each distinct problem once)
+        shifted = np.any(c != near[1], axis=1)
+        if np.any(shifted):
+            x[shifted] = _predicted(
+                face,
+                Eq,
+                x0[shifted],
+                e_rows[shifted],
+                r_surface[shifted],
+                c_surface[shifted],
+                (near[0][shifted], near[1][shifted]),
+                ne0,
+            )
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
     # (the same positions); the forces are split afterwards
