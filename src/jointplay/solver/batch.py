@@ -377,33 +377,54 @@ def _newton_batch(
     in_set = np.zeros(len(ws.balls), dtype=bool)
     in_set[[*surface, *linear]] = True
     touching = (stack.spring == 0) & (stack.gap_used(stack.levels(x, c)[2], r) >= st.touching)
+    outside = np.any(touching & ~in_set, axis=1)
     if tie is not None:
         # the least-norm point of the face's affine hull is the tie's answer only
         # where it stays inside every other cone, off their limits (else the
         # optimal face is smaller: the full solver's least-norm program)
-        conv = conv & ~np.any(touching & ~in_set, axis=1)
-    elif redundant or np.any(touching & ~in_set):
-        # Newton's split is one of many; the documented one (``forces``),
-        # from the neighbour's split, on the cone limits that bind it
+        conv = conv & ~outside
+        outside[:] = False
+    # rows whose split is one of many (redundant contacts, or contacts touching
+    # outside the set): the documented one (``forces``), from the neighbour's
+    # split, on the cone limits that bind it; the others' forces are Newton's,
+    # each strictly positive
+    shared = np.full(B, redundant) | outside
+    ok = conv.copy()
+    if np.any(shared):
+        rows = np.flatnonzero(shared)
         apex = st.feasibility_tolerance * ws.max_radius
-        split, lam, f, _ = forces.least_squares_rows(
-            ws.asm, x, lam, f, g_hat, r, (lam0, f0), apex, st, c
+        split, lam[rows], f[rows], _ = forces.least_squares_rows(
+            ws.asm,
+            x[rows],
+            lam[rows],
+            f[rows],
+            g_hat[rows],
+            r[rows],
+            (lam0[rows], f0[rows]),
+            apex,
+            st,
+            c[rows],
         )
-        # rigid joints' forces by least squares, for split and own rows alike
-        # (the batch reports contact forces only)
-        checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
-        ok = conv & split & _pinned(ws, key, x, lam, f, c)
-        return ok & checks.passed(st, ws.max_radius), x, lam, f, checks
-    lam_a = lam[:, list(surface) + list(linear)]
-    positive = ws.settings.positive_force
-    strict = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1) if lam_a.shape[1] else conv
-    if linear:
-        lin = stack.take(linear)
-        f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
-        inside = (f_norm < (1.0 - positive) * lam[:, list(linear)]) | (lin.k == 0)
-        strict &= np.all(inside, axis=1)
+        ok[rows] &= split & _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
+    own = np.flatnonzero(~shared)
+    if own.size:
+        lam_a = lam[own][:, list(surface) + list(linear)]
+        positive = st.positive_force
+        strict = (
+            np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1)
+            if lam_a.shape[1]
+            else np.ones(len(own), dtype=bool)
+        )
+        if linear:
+            lin = stack.take(linear)
+            f_norm = np.sqrt(lin.segment_sum(f[own][:, face.linear_rows] ** 2))
+            inside = (f_norm < (1.0 - positive) * lam[own][:, list(linear)]) | (lin.k == 0)
+            strict &= np.all(inside, axis=1)
+        ok[own] &= strict
+    # rigid joints' forces by least squares, for split and own rows alike
+    # (the batch reports contact forces only)
     checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
-    return conv & strict & checks.passed(ws.settings, ws.max_radius), x, lam, f, checks
+    return ok & checks.passed(st, ws.max_radius), x, lam, f, checks
 
 
 def _predicted(
