@@ -156,7 +156,7 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
     if outcome(sol) == "infeasible":
         ray = infeasibility(ws)
         if ray is not None:
-            raise unassembled(ws, ws.interior_program, ray)
+            raise unassembled(ws, ray)
     if not has_answer(sol):  # feasible programs: numerical trouble
         raise SolverError(
             f"the cone solver stopped with status {status_name(sol)} on this model. "
@@ -179,18 +179,16 @@ def infeasibility(ws: Workspace) -> FloatArray | None:
     return np.asarray(sol.z) if outcome(sol) == "infeasible" else None
 
 
-def unassembled(ws: Workspace, prog: ConeProgram, ray: FloatArray) -> UnassembledError:
-    """The error for a program with no feasible point, naming the joints
-    whose cones carry Clarabel's certificate of infeasibility ``ray`` (the
-    forces that, pushing together, would have to do work from nothing)."""
-    lam = ray[prog.soc_first]
-    top = float(np.max(np.abs(lam), initial=0.0))
-    cones = np.flatnonzero(np.abs(lam) > ws.settings.noise_force * top if top > 0 else 0 * lam)
+def unassembled(ws: Workspace, ray: FloatArray) -> UnassembledError:
+    """The error for clearances with no position inside them all, naming the
+    joints whose cones carry Clarabel's certificate of infeasibility ``ray``
+    of the plain program (forces that, pushing together, would have to do
+    work from nothing)."""
+    lam = np.abs(ray[ws.interior_program.soc_first])
+    top = float(np.max(lam, initial=0.0))
+    cones = np.flatnonzero(lam > ws.settings.noise_force * top) if top > 0 else np.zeros(0, int)
     model = ws.asm.model
-    balls = ws.balls
-    joints = tuple(
-        dict.fromkeys(model.joints[balls[int(i)].joint_index].name for i in cones if i < len(balls))
-    )
+    joints = tuple(dict.fromkeys(model.joints[ws.balls[int(i)].joint_index].name for i in cones))
     named = ", ".join(f"'{j}'" for j in joints) or "the joints"
     return UnassembledError(
         f"the parts cannot be assembled: with the joints' deviations, no position of the "
