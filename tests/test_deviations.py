@@ -581,3 +581,53 @@ def test_rows_whose_plays_alone_vary_keep_their_neighbour_s_position(monkeypatch
     carriage = Path(__file__).parents[1] / "examples" / "studies" / "carriage.yaml"
     mc = MonteCarlo(samples=1_000, seed=2).run(jointplay.load(carriage))
     assert mc.batched >= 990
+
+
+def test_a_shared_deviation_reaches_a_slot_in_the_slot_s_own_frame() -> None:
+    """A slot's frame is set by its ``along``, not by ``up``: a group shift
+    of 0.01 mm along global Y reaches it as its own deviation would."""
+
+    def pinned(deviation: Any, shared: list[dict[str, Any]]) -> Any:
+        slot = {
+            "name": "l2",
+            "type": "slot",
+            "between": ["S0", "S1"],
+            "at": [200, 0, 0],
+            "axis": [1, 0, 0],
+            "along": [0, 0, 1],
+            "length": 10,
+            "clearance": J,
+            "slot_length": 50,
+            "deviation": deviation,
+        }
+        return pivoted_shaft().replace(
+            joints=[pivoted_shaft().model_dump(exclude_none=True)["joints"][0], slot],
+            deviations=shared,
+        )
+
+    frame = pinned(None, []).joints[1].frame()
+    own = pinned({"position": {"diameter": 0, "mean": (frame.T @ [0, 0.01, 0]).tolist()}}, [])
+    group = {"name": "setup", "body": "S0", "at": [200, 0, 0], "axis": [1, 0, 0]}
+    shared = pinned("setup", [{**group, "position": {"diameter": 0, "mean": [0, 0.01, 0]}}])
+    # the slot holds across (global Y) at its far end, x = 205, on the pivot's lever
+    assert np.allclose(tip(own), [0, 300 / 205 * (0.01 - J / 2), 0], atol=MM, rtol=0)
+    assert np.allclose(tip(shared), tip(own), atol=MM, rtol=0)
+
+
+def test_a_batch_without_load_takes_the_rest_position_of_its_measured_deviations() -> None:
+    plays = {"clearance": {"min": 0.08, "max": 0.12}}
+    measured = {"deviation": {"position": {"diameter": 0, "mean": [0, 0.2, 0]}}}
+    model = pivoted_shaft(bore={**plays, **measured}).replace(loads=[])
+    one = jointplay.solve(model).points["T"].displacement
+    mc = MonteCarlo(samples=50, seed=1).run(model)
+    # 0 does not fit: the bore is 0.2 mm off, its play 0.04 to 0.06 mm
+    assert one[1] > 0.2
+    radius = mc.plays[:, 0] / 2
+    expected = np.column_stack([np.zeros(50), 1.5 * (0.2 - radius), np.zeros(50)])
+    assert np.allclose(mc.displacement[:, 0], expected, atol=MM, rtol=0)
+
+
+def test_two_shared_deviations_of_one_name_are_named() -> None:
+    group = {"name": "setup", "body": "S0", "at": [0, 0, 0], "axis": [1, 0, 0], "position": "1 um"}
+    with pytest.raises(jointplay.ModelError, match="duplicate deviation name 'setup'"):
+        two_bores([group, group])

@@ -810,10 +810,11 @@ def _nested_keys(model: Any, path: list[Any]) -> set[str]:
     joint's, or of a mapping nested in it (a deviation's zone)."""
     for name in path:
         field = model.model_fields.get(name)
+        if field is None:
+            return set()
         nested = [
             t
             for t in (field.annotation, *get_args(field.annotation))
-            if field is not None
             if isinstance(t, type) and issubclass(t, BaseModel)
         ]
         if not nested:

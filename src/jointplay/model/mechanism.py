@@ -25,7 +25,7 @@ from pydantic import (
     model_validator,
 )
 
-from jointplay.geometry import FloatArray, joint_frame
+from jointplay.geometry import FloatArray
 from jointplay.model.deviations import MOTION_WORDS, SharedDeviation, Zones, transport
 from jointplay.model.fields import (
     AccelerationVector,
@@ -424,7 +424,7 @@ class Model(BaseModel):
                 users.setdefault(joint.deviation.shared, []).append(jdx)
             elif joint.deviation is not None:
                 ball = joint.type_name == "spherical"
-                frame = (joint_frame(joint.axis, joint.up), np.asarray(joint.at, dtype=float))
+                frame = (joint.frame(), np.asarray(joint.at, dtype=float))
                 own = DeviationSource(joint.name, joint.deviation, *frame, (jdx,), (1.0,), ball)
                 out.append(own)
         for name, dev in shared.items():
@@ -472,8 +472,7 @@ class DeviationSource:
     def torsor_at(self, jdx: int, joint: Joint) -> FloatArray:
         """(6, 6): this deviation's torsor as joint ``jdx`` sees it (at its
         centre, in its frame, a's features minus b's)."""
-        R = joint_frame(joint.axis, joint.up)  # not the cached frame: see Joint.takes
-        T = transport(self.R, self.at, R, np.asarray(joint.at, dtype=float))
+        T = transport(self.R, self.at, joint.frame(), np.asarray(joint.at, dtype=float))
         return self.signs[self.joints.index(jdx)] * T
 
 
@@ -499,6 +498,8 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
                 )
     for k, dev in enumerate(model.deviations):
         entry = f"deviations[{k}] '{dev.name}'"
+        if names.count(dev.name) > 1:
+            continue  # its name is taken twice: said above (_check_unique)
         if dev.name not in used:
             found.append(
                 EntryError(entry, "no joint names it; give joints 'deviation: " + dev.name + "'")

@@ -244,7 +244,8 @@ def _solve_batch(
         if seed is not None and dense:
             solved_by_set.setdefault(seed, []).append(np.array([first]))
 
-    if centres is not None:  # with no load, the rest position: where the centres put it
+    if centres is not None or ws.stack.centre is not None:
+        # with no load, the rest position: where the centres put it
         for row in np.flatnonzero(norms == 0):
             try:
                 rest = pipeline.rest_position(ws.with_radii(r[row], c[row]))

@@ -220,7 +220,12 @@ class Joint(BaseModel):
 
     @cached_property
     def R_world_joint(self) -> FloatArray:
-        """Joint axes x, y, z as columns, in global axes."""
+        """Joint axes x, y, z as columns, in global axes (``frame``, kept)."""
+        return self.frame()
+
+    def frame(self) -> FloatArray:
+        """Joint axes x, y, z as columns, in global axes, computed anew (a
+        validator must leave no arrays on the model: see ``takes``)."""
         return joint_frame(self.axis, self.up)  # tuples: NumPy's scalars cost more here
 
     @cached_property

@@ -20,7 +20,6 @@ is limited by the engagement::
 
 from __future__ import annotations
 
-from functools import cached_property
 from typing import Literal, Self
 
 import numpy as np
@@ -51,8 +50,7 @@ class Slot(Joint):
         check_engagement(self.length, self.clearance)
         return self
 
-    @cached_property
-    def R_world_joint(self) -> FloatArray:
+    def frame(self) -> FloatArray:
         """x = axis, y = along (across the axis), z = x cross y."""
         return joint_frame(self.axis, cross(np.array(self.axis), np.array(self.along)))
 
