@@ -328,16 +328,24 @@ def two_bores(deviations: list[dict[str, Any]], own: dict[str, Any] | None = Non
     )
 
 
+def group(**fields: Any) -> dict[str, Any]:
+    """A shared deviation 'setup' of features made on S0 (the bores' body)."""
+    return {"name": "setup", "body": "S0", "at": [0, 0, 0], **fields}
+
+
+def shifted_and_tilted(dy: float, wz: float) -> dict[str, Any]:
+    """The setup at x = 200, measured: shifted by dy along y, tilted by wz about z."""
+    return group(
+        at=[200, 0, 0],
+        axis=[1, 0, 0],
+        position={"diameter": 0, "mean": [0, dy, 0]},
+        orientation={"angle": 0, "mean": [0, 0, wz]},
+    )
+
+
 def test_a_shared_deviation_moves_both_bores_as_one_rigid_group() -> None:
     dy, wz = 0.01, 1e-4
-    setup = {
-        "name": "setup",
-        "body": "S0",
-        "at": [200, 0, 0],
-        "axis": [1, 0, 0],
-        "position": {"diameter": 0, "mean": [0, dy, 0]},
-        "orientation": {"angle": 0, "mean": [0, 0, wz]},
-    }
+    setup = shifted_and_tilted(dy, wz)
     result = jointplay.solve(two_bores([setup]))
     result.check()
     # each bore moves by dy + w x (c - at): -100 wz at the front, +100 wz at the rear
@@ -346,14 +354,7 @@ def test_a_shared_deviation_moves_both_bores_as_one_rigid_group() -> None:
 
 
 def test_a_shared_deviation_keeps_its_body_s_side_whatever_the_joints_order() -> None:
-    setup = {
-        "name": "setup",
-        "body": "S0",
-        "at": [200, 0, 0],
-        "axis": [1, 0, 0],
-        "position": {"diameter": 0, "mean": [0, 0.01, 0]},
-        "orientation": {"angle": 0, "mean": [0, 0, 1e-4]},
-    }
+    setup = shifted_and_tilted(0.01, 1e-4)
     model = two_bores([setup])
     data = model.model_dump(by_alias=True, exclude_none=True)
     data["joints"][1]["between"] = ["S1", "S0"]  # the same bore, written from the shaft
@@ -370,13 +371,7 @@ def test_a_shared_deviation_keeps_its_body_s_side_whatever_the_joints_order() ->
 
 
 def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
-    setup = {
-        "name": "setup",
-        "body": "S0",
-        "at": [200, 0, 0],
-        "axis": [1, 0, 0],
-        "position": "20 um",
-    }
+    setup = group(at=[200, 0, 0], axis=[1, 0, 0], position="20 um")
     shared = MonteCarlo(samples=1_000, seed=4).run(two_bores([setup]))
     assert shared.deviation_labels == ("setup.deviation.position.y", "setup.deviation.position.z")
     d = shared.deviations
@@ -398,49 +393,17 @@ def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
     [
         ([], "unknown shared deviation 'setup'"),
         (
-            [
-                {"name": "setup", "body": "S0", "at": [0, 0, 0], "position": "1 um"},
-                {"name": "other", "body": "S0", "at": [0, 0, 0], "position": "1 um"},
-            ],
+            [group(position="1 um"), {**group(position="1 um"), "name": "other"}],
             "no joint names it",
         ),
+        ([group(orientation="1 mrad")], "give the deviation an 'axis'"),
         (
-            [{"name": "setup", "body": "S0", "at": [0, 0, 0], "orientation": "1 mrad"}],
-            "give the deviation an 'axis'",
-        ),
-        (
-            [
-                {
-                    "name": "setup",
-                    "body": "S0",
-                    "at": [0, 0, 0],
-                    "axis": [1, 0, 0],
-                    "position": {"x": {"min": 0, "max": 0.01}},
-                }
-            ],
+            [group(axis=[1, 0, 0], position={"x": {"min": 0, "max": 0.01}})],
             "moves none of",
         ),
-        (
-            [{"name": "setup", "body": "S9", "at": [0, 0, 0], "position": "1 um"}],
-            "the features are made on 'S9'",
-        ),
-        (
-            [
-                {
-                    "name": "setup",
-                    "body": "S0",
-                    "at": [0, 0, 0],
-                    "axis": [1, 0, 0],
-                    "up": [2, 0, 0],
-                    "position": "1 um",
-                }
-            ],
-            "parallel to axis",
-        ),
-        (
-            [{"name": "setup", "body": "S0", "at": [0, 0, 0], "up": [0, 1, 0], "position": "1 um"}],
-            "give the axis too",
-        ),
+        ([group(body="S9", position="1 um")], "the features are made on 'S9'"),
+        ([group(axis=[1, 0, 0], up=[2, 0, 0], position="1 um")], "parallel to axis"),
+        ([group(up=[0, 1, 0], position="1 um")], "give the axis too"),
     ],
 )
 def test_bad_shared_deviations_are_named(deviations: list[dict[str, Any]], words: str) -> None:
@@ -607,8 +570,8 @@ def test_a_shared_deviation_reaches_a_slot_in_the_slot_s_own_frame() -> None:
 
     frame = pinned(None, []).joints[1].frame()
     own = pinned({"position": {"diameter": 0, "mean": (frame.T @ [0, 0.01, 0]).tolist()}}, [])
-    group = {"name": "setup", "body": "S0", "at": [200, 0, 0], "axis": [1, 0, 0]}
-    shared = pinned("setup", [{**group, "position": {"diameter": 0, "mean": [0, 0.01, 0]}}])
+    at_slot = group(at=[200, 0, 0], axis=[1, 0, 0])
+    shared = pinned("setup", [{**at_slot, "position": {"diameter": 0, "mean": [0, 0.01, 0]}}])
     # the slot holds across (global Y) at its far end, x = 205, on the pivot's lever
     assert np.allclose(tip(own), [0, 300 / 205 * (0.01 - J / 2), 0], atol=MM, rtol=0)
     assert np.allclose(tip(shared), tip(own), atol=MM, rtol=0)
@@ -628,6 +591,6 @@ def test_a_batch_without_load_takes_the_rest_position_of_its_measured_deviations
 
 
 def test_two_shared_deviations_of_one_name_are_named() -> None:
-    group = {"name": "setup", "body": "S0", "at": [0, 0, 0], "axis": [1, 0, 0], "position": "1 um"}
+    twice = group(axis=[1, 0, 0], position="1 um")
     with pytest.raises(jointplay.ModelError, match="duplicate deviation name 'setup'"):
-        two_bores([group, group])
+        two_bores([twice, twice])
