@@ -469,6 +469,43 @@ def test_the_batch_tries_a_failed_row_again_only_from_a_nearer_start(monkeypatch
     assert len(tries) == len(set(tries))  # no row twice on one set from one start
 
 
+def test_a_row_whose_set_crosses_another_contact_leaves_that_set(monkeypatch: Any) -> None:
+    """A row that converged on a set with no force pulling sits at the
+    optimum of the program on that set's contacts alone (a convex program);
+    if that point crosses another contact, the row's optimum lies on another
+    set and no start on this set does better. Here the bore's far end
+    touches in some samples: trying those rows again from nearer starts on
+    the first set cost the example's study a quarter of its time."""
+    import jointplay.solver.batch as batch_module
+    from jointplay.solver import pipeline
+    from jointplay.solver.workspace import Workspace
+
+    real = batch_module._newton_batch
+    tries: list[tuple[Any, bytes]] = []
+    left: list[tuple[Any, bytes, Any, Any, Any, Any]] = []
+
+    def recording(ws: Any, key: Any, g_hat: Any, sigma: Any, x0: Any, *rest: Any) -> Any:
+        r, c = rest[2], rest[3]  # each sample's own cone radii and centres
+        tries.extend((key, row.tobytes()) for row in c)
+        out = real(ws, key, g_hat, sigma, x0, *rest)
+        left.extend(
+            (key, c[i].tobytes(), g_hat[i], sigma[i], r[i], c[i]) for i in np.flatnonzero(out[-1])
+        )
+        return out
+
+    monkeypatch.setattr(batch_module, "_newton_batch", recording)
+    model = jointplay.load(EXAMPLE)
+    mc = MonteCarlo(samples=3_000, seed=5).run(model)
+    assert mc.batched > 2_900  # the study is batched
+    assert len(left) > 20
+    for key, sample, *_ in left:
+        assert tries.count((key, sample)) == 1  # not tried on that set again
+    ws = Workspace.of(model)
+    for key, _, g_hat, sigma, r, c in left[:5]:
+        point = pipeline.optimum(ws.with_radii(r, c), g_hat, sigma)
+        assert point.active is not None and point.active != key  # the optimum is on another set
+
+
 def test_the_envelope_over_a_position_zone_is_exact_and_holds_every_sample() -> None:
     from jointplay.studies.envelope import Envelope
 

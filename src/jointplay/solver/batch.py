@@ -201,7 +201,7 @@ def _solve_batch(
                 start_distance[active][tried] = dist
                 for part in range(0, len(tried), chunk):
                     now, near = tried[part : part + chunk], nearest[part : part + chunk]
-                    ok, xs, lams, fs, checks = _newton_batch(
+                    ok, xs, lams, fs, checks, wrong_set = _newton_batch(
                         ws,
                         active,
                         g_hat[now],
@@ -214,6 +214,7 @@ def _solve_batch(
                         (r[near], c[near]),
                     )
                     failed[now[~ok]] += 1
+                    failed[now[wrong_set]] = give_up
                     if np.any(ok):
                         won = now[ok]
                         x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
@@ -290,7 +291,7 @@ def _newton_batch(
     r: FloatArray,
     c: FloatArray,
     near: tuple[FloatArray, FloatArray] | None = None,
-) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None]:
+) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None, BoolArray]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
     each from its own start (rows of ``x0``, ``lam0``, ``f0``: the nearest
     solved sample's answer and split) and with its own cone radii (rows of
@@ -298,8 +299,10 @@ def _newton_batch(
     centres (default: the same as the rows').
 
     Returns (accepted mask, x, full multipliers, force vectors, their
-    certificate); a row is accepted only if it converged and passes the
-    certificate of a unique optimum.
+    certificate, wrong-set mask); a row is accepted only if it converged
+    and passes the certificate of a unique optimum. The wrong-set rows
+    converged with no force pulling to a point that crosses a contact
+    outside the set: their optimum lies on another set.
     """
     B = g_hat.shape[0]
     stack = ws.stack
@@ -312,7 +315,7 @@ def _newton_batch(
     if tie is not None:
         Eq, e = np.vstack([linalg.dense(Eq), tie]), np.concatenate([e, np.zeros(len(tie))])
     elif not face.determined:  # a tilting face (uniqueness depends on x), or a large tie
-        return np.zeros(B, dtype=bool), x, lam, f, None
+        return np.zeros(B, dtype=bool), x, lam, f, None, np.zeros(B, dtype=bool)
     surface, linear = key
     ne0 = ws.Eq.shape[0]
     eq_soft = np.zeros((B, len(Eq)))
@@ -425,7 +428,14 @@ def _newton_batch(
     # rigid joints' forces by least squares, for split and own rows alike
     # (the batch reports contact forces only)
     checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
-    return ok & checks.passed(st, ws.max_radius), x, lam, f, checks
+    passed = checks.passed(st, ws.max_radius)
+    # converged with no force pulling: the optimum of the (convex) program on
+    # the set's contacts alone, unique off a tie; where it crosses another
+    # contact, no other start on this set does better
+    crossed = conv & (checks.feasibility > st.feasibility_tolerance * ws.max_radius)
+    crossed &= checks.min_force >= -st.equilibrium_tolerance * checks.force_scale
+    wrong_set = crossed & ~passed if tie is None else np.zeros(B, dtype=bool)
+    return ok & passed, x, lam, f, checks, wrong_set
 
 
 def _predicted(
