@@ -31,19 +31,22 @@ def face_equalities(
     ``u . (A_i x - c_i) + B_i x = reach_i``); a linear cone ``A_i x = c_i``,
     ``B_i x = reach_i``. ``reach`` is per cone of ``which`` (surface first)."""
     surface, linear = which
-    rows: list[Matrix] = []
-    rhs: list[FloatArray] = []
     v, rho = stack.norms(x)
     centres = stack.centres()
-    for j, i in enumerate((*surface, *linear)):
-        Ai = stack.cone_rows(i)
+    cones = np.array([*surface, *linear], dtype=np.intp)
+    on_surface = np.arange(len(cones)) < len(surface)
+    plain = on_surface & (stack.k[cones] > 0) & ~stack.has_offset[cones]
+    # the surface cones with no offset, all at once (a large tie has thousands)
+    idx = cones[plain]
+    at = stack.rows_of(idx)
+    u = v[at] / np.repeat(np.maximum(rho[idx], TINY), stack.k[idx])
+    rows: list[Matrix] = [stack.A[at]]
+    rhs: list[FloatArray] = [centres[at] + np.repeat(reach[plain], stack.k[idx]) * u]
+    for j in np.flatnonzero(~plain):
+        i = int(cones[j])
         c = centres[stack.start[i] : stack.start[i] + stack.k[i]]
-        if j < len(surface) and stack.k[i]:
+        if on_surface[j] and stack.k[i]:  # tilting on its offset
             u = v[stack.start[i] : stack.start[i] + stack.k[i]] / max(rho[i], TINY)
-            if not stack.has_offset[i]:
-                rows.append(Ai)
-                rhs.append(c + reach[j] * u)
-                continue
             across = np.linalg.svd(u[None, :])[2][1:]  # directions across u
             M = linalg.dense(stack.face_rows(i))
             rows.append(np.vstack([across @ M[:-1], u @ M[:-1] + M[-1]]))
@@ -51,8 +54,6 @@ def face_equalities(
         else:
             rows.append(stack.face_rows(i))
             rhs.append(np.append(c, reach[j]))
-    if not rows:
-        return np.zeros((0, ws.m)), np.zeros(0)
     return linalg.vstack(rows, ws.m), np.concatenate(rhs)
 
 
@@ -68,7 +69,8 @@ def least_norm(
     Eq, e = independent_rows(
         ws, linalg.vstack([ws.Eq, L], ws.m), np.concatenate([np.zeros(ws.Eq.shape[0]), L_rhs])
     )
-    rest_index = [i for i in range(len(ws.balls)) if i not in set(both)]
+    in_face = set(both)
+    rest_index = [i for i in range(len(ws.balls)) if i not in in_face]
     rest = ws.stack.take(rest_index)
     # a tilting face stays on the side it leans to: u . (A_i x - c_i) >= 0
     stack = ws.stack
