@@ -376,6 +376,19 @@ def _newton_batch(
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
     st = ws.settings
+    # Newton's own forces, each strictly positive (a face's inside its rim)
+    lam_a = lam[:, list(surface) + list(linear)]
+    positive = st.positive_force
+    strict = (
+        np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1)
+        if lam_a.shape[1]
+        else np.ones(B, dtype=bool)
+    )
+    if linear:
+        lin = stack.take(linear)
+        f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
+        inside = (f_norm < (1.0 - positive) * lam[:, list(linear)]) | (lin.k == 0)
+        strict &= np.all(inside, axis=1)
     # contacts that touch outside the set (unloaded in the neighbour's split)
     # may share the load: the split rule decides, as when the set is redundant
     in_set = np.zeros(len(ws.balls), dtype=bool)
@@ -410,31 +423,16 @@ def _newton_batch(
             c[rows],
         )
         ok[rows] &= split & _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
-    own = np.flatnonzero(~shared)
-    if own.size:
-        lam_a = lam[own][:, list(surface) + list(linear)]
-        positive = st.positive_force
-        strict = (
-            np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1)
-            if lam_a.shape[1]
-            else np.ones(len(own), dtype=bool)
-        )
-        if linear:
-            lin = stack.take(linear)
-            f_norm = np.sqrt(lin.segment_sum(f[own][:, face.linear_rows] ** 2))
-            inside = (f_norm < (1.0 - positive) * lam[own][:, list(linear)]) | (lin.k == 0)
-            strict &= np.all(inside, axis=1)
-        ok[own] &= strict
+    ok[~shared] &= strict[~shared]
     # rigid joints' forces by least squares, for split and own rows alike
     # (the batch reports contact forces only)
     checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
     passed = checks.passed(st, ws.max_radius)
-    # converged with no force pulling: the optimum of the (convex) program on
-    # the set's contacts alone, unique off a tie; where it crosses another
-    # contact, no other start on this set does better
-    crossed = conv & (checks.feasibility > st.feasibility_tolerance * ws.max_radius)
-    crossed &= checks.min_force >= -st.equilibrium_tolerance * checks.force_scale
-    wrong_set = crossed & ~passed if tie is None else np.zeros(B, dtype=bool)
+    # converged with Newton's forces strictly positive: the unique optimum of
+    # the (convex) program on the set's contacts alone; where it crosses
+    # another contact, no other start on this set does better
+    crossed = checks.feasibility > st.feasibility_tolerance * ws.max_radius
+    wrong_set = conv & strict & crossed if tie is None else np.zeros(B, dtype=bool)
     return ok & passed, x, lam, f, checks, wrong_set
 
 
