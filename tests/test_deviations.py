@@ -631,3 +631,67 @@ def test_two_shared_deviations_of_one_name_are_named() -> None:
     twice = group(axis=[1, 0, 0], position="1 um")
     with pytest.raises(jointplay.ModelError, match="duplicate deviation name 'setup'"):
         two_bores([twice, twice])
+
+
+def plate_on_buttons() -> Any:
+    """A plate on three buttons (point contacts with no play, axis z), held
+    sideways by a pin and a slot, pushed down inside the buttons' triangle;
+    the first button's height is toleranced +-10 um (its joint-frame x is
+    its axis)."""
+    on = {"between": ["fixture", "plate"], "axis": [0, 0, 1]}
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "fixture", "ground": True}, {"name": "plate"}],
+            "joints": [
+                {
+                    "name": "b1",
+                    "type": "point",
+                    "at": [0, 0, 0],
+                    "deviation": {"position": {"x": {"min": "-10 um", "max": "10 um"}}},
+                    **on,
+                },
+                {"name": "b2", "type": "point", "at": [100, 0, 0], **on},
+                {"name": "b3", "type": "point", "at": [0, 100, 0], **on},
+                {
+                    "name": "pin",
+                    "type": "sphere_in_cylinder",
+                    "at": [30, 30, 0],
+                    "clearance": 0.02,
+                    **on,
+                },
+                {
+                    "name": "slot",
+                    "type": "slot",
+                    "at": [90, 90, 0],
+                    "along": [1, 1, 0],
+                    "length": 5,
+                    "clearance": 0.02,
+                    **on,
+                },
+            ],
+            "loads": [{"body": "plate", "at": [40, 40, 10], "force": [1, 2, -50]}],
+            "points": [{"name": "P", "body": "plate", "at": [0, 0, 0]}],
+        }
+    )
+
+
+def test_a_button_lowered_past_its_play_is_studied_like_one_measured_part() -> None:
+    """A point contact has no play: a deviation that lowers it moves its
+    limit below 0 (r + b.delta < 0). The plate then sits lower there by
+    exactly the deviation, in the batch as in a single solve of the part as
+    measured (the batch once refused negative limits; a measured part once
+    could not be given for a point contact, which leaves y and z free)."""
+    model = plate_on_buttons()
+    mc = MonteCarlo(samples=300, seed=2).run(model)
+    assert mc.batched > 250
+    low = mc.deviations[:, 0]
+    assert np.any(low < 0) and np.any(low > 0)
+    assert np.allclose(mc.displacement[:, 0, 2], low, atol=MM, rtol=0)
+    for i in range(4):
+        part = jointplay.with_deviations(model, {"b1": {"position": [low[i], 0, 0]}})
+        result = jointplay.solve(part)
+        result.check()
+        assert np.allclose(result.points["P"].displacement, mc.displacement[i, 0], atol=MM, rtol=0)
+    with pytest.raises(jointplay.ModelError, match="leaves that motion free") as sideways:
+        jointplay.with_deviations(model, {"b1": {"position": [0, 0.01, 0]}})
+    assert sideways.value.entry == "--deviations"

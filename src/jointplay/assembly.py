@@ -342,11 +342,12 @@ class BallStack:
 
     def gap_used(self, level: FloatArray, radii: FloatArray | None = None) -> FloatArray:
         """Fraction of each cone's play used at ``level = |A_i x| + B_i x``, in
-        [0, 1] (a limit with no play counts as used as soon as it is reached);
-        ``radii``: other radii than the stack's (a row each, like ``level``)."""
+        [0, 1] (a limit with no play, or one a deviation moved in past its
+        play, counts as used as soon as it is reached); ``radii``: other
+        radii than the stack's (a row each, like ``level``)."""
         radii = self.r if radii is None else radii
         r = np.where(radii > 0, radii, 1.0)
-        reached = level >= -DEFAULT.zero_play_reach
+        reached = level >= np.minimum(radii, 0.0) - DEFAULT.zero_play_reach
         return np.clip(np.where(radii > 0, level / r, reached), 0.0, 1.0)
 
 

@@ -143,6 +143,11 @@ def _measured(options: list[str], source: str) -> dict[str, dict[str, Any]]:
                 "JOINT.orientation=[0, wy, wz], e.g. 'l2.position=[0, 5 um, -3 um]'",
                 source=source,
             )
+        if kind in out.get(joint, {}):
+            raise OptionError(
+                f"--deviations {option!r}: {joint}.{kind} is given twice; give it once",
+                source=source,
+            )
         out.setdefault(joint, {})[kind] = value
     return out
 

@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 
 from jointplay.errors import ModelError
 from jointplay.model.deviations import SharedDeviation
+from jointplay.model.fields import _vector
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import (
     Body,
@@ -544,7 +545,8 @@ def with_deviations(
         if name in shared:
             entry = data["deviations"][shared.index(name)]
         else:
-            entry = data["joints"][names.index(name)].setdefault("deviation", {})
+            joint = data["joints"][names.index(name)]
+            entry = joint.setdefault("deviation", {})
             if entry.get("shared") is not None:
                 raise ModelError(
                     f"joint {shown(name)} takes the shared deviation "
@@ -553,11 +555,41 @@ def with_deviations(
                     source=source,
                     entry="--deviations",
                 )
-        if "position" in given:
-            entry["position"] = {"diameter": 0, "mean": given["position"]}
-        if "orientation" in given:
-            entry["orientation"] = {"angle": 0, "mean": given["orientation"]}
-    return model_from_dict(data, source=source)
+        _measure(entry, given, name, source)
+        if not {"position", "orientation"} & set(entry):  # measured at 0: none
+            if name in shared:
+                entry["position"] = {"diameter": 0}
+            else:
+                del joint["deviation"]
+    try:
+        return model_from_dict(data, source=source)
+    except ModelError as exc:
+        raise ModelError(
+            f"the measured deviations ({', '.join(map(shown, measured))}) do not fit the "
+            f"model: {exc.problem} (at {exc.entry})",
+            source=source,
+            entry="--deviations",
+        ) from None
+
+
+def _measure(entry: dict[str, Any], given: Mapping[str, Any], name: str, source: str) -> None:
+    """A deviation's zones replaced by the measured values: a position as
+    limits of no width on the directions where it is not 0 (so that a joint
+    that leaves a direction free, a point contact's sideways slip, takes the
+    others), an orientation as a tilt of no size around its value."""
+    for kind, dimension in (("position", "length"), ("orientation", "angle")):
+        if kind not in given:
+            continue
+        try:
+            value = _vector(dimension)(given[kind])
+        except ValueError as exc:
+            raise ModelError(f"{name}.{kind}: {exc}", source=source, entry="--deviations") from None
+        if not any(value):
+            entry.pop(kind, None)
+        elif kind == "position":
+            entry[kind] = {a: {"min": v, "max": v} for a, v in zip("xyz", value, strict=True) if v}
+        else:
+            entry[kind] = {"angle": 0, "mean": list(value)}
 
 
 def _check_sizes(data: dict[str, Any], source: str) -> None:
