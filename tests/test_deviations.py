@@ -401,7 +401,11 @@ def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
             [group(axis=[1, 0, 0], position={"x": {"min": 0, "max": 0.01}})],
             "moves none of",
         ),
-        ([group(body="S9", position="1 um")], "the features are made on 'S9'"),
+        ([group(body="S9", position="1 um")], "there is no body 'S9'"),
+        (
+            [group(position="1 um"), {**group(position="1 um"), "name": "front"}],
+            "'front' is also a joint's name",
+        ),
         ([group(axis=[1, 0, 0], up=[2, 0, 0], position="1 um")], "parallel to axis"),
         ([group(up=[0, 1, 0], position="1 um")], "give the axis too"),
     ],

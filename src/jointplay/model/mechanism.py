@@ -496,10 +496,32 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
                         f"'deviations' section has {known}." + suggest(shared, names),
                     )
                 )
+    joints = {joint.name for joint in model.joints}
+    bodies = [body.name for body in model.bodies]
     for k, dev in enumerate(model.deviations):
         entry = f"deviations[{k}] '{dev.name}'"
         if names.count(dev.name) > 1:
             continue  # its name is taken twice: said above (_check_unique)
+        if dev.name in joints:
+            found.append(
+                EntryError(
+                    entry,
+                    f"name: '{dev.name}' is also a joint's name; give the shared deviation a "
+                    "name of its own (studies and --deviations call each by its name)",
+                )
+            )
+            continue
+        if dev.body not in bodies:
+            found.append(
+                EntryError(
+                    entry,
+                    f"body: there is no body '{dev.body}'; the bodies are "
+                    + listing(f"'{b}'" for b in bodies)
+                    + "."
+                    + suggest(dev.body, bodies),
+                )
+            )
+            continue
         if dev.name not in used:
             found.append(
                 EntryError(entry, "no joint names it; give joints 'deviation: " + dev.name + "'")
