@@ -264,3 +264,30 @@ def test_no_number_is_cut_short_on_a_narrow_terminal(columns: str) -> None:
         assert "…" not in proc.stdout, proc.stdout
         if columns == "80":  # the carriage's tool point fits whole on one line
             assert "2.025000e-02" in proc.stdout or path.name != "carriage.yaml"
+
+
+@pytest.mark.parametrize("columns", ["80", "50"])
+def test_contributions_print_every_figure_whole(columns: str) -> None:
+    """The spread of a measure was a table title, which Rich cuts to the
+    table's width: 'RSS sigma 0.0' at 80 columns for 0.00314485. The figures
+    now come above the table, and the table drops its bars, then folds the
+    names, before it would cut a number."""
+    import os
+
+    from jointplay.studies.contributions import Contributions
+
+    path = ROOT / "examples" / "studies" / "shaft_deviations.yaml"
+    study = Contributions().run(jointplay.load(path))
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", "contributions", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "COLUMNS": columns},
+    )
+    assert proc.returncode == 0, proc.stderr
+    text = proc.stdout
+    assert f"RSS sigma {study.rss_sigma[0]:.6g} mm" in " ".join(text.split())
+    for share in (*study.rss[0], *study.worst_case[0]):
+        assert f"{share:5.1f} %".strip() in text
+    assert all(len(line) <= int(columns) for line in text.splitlines())

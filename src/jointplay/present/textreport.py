@@ -357,34 +357,25 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         "tolerance; RSS: (s sigma)^2 of sum (s sigma)^2"
     )
     parts: list[Table | Text] = [head]
-    wc, rss = result.worst_case, result.rss
+    rss = result.rss
     for k, measure in enumerate(result.measures):
-        table = Table(
-            title=(
+        # the figures above the table, not as its title: a title is cut to the
+        # table's width, numbers and all
+        parts.append(
+            Text(
                 f"{measure}: {result.nominal[k]:.6g} mm at the nominal; worst-case spread "
                 f"{result.worst_case_range[k]:.6g} mm, RSS sigma {result.rss_sigma[k]:.6g} mm"
-            ),
-            title_justify="left",
-            show_edge=False,
-        )
-        widest = max((len(p) for p in result.plays), default=8)
-        for name in ("variable", "tolerance T", "sensitivity s", "worst case", "RSS", ""):
-            table.add_column(
-                name,
-                justify="left" if name in ("variable", "") else "right",
-                min_width=widest + 2 if name == "variable" else None,
             )
+        )
         order = np.argsort(-rss[k], kind="stable")
+        # the widest that fits: with bars, then without, then names folded
+        wide = console.options.update_width(10_000)
+        for bars, whole_names in ((True, True), (False, True), (False, False)):
+            table = _contributions_table(result, k, order, bars, whole_names)
+            if console.measure(table, options=wide).maximum <= console.width:
+                break
         notes = Text()
         for i in order:
-            table.add_row(
-                result.plays[i],
-                f"{result.width[i]:.6g}",
-                f"{result.sensitivity[k, i]:.6g}",
-                f"{wc[k, i]:5.1f} %",
-                f"{rss[k, i]:5.1f} %",
-                _bar(rss[k, i]),
-            )
             if result.kink[k, i]:
                 notes.append(
                     f"  {result.plays[i]}: the contacts change at the nominal play; the slope is "
@@ -395,6 +386,33 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         if notes:
             parts.append(notes)
     console.print(_unclipped(console, *parts))
+
+
+def _contributions_table(
+    result: ContributionsResult, k: int, order: Any, bars: bool, whole_names: bool
+) -> Table:
+    """Measure ``k``'s rows in ``order``; ``bars``: with the RSS share drawn;
+    ``whole_names``: the variables' names on one line."""
+    wc, rss = result.worst_case, result.rss
+    table = Table(show_edge=False)
+    widest = max((len(p) for p in result.plays), default=8)
+    names = ("variable", "tolerance T", "sensitivity s", "worst case", "RSS", "")
+    for name in names[: len(names) if bars else -1]:
+        table.add_column(
+            name,
+            justify="left" if name in ("variable", "") else "right",
+            min_width=widest if name == "variable" and whole_names else None,
+        )
+    for i in order:
+        row = [
+            result.plays[i],
+            f"{result.width[i]:.6g}",
+            f"{result.sensitivity[k, i]:.6g}",
+            f"{wc[k, i]:5.1f} %",
+            f"{rss[k, i]:5.1f} %",
+        ]
+        table.add_row(*row, *([_bar(rss[k, i])] if bars else []))
+    return table
 
 
 def render_tolerances(result: TolerancesResult, source: str, console: Console) -> None:
