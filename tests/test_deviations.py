@@ -699,3 +699,49 @@ def test_a_button_lowered_past_its_play_is_studied_like_one_measured_part() -> N
     with pytest.raises(jointplay.ModelError, match="leaves that motion free") as sideways:
         jointplay.with_deviations(model, {"b1": {"position": [0, 0.01, 0]}})
     assert sideways.value.entry == "--deviations"
+
+
+def test_the_envelope_over_a_guide_s_tilt_zone_holds_every_sample() -> None:
+    """A prismatic guide with a position and a tilt zone: along some
+    directions Clarabel stalls at a gap of 1.1e-10 mm, just above its
+    tolerance ("AlmostSolved"), and the envelope used to stop there. Such
+    a support is kept when its point holds every clearance and its value
+    is within ``support_gap`` of the dual bound."""
+    from jointplay.studies.envelope import Envelope
+
+    model = jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
+            "joints": [
+                {
+                    "name": "l1",
+                    "type": "spherical",
+                    "between": ["S0", "S1"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.05,
+                },
+                {
+                    "name": "l2",
+                    "type": "prismatic",
+                    "between": ["S0", "S1"],
+                    "at": [200, 0, 0],
+                    "axis": [1, 0, 0],
+                    "length": 40,
+                    "width": 20,
+                    "height": 20,
+                    "clearance_y": 0.04,
+                    "clearance_z": 0.04,
+                    "deviation": {
+                        "position": "0.02 mm",
+                        "orientation": {"tolerance": "0.01 mm", "over": "40 mm"},
+                    },
+                },
+            ],
+            "loads": [{"body": "S1", "at": [300, 0, 0], "force": [0.3, -1, 0.5]}],
+            "points": [{"name": "B", "body": "S1", "at": [300, 0, 0]}],
+        }
+    )
+    env = Envelope("B").run(model)
+    mc = MonteCarlo(samples=2_000, seed=7).run(model)
+    assert np.all(env.contains(mc.displacement[:, 0], tol=MM))
+    assert env.largest > np.max(np.linalg.norm(mc.displacement[:, 0], axis=1)) - MM

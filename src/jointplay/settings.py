@@ -106,6 +106,11 @@ class SolverSettings:
     #: A contact with no play counts as used when its level is within this of
     #: its limit (round-off of a scaled length, or of mm).
     zero_play_reach: float = 1e-12
+    #: mm: how far an envelope's support value may be from the optimum when
+    #: Clarabel stalls just short of its tolerance ("AlmostSolved": a tilt
+    #: zone on a prismatic guide, 1.1e-10 mm); far below the micrometres a
+    #: tolerance study reads, and the point stays inside every clearance.
+    support_gap: float = 1e-9
     #: Re-orthonormalizing a free-motion basis stops when a vector's norm
     #: changes by less than this fraction.
     orthonormal_stall: float = 1e-3

@@ -22,6 +22,7 @@ from jointplay.numerics.linalg import Matrix
 from jointplay.solver import held
 
 if TYPE_CHECKING:
+    from jointplay.settings import SolverSettings
     from jointplay.solver.workspace import Workspace
 
 Outcome = Literal["optimal", "inaccurate", "infeasible", "unbounded", "stopped"]
@@ -96,17 +97,26 @@ def cone_program(
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in stack.k
     ]
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    tol = ws.settings.ipm_tolerance if tolerance is None else tolerance
-    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
-    settings.max_iter = ws.settings.max_iterations if max_iter is None else max_iter
-    # refine each step's linear solve further than the default: with
-    # stiff springs pressed far past their play, the default leaves some
-    # programs "AlmostSolved" at a 1e-7 gap
-    refine = ws.settings.ipm_refinement
-    settings.iterative_refinement_reltol = settings.iterative_refinement_abstol = refine
+    settings = options(ws.settings, tolerance, max_iter)
     return ConeProgram(_upper(P, ws.m), A, b, cones, settings, soc_first, ball_rows)
+
+
+def options(
+    settings: SolverSettings, tolerance: float | None = None, max_iter: int | None = None
+) -> Any:
+    """Clarabel's settings for every cone program we run: quiet, our
+    tolerance (default ``ipm_tolerance``) and iteration limit."""
+    out = clarabel.DefaultSettings()
+    out.verbose = False
+    tol = settings.ipm_tolerance if tolerance is None else tolerance
+    out.tol_gap_abs = out.tol_gap_rel = out.tol_feas = tol
+    out.max_iter = settings.max_iterations if max_iter is None else max_iter
+    # refine each step's linear solve further than the default: with
+    # stiff springs pressed far past their play, or a deviation zone's tilt
+    # against a long lever, the default leaves some programs "AlmostSolved"
+    refine = settings.ipm_refinement
+    out.iterative_refinement_reltol = out.iterative_refinement_abstol = refine
+    return out
 
 
 def with_penetrations(prog: ConeProgram, soft: IntArray) -> ConeProgram:

@@ -490,12 +490,6 @@ def _cone_program(
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in k_faces
     ]
-    options = clarabel.DefaultSettings()
-    options.verbose = False
-    options.tol_gap_abs = options.tol_gap_rel = options.tol_feas = settings.ipm_tolerance
-    options.max_iter = settings.max_iterations
-    refine = settings.ipm_refinement
-    options.iterative_refinement_reltol = options.iterative_refinement_abstol = refine
     Q = sp.csc_matrix(P.T @ P)
     sol = clarabel.DefaultSolver(
         sp.triu(Q, format="csc"),
@@ -503,7 +497,7 @@ def _cone_program(
         A,
         np.r_[np.zeros(m), given[:n_cone]],
         cones,
-        options,
+        conic.options(settings),
     ).solve()
     if not conic.has_answer(sol):
         return None
