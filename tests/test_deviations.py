@@ -745,3 +745,16 @@ def test_the_envelope_over_a_guide_s_tilt_zone_holds_every_sample() -> None:
     mc = MonteCarlo(samples=2_000, seed=7).run(model)
     assert np.all(env.contains(mc.displacement[:, 0], tol=MM))
     assert env.largest > np.max(np.linalg.norm(mc.displacement[:, 0], axis=1)) - MM
+
+
+def test_a_tilt_tolerance_alone_is_over_the_joint_s_length() -> None:
+    joint = pivoted_shaft().joints[1].model_dump(by_alias=True, exclude_none=True)
+    joint.update(type="cylindrical", length=40, clearance=J)
+    given = {**joint, "deviation": {"orientation": {"tolerance": "0.01 mm"}}}
+    said = {**joint, "deviation": {"orientation": {"tolerance": "0.01 mm", "over": "40 mm"}}}
+    from jointplay.model.joints import JOINT_TYPES
+
+    cylindrical = JOINT_TYPES["cylindrical"]
+    tilt = cylindrical.model_validate(given).deviation.orientation
+    assert tilt == cylindrical.model_validate(said).deviation.orientation
+    assert tilt.radius == pytest.approx(0.01 / 40, rel=1e-15)

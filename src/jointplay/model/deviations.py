@@ -183,7 +183,8 @@ class OrientationZone(BaseModel):
         if self.angle is None and given != 2:
             raise ValueError(
                 "an orientation zone needs an angle (e.g. '0.2 mrad') or a tolerance over "
-                "a length, e.g. {tolerance: '0.01 mm', over: '40 mm'}"
+                "a length, e.g. {tolerance: '0.01 mm', over: '40 mm'} ('over' is the "
+                "joint's length if it has one)"
             )
         if self.mean[0] != 0.0:
             raise ValueError(
@@ -192,7 +193,7 @@ class OrientationZone(BaseModel):
         reach = self.radius + float(np.linalg.norm(self.mean))
         if reach > LARGEST_TILT:
             raise ValueError(
-                f"the axis would tilt by up to {reach:.3g} rad, beyond the {LARGEST_TILT:g} rad "
+                f"the axis would tilt by up to {reach:.6g} rad, beyond the {LARGEST_TILT:g} rad "
                 "that small displacements describe; an orientation tolerance is a small angle "
                 "(a tolerance over a length: check the units)"
             )

@@ -179,6 +179,22 @@ class Joint(BaseModel):
             )
         return self
 
+    @model_validator(mode="before")
+    @classmethod
+    def _tilt_over_length(cls, data: Any) -> Any:
+        """A tilt zone given as a tolerance alone is over the joint's length
+        (a parallelism of a bore over the bore)."""
+        if not isinstance(data, dict) or "length" not in cls.model_fields:
+            return data
+        deviation = data.get("deviation")
+        tilt = deviation.get("orientation") if isinstance(deviation, dict) else None
+        if not isinstance(tilt, dict) or "over" in tilt or data.get("length") is None:
+            return data
+        if "tolerance" in tilt:
+            tilt = {**tilt, "over": data["length"]}
+            return {**data, "deviation": {**deviation, "orientation": tilt}}
+        return data
+
     @model_validator(mode="after")
     def _check_deviation(self) -> Joint:
         if self.deviation is None or self.deviation.shared is not None:
