@@ -187,7 +187,9 @@ class Joint(BaseModel):
         if not isinstance(data, dict) or "length" not in cls.model_fields:
             return data
         deviation = data.get("deviation")
-        tilt = deviation.get("orientation") if isinstance(deviation, dict) else None
+        if not isinstance(deviation, dict):
+            return data
+        tilt = deviation.get("orientation")
         if not isinstance(tilt, dict) or "over" in tilt or data.get("length") is None:
             return data
         if "tolerance" in tilt:
