@@ -314,7 +314,7 @@ def _newton_batch(
     tie = face.tie_rows  # a tie: its rows pick the least-norm point of the face
     if tie is not None:
         Eq, e = np.vstack([linalg.dense(Eq), tie]), np.concatenate([e, np.zeros(len(tie))])
-    elif not face.determined:  # a tilting face (uniqueness depends on x), or a large tie
+    elif face.determined is False:  # a large tie (sparse: no tie rows)
         return np.zeros(B, dtype=bool), x, lam, f, None, np.zeros(B, dtype=bool)
     surface, linear = key
     ne0 = ws.Eq.shape[0]
@@ -369,6 +369,8 @@ def _newton_batch(
         ws.settings,
     )
     lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
+    if face.determined is None:  # a tilting face: whether it pins x depends on x
+        conv &= faces.determined_rows(ws, face, x, c_surface)
 
     lam[:, list(surface)] = lam_s
     v, rho = face.stack.norms(x, c_surface)

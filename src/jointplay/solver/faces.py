@@ -16,6 +16,7 @@ from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from jointplay.assembly import BallStack, IntArray
 from jointplay.geometry import FloatArray
@@ -167,6 +168,36 @@ def is_determined(ws: Workspace, face: Face, x: FloatArray) -> bool:
         M = linalg.dense(sub.face_rows(i))
         rows.append(M - np.outer(w, w @ M))
     return pins_position(ws, linalg.vstack(rows, ws.m))
+
+
+def determined_rows(
+    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray
+) -> NDArray[np.bool_]:
+    """``is_determined`` for each row of ``x`` (B, m), the cones' centres
+    rows of ``centre`` (dense models): one stack of rows per row, whose
+    tilting cones' rows depend on it, and their ranks at once."""
+    B = len(x)
+    if face.determined is not None:
+        return np.full(B, bool(face.determined))
+    sub = face.stack
+    v, rho = sub.norms(x, centre)
+    fixed = [linalg.dense(ws.Eq), linalg.dense(face.L)]
+    fixed += [linalg.dense(sub.cone_rows(i)) for i in range(len(sub.k)) if not sub.has_offset[i]]
+    rows = [np.broadcast_to(np.vstack(fixed), (B, *np.vstack(fixed).shape))]
+    ok = np.ones(B, dtype=bool)
+    for i in np.flatnonzero(sub.has_offset):
+        at = slice(sub.start[i], sub.start[i] + sub.k[i])
+        ok &= rho[:, i] > 0.0
+        u = v[:, at] / np.where(rho[:, i : i + 1] > 0, rho[:, i : i + 1], 1.0)
+        w = np.hstack([u, -np.ones((B, 1))]) / np.sqrt(2)
+        M = linalg.dense(sub.face_rows(int(i)))
+        rows.append(M[None] - w[:, :, None] * (w @ M)[:, None, :])
+    stacked = np.concatenate(rows, axis=1)
+    if stacked.shape[1] < ws.m:
+        return np.zeros(B, dtype=bool)
+    sv = np.linalg.svd(stacked, compute_uv=False)
+    rank = np.sum(sv > ws.settings.free_motion_rcond * sv[:, :1], axis=1)
+    return np.asarray(ok & (sv[:, 0] > 0) & (rank == ws.m))
 
 
 def active_set(
