@@ -790,3 +790,13 @@ def test_a_guide_tilted_by_its_zone_is_batched_like_single_solves() -> None:
         body = batch.body_displacement("carriage")[i]
         assert np.allclose(body[:3], ref.bodies["carriage"].translation, atol=MM, rtol=0)
         assert np.allclose(body[3:], ref.bodies["carriage"].rotation, atol=RAD, rtol=0)
+
+
+def test_a_sweep_refuses_a_zone_s_size() -> None:
+    """A sweep solves each step at the zones' means: varying a zone's
+    diameter was accepted and changed nothing."""
+    from jointplay.studies.sweep import Sweep, Vary
+
+    model = pivoted_shaft(bore={"deviation": {"position": "20 um"}})
+    with pytest.raises(jointplay.ModelError, match="sweep its mean"):
+        Sweep((Vary("joints[l2].deviation.position.diameter", ("10 um", "20 um")),)).run(model)

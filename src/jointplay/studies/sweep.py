@@ -262,6 +262,13 @@ def _locate(data: dict[str, Any], path: str) -> tuple[Any, str | int]:
     node: Any = data
     container: Any
     keys = parse_path(path)
+    words = [k for k in keys if isinstance(k, str)]
+    zoned = "deviation" in words or words[:1] == ["deviations"]
+    if zoned and {"position", "orientation"} & set(words) and "mean" not in words:
+        raise ValueError(
+            "a zone's size changes no single solve (each step takes the zone at its "
+            "mean); sweep its mean, like ...position.mean[1], or study the zone by Monte Carlo"
+        )
     where = ""
     for n, key in enumerate(keys):
         last = n == len(keys) - 1
