@@ -306,3 +306,111 @@ def test_wobbly_table_example_rocks_onto_the_short_foot_by_hand() -> None:
     np.testing.assert_allclose(
         lean.points["probe"].displacement, np.cross(omega, [0, 150, 80]), atol=MM
     )
+
+
+def test_a_light_load_next_to_a_heavy_torque_keeps_its_contact() -> None:
+    """A table (T) on three points (one 0.1 mm low) and two pins, turned by
+    1e5 N*mm about z and pushed down by 0.01 N at x = -1: it tips onto the
+    low point, which carries 0.01 * 1.5 / 7.5 = 0.002 N. The interior point
+    weighs that tilt at 1e-7 of the torque's work and leaves the low point
+    off its limit; the unloaded bodies beside it make the optimum a tie,
+    whose least-norm point lifted the table off the low point while keeping
+    its force. Every cone the forces load now stays on the tie's face (a
+    property test's case, as it was drawn)."""
+    on = {"between": ["G", "T"], "axis": [0, 0, 1]}
+    model = jointplay.model_from_dict(
+        {
+            "bodies": [
+                {"name": n, **({"ground": True} if n == "G" else {})}
+                for n in ["G", "B1", "B2", "B3", "T"]
+            ],
+            "joints": [
+                *BESIDE,  # three bodies on their own bearings, unloaded
+                {"name": "low", "type": "point", "at": [5, 0, 0], "gap": 0.1, **on},
+                {"name": "a", "type": "point", "at": [-2.5, 4.330127018922194, 0], **on},
+                {"name": "b", "type": "point", "at": [-2.5, -4.330127018922192, 0], **on},
+                {"name": "p1", "type": "sphere_in_cylinder", "at": [0, 0, 0], "clearance": 1, **on},
+                {"name": "p2", "type": "sphere_in_cylinder", "at": [5, 0, 0], "clearance": 1, **on},
+            ],
+            "loads": [
+                {"body": "T", "torque": [0, 0, -1e5]},
+                {"body": "T", "at": [-1, 0, 0], "force": [0, 0, -0.01]},
+            ],
+        }
+    )
+    result = jointplay.solve(model)
+    result.check()
+    low = result.joints["low"].contacts[0]
+    assert low.in_contact and low.gap_used == pytest.approx(1.0, abs=1e-12)
+    # forces are certified to 1e-8 of the largest (the pins' 2e4 N): 2e-4 N
+    force = {name: result.joints[name].contacts[0].force_magnitude for name in ("low", "a", "b")}
+    assert force["low"] == pytest.approx(0.002, abs=2e-4)
+    assert force["a"] == pytest.approx(0.004, abs=2e-4)
+    assert force["b"] == pytest.approx(0.004, abs=2e-4)
+    # it turns about the line through a and b by the low point's 0.1 mm over 7.5 mm
+    assert abs(result.bodies["T"].rotation[1]) == pytest.approx(0.1 / 7.5, abs=1e-8)
+
+
+BESIDE: list[dict[str, Any]] = [
+    {
+        "name": "j0",
+        "type": "revolute",
+        "between": ["G", "B1"],
+        "at": [0.0, 0.0, 0.0],
+        "axis": [0.0, 0.0, 1.0],
+        "clearance": 1.0,
+        "length": 5.0,
+        "axial_clearance": 1.0,
+    },
+    {
+        "name": "j1",
+        "type": "point",
+        "between": ["G", "B1"],
+        "at": [5.0, 0.0, 0.0],
+        "axis": [0.0, 1.0, 0.0],
+        "gap": 3.1622776601683795,
+    },
+    {
+        "name": "j2",
+        "type": "point",
+        "between": ["G", "B1"],
+        "at": [5.0, 0.0, 0.0],
+        "axis": [-0.0, -1.0, -0.0],
+    },
+    {
+        "name": "j3",
+        "type": "cylindrical",
+        "between": ["G", "B2"],
+        "at": [0.0, 0.0, 0.0],
+        "axis": [0.0, 0.0, 1.0],
+        "clearance": 1.0,
+        "length": 5.0,
+    },
+    {
+        "name": "j4",
+        "type": "cylindrical",
+        "between": ["G", "B2"],
+        "at": [5.0, 0.0, 0.0],
+        "axis": [0.0, 1.0, 0.0],
+        "clearance": 1.0,
+        "length": 5.0,
+    },
+    {
+        "name": "j5",
+        "type": "cylindrical",
+        "between": ["G", "B3"],
+        "at": [0.0, 0.0, 0.0],
+        "axis": [0.0, 0.0, 1.0],
+        "clearance": 1.0,
+        "length": 5.0,
+    },
+    {
+        "name": "j6",
+        "type": "cylindrical",
+        "between": ["G", "B3"],
+        "at": [5.0, 0.0, 0.0],
+        "axis": [0.0, 1.0, 0.0],
+        "clearance": 1.0,
+        "length": 5.0,
+    },
+]
