@@ -800,3 +800,34 @@ def test_a_sweep_refuses_a_zone_s_size() -> None:
     model = pivoted_shaft(bore={"deviation": {"position": "20 um"}})
     with pytest.raises(jointplay.ModelError, match="sweep its mean"):
         Sweep((Vary("joints[l2].deviation.position.diameter", ("10 um", "20 um")),)).run(model)
+
+
+def test_studies_with_deviations_do_not_depend_on_the_global_frame() -> None:
+    """The example turned and shifted as a whole: zones live in the joint
+    frames, so the draws are the same parts, the tip's excursion has the
+    same size in every sample, the contributions the same shares, and the
+    envelope the same reach."""
+    from jointplay.studies.contributions import Contributions
+    from jointplay.studies.envelope import Envelope
+    from strategies import moved
+
+    data = jointplay.load(EXAMPLE).model_dump(by_alias=True, exclude_none=True)
+    c, s = np.cos(0.7), np.sin(0.7)
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ np.array(
+        [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
+    )
+    t = np.array([10.0, -20.0, 5.0])
+    turned = moved(data, R, t)
+    for point in turned["points"]:
+        point["at"] = (R @ np.asarray(point["at"], dtype=float) + t).tolist()
+    a, b = jointplay.model_from_dict(data), jointplay.model_from_dict(turned)
+    mc_a = MonteCarlo(samples=500, seed=3).run(a)
+    mc_b = MonteCarlo(samples=500, seed=3).run(b)
+    assert np.array_equal(mc_a.deviations, mc_b.deviations)
+    assert np.allclose(mc_b.displacement[:, 0], mc_a.displacement[:, 0] @ R.T, atol=MM, rtol=0)
+    ca, cb = Contributions().run(a), Contributions().run(b)
+    assert ca.plays == cb.plays
+    assert np.allclose(cb.worst_case, ca.worst_case, atol=1e-6, rtol=0)  # percent
+    assert np.allclose(cb.rss, ca.rss, atol=1e-6, rtol=0)
+    ea, eb = Envelope("B").run(a), Envelope("B").run(b)
+    assert eb.largest == pytest.approx(ea.largest, abs=MM)
