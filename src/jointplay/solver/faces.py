@@ -222,21 +222,6 @@ def active_set(
     r = np.where(stack.r > 0, stack.r, ws.max_radius)
     slack = (stack.r - level) / r
     held = np.flatnonzero(lam / lam_max > np.maximum(slack, st.feasibility_tolerance))
-    return _split_at_apex(ws, stack, held, rho, r, lam, f)
-
-
-def _split_at_apex(
-    ws: Workspace,
-    stack: BallStack,
-    held: IntArray,
-    rho: FloatArray,
-    r: FloatArray,
-    lam: FloatArray,
-    f: FloatArray,
-) -> FaceKey:
-    """The cones ``held`` as a face key: on their surface, or at their apex
-    (no rows, or at the centre with the force inside the cone)."""
-    st = ws.settings
     f_norm = np.sqrt(stack.segment_sum(f * f))
     apex = (stack.k == 0) | (
         (rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * np.maximum(lam, 0.0))
@@ -244,22 +229,3 @@ def _split_at_apex(
     surface = tuple(int(i) for i in held if not apex[i])
     linear = tuple(int(i) for i in held if apex[i])
     return surface, linear
-
-
-def with_loaded(ws: Workspace, point: Point, key: FaceKey) -> FaceKey:
-    """``key`` and every other cone that ``point``'s forces load (above
-    ``positive_force`` of the largest): each optimal position is
-    complementary to these forces, so each such cone touches on the optimal
-    face. The interior point's key can miss one whose force is small next
-    to the others (a 0.01 N load on a table turned by 1e5 N*mm) and whose
-    slack it left large: the tie's least-norm point then left it clear."""
-    stack = ws.stack
-    top = float(np.max(point.lam, initial=0.0))
-    loaded = np.flatnonzero(point.lam > ws.settings.positive_force * top)
-    extra = np.array([i for i in loaded if i not in {*key[0], *key[1]}], dtype=np.intp)
-    if not extra.size:
-        return key
-    _, rho, _ = stack.levels(point.x)
-    r = np.where(stack.r > 0, stack.r, ws.max_radius)
-    surface, linear = _split_at_apex(ws, stack, extra, rho, r, point.lam, point.f)
-    return tuple(sorted({*key[0], *surface})), tuple(sorted({*key[1], *linear}))

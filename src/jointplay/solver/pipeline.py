@@ -244,7 +244,6 @@ def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Poi
     if faces.is_determined(ws, faces.face_of(ws, key), optimum.x):
         return optimum
     optimum.active = None  # the face is not a warm start: x is not unique
-    key = faces.with_loaded(ws, optimum, key)
     tied = ties.least_norm(ws, sigma, optimum, key)
     tied.tie = key  # but the batch solves other loads on it (``Face.tie_rows``)
     return tied

@@ -42,6 +42,7 @@ def face_equalities(
     u = v[at] / np.repeat(np.maximum(rho[idx], TINY), stack.k[idx])
     rows: list[Matrix] = [stack.A[at]]
     rhs: list[FloatArray] = [centres[at] + np.repeat(reach[plain], stack.k[idx]) * u]
+    size = np.where(plain, stack.k[cones], 0)  # each cone's rows, in ``which`` order
     for j in np.flatnonzero(~plain):
         i = int(cones[j])
         c = centres[stack.start[i] : stack.start[i] + stack.k[i]]
@@ -54,7 +55,15 @@ def face_equalities(
         else:
             rows.append(stack.face_rows(i))
             rhs.append(np.append(c, reach[j]))
-    return linalg.vstack(rows, ws.m), np.concatenate(rhs)
+        size[j] = rows[-1].shape[0]
+    # back in ``which`` order, cone by cone: the least-norm program's round-off
+    # then does not depend on how the cones were grouped here
+    grouped = np.concatenate([np.flatnonzero(plain), np.flatnonzero(~plain)])
+    first = np.empty(len(cones), dtype=np.intp)
+    first[grouped] = np.cumsum(size[grouped]) - size[grouped]
+    at_end = np.cumsum(size) - size  # each cone's first row in ``which`` order
+    order = np.repeat(first - at_end, size) + np.arange(int(np.sum(size)))
+    return linalg.vstack(rows, ws.m)[order], np.concatenate(rhs)[order]
 
 
 def least_norm(
