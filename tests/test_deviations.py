@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import jointplay
-from conftest import MM, RAD
+from conftest import MM, RAD, spherical_shaft
 from jointplay.studies.montecarlo import MonteCarlo
 
 J = 0.1  # the bore's diametral play (mm)
@@ -709,38 +709,29 @@ def test_the_envelope_over_a_guide_s_tilt_zone_holds_every_sample() -> None:
     is within ``support_gap`` of the dual bound."""
     from jointplay.studies.envelope import Envelope
 
-    model = jointplay.model_from_dict(
-        {
-            "bodies": [{"name": "S0", "ground": True}, {"name": "S1"}],
-            "joints": [
-                {
-                    "name": "l1",
-                    "type": "spherical",
-                    "between": ["S0", "S1"],
-                    "at": [0, 0, 0],
-                    "clearance": 0.05,
-                },
-                {
-                    "name": "l2",
-                    "type": "prismatic",
-                    "between": ["S0", "S1"],
-                    "at": [200, 0, 0],
-                    "axis": [1, 0, 0],
-                    "length": 40,
-                    "width": 20,
-                    "height": 20,
-                    "clearance_y": 0.04,
-                    "clearance_z": 0.04,
-                    "deviation": {
-                        "position": "0.02 mm",
-                        "orientation": {"tolerance": "0.01 mm", "over": "40 mm"},
-                    },
-                },
-            ],
-            "loads": [{"body": "S1", "at": [300, 0, 0], "force": [0.3, -1, 0.5]}],
-            "points": [{"name": "B", "body": "S1", "at": [300, 0, 0]}],
-        }
+    guide = {
+        "name": "l2",
+        "type": "prismatic",
+        "between": ["S0", "S1"],
+        "at": [200, 0, 0],
+        "axis": [1, 0, 0],
+        "length": 40,
+        "width": 20,
+        "height": 20,
+        "clearance_y": 0.04,
+        "clearance_z": 0.04,
+        "deviation": {
+            "position": "0.02 mm",
+            "orientation": {"tolerance": "0.01 mm", "over": "40 mm"},
+        },
+    }
+    data = spherical_shaft(
+        loads=[{"body": "S1", "at": [300, 0, 0], "force": [0.3, -1, 0.5]}],
+        points=[{"name": "B", "body": "S1", "at": [300, 0, 0]}],
     )
+    ball = {**data["joints"][0], "clearance": 0.05}  # type: ignore[index]
+    data["joints"] = [ball, guide]
+    model = jointplay.model_from_dict(data)
     env = Envelope("B").run(model)
     mc = MonteCarlo(samples=2_000, seed=7).run(model)
     assert np.all(env.contains(mc.displacement[:, 0], tol=MM))
