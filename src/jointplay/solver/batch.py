@@ -301,8 +301,8 @@ def _newton_batch(
     Returns (accepted mask, x, full multipliers, force vectors, their
     certificate, wrong-set mask); a row is accepted only if it converged
     and passes the certificate of a unique optimum. The wrong-set rows
-    converged with no force pulling to a point that crosses a contact
-    outside the set: their optimum lies on another set.
+    converged, Newton's forces all strictly positive, to a point that
+    crosses a contact outside the set: their optimum lies on another set.
     """
     B = g_hat.shape[0]
     stack = ws.stack
