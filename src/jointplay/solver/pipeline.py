@@ -273,8 +273,14 @@ def refine_active(
     both = np.array([*key[0], *key[1]], dtype=np.intp)
     top = float(np.max(point.lam, initial=0.0))
     faint = set(both[point.lam[both] < st.faint * top].tolist())
+    # and one it loads faintly but clearly (a 0.01 N push under a 1e5 N*mm
+    # turn) may be one the interior point left short of its limit: its
+    # slack outweighs its relative force, and without it the set's
+    # equations leave the push unheld
+    loaded = set(np.flatnonzero(point.lam > st.positive_force * top).tolist())
     seen: set[frozenset[int]] = set()
-    for start in ({*key[0], *key[1]}, near, {*key[0], *key[1]} - faint):
+    held_now = {*key[0], *key[1]}
+    for start in (held_now, near, held_now | loaded, held_now - faint):
         found = active_set_steps(ws, g_hat, sigma, point, start, at_apex, seen)
         if found is not None:
             return found
