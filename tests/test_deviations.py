@@ -10,6 +10,7 @@ import pytest
 
 import jointplay
 from conftest import MM, RAD, spherical_shaft
+from jointplay.geometry import FloatArray
 from jointplay.studies.montecarlo import MonteCarlo
 
 J = 0.1  # the bore's diametral play (mm)
@@ -751,12 +752,9 @@ def test_a_tilt_tolerance_alone_is_over_the_joint_s_length() -> None:
     assert tilt.radius == pytest.approx(0.01 / 40, rel=1e-15)
 
 
-def test_a_guide_tilted_by_its_zone_is_batched_like_single_solves() -> None:
-    """The carriage's guide with a tilt zone rests on a tilting face (a
-    face on its edge), whose uniqueness depends on the position: the batch
-    declined every such row (1,000 samples: 1,000 full solves, 14 s). It now
-    checks each row's face at its own position and batches it; each row
-    matches its own full solve."""
+def tilted_carriage_samples(B: int) -> tuple[Any, FloatArray, FloatArray, FloatArray]:
+    """The carriage with a 0.02 mrad tilt zone on its guide: a workspace
+    and B samples' (work, radii, centres)."""
     from jointplay.solver.workspace import Workspace
     from jointplay.studies.variation import deviation_map, play_map
 
@@ -767,12 +765,22 @@ def test_a_guide_tilted_by_its_zone_is_batched_like_single_solves() -> None:
     model = jointplay.model_from_dict(data)
     ws = Workspace.of(model)
     rng = np.random.default_rng(11)
-    B = 80
     pmap, dmap = play_map(ws.asm, model.name), deviation_map(ws.asm)
     tilts = dmap.sample(rng, B)
     radii = pmap.radii(pmap.sample(rng, B)) + dmap.radii_shift(tilts)
     centres = dmap.centres(tilts)
     work = np.repeat(ws.asm.g[None], B, axis=0)
+    return ws, work, radii, centres
+
+
+def test_a_guide_tilted_by_its_zone_is_batched_like_single_solves() -> None:
+    """The carriage's guide with a tilt zone rests on a tilting face (a
+    face on its edge), whose uniqueness depends on the position: the batch
+    declined every such row (1,000 samples: 1,000 full solves, 14 s). It now
+    checks each row's face at its own position and batches it; each row
+    matches its own full solve."""
+    B = 80
+    ws, work, radii, centres = tilted_carriage_samples(B)
     batch = ws.solve_batch(work, radii, centres)
     assert np.sum(batch.batched) >= 0.9 * B
     for i in range(0, B, 8):
@@ -781,6 +789,47 @@ def test_a_guide_tilted_by_its_zone_is_batched_like_single_solves() -> None:
         body = batch.body_displacement("carriage")[i]
         assert np.allclose(body[:3], ref.bodies["carriage"].translation, atol=MM, rtol=0)
         assert np.allclose(body[3:], ref.bodies["carriage"].rotation, atol=RAD, rtol=0)
+
+
+def test_positions_only_keep_newton_s_forces_where_they_certify(monkeypatch: Any) -> None:
+    """The tilted guide's four corners are redundant: each sample's forces
+    were split by the documented rule (a least-squares problem per sample:
+    its contact directions differ), though Monte Carlo reads positions only.
+    Asked for positions only, a row keeps the forces of Newton on the
+    independent corners where they are strictly positive, pass the
+    certificate and pin the position: the same positions, no split."""
+    from jointplay.solver import forces
+
+    B = 60
+    ws, work, radii, centres = tilted_carriage_samples(B)
+    split_rows = []
+    least_squares_rows = forces.least_squares_rows
+
+    def counted(*args: Any, **kwargs: Any) -> Any:
+        split_rows.append(len(args[1]))
+        return least_squares_rows(*args, **kwargs)
+
+    monkeypatch.setattr(forces, "least_squares_rows", counted)
+    split = ws.solve_batch(work, radii, centres)
+    assert split.forces is not None and sum(split_rows) >= 0.9 * B
+    split_rows.clear()
+    positions = ws.solve_batch(work, radii, centres, forces=False)
+    assert positions.forces is None and sum(split_rows) <= 0.1 * B
+    assert np.sum(positions.batched) >= 0.9 * B
+    for got, ref in ((positions, split), (positions, None)):
+        for i in range(0, B, 6):
+            body = got.body_displacement("carriage")[i]
+            if ref is None:
+                alone = ws.with_radii(radii[i], centres[i]).solve()
+                expected = np.r_[
+                    alone.bodies["carriage"].translation, alone.bodies["carriage"].rotation
+                ]
+            else:
+                expected = ref.body_displacement("carriage")[i]
+            assert np.allclose(body[:3], expected[:3], atol=MM, rtol=0)
+            assert np.allclose(body[3:], expected[3:], atol=RAD, rtol=0)
+    assert np.max(positions.feasibility_mm) <= 1e-9
+    assert np.max(positions.equilibrium_residual) <= 1e-8
 
 
 def test_a_sweep_refuses_a_zone_s_size() -> None:

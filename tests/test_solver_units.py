@@ -185,3 +185,24 @@ def test_the_status_map_and_the_program_agree_on_a_solve(paper: Workspace) -> No
     point = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
     z = np.asarray(sol.z)
     assert np.allclose(z[ws.interior_program.soc_first], point.lam, rtol=1e-6, atol=1e-9)
+
+
+def test_the_batched_rank_test_gives_the_svds_verdict() -> None:
+    # stacks of 11 x 6 matrices with chosen singular values: well conditioned,
+    # rank deficient, and smallest singular value either side of rcond (which
+    # the Gram matrix cannot resolve: the SVD decides those)
+    rng = np.random.default_rng(3)
+    rcond = 1e-9
+    smallest = [1.0, 1e-3, 1e-7, 3e-9, 1e-9 * 1.01, 1e-9 * 0.99, 1e-12, 0.0]
+    stacks = []
+    for s in smallest:
+        U, _ = np.linalg.qr(rng.normal(size=(11, 6)))
+        V, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+        stacks.append(U @ np.diag([7.0, 3.0, 2.0, 1.0, 0.5, 7.0 * s]) @ V.T)
+    J = np.array([*stacks, np.zeros((11, 6))])
+    sv = np.linalg.svd(J, compute_uv=False)
+    expected = (sv[:, 0] > 0) & (sv[:, 5] > rcond * sv[:, 0])
+    np.testing.assert_array_equal(linalg.full_column_rank_rows(J, rcond), expected)
+    assert expected.tolist() == [True] * 5 + [False] * 4  # the cases are what they say
+    # fewer rows than unknowns never pin them
+    assert not np.any(linalg.full_column_rank_rows(J[:, :5], rcond))

@@ -9,6 +9,7 @@ unless a field says otherwise.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 
@@ -150,3 +151,11 @@ DEFAULT = SolverSettings()
 #: A positive floor for dividing by a size that may be 0 (not a tolerance:
 #: any size it replaces is exactly 0).
 TINY = 1e-300
+
+#: Eigenvalues of a Gram matrix ``J^T J`` above this fraction of the largest
+#: are above their round-off (a few ``m * eps`` of the largest) by orders of
+#: magnitude, so ``J``'s singular values are surely above any rank tolerance
+#: (``free_motion_rcond`` squared is 1e-18, below round-off): a rank test may
+#: trust them and leave only the rows below to the SVD (not a tolerance of
+#: any answer: both routes give the SVD's verdict).
+GRAM_CERTAIN = sys.float_info.epsilon**0.5

@@ -44,7 +44,8 @@ class BatchSolution:
     """Equilibria of B samples; every row passed its certificate.
 
     ``x``: scaled unknowns (B, m). ``forces``: ball-contact forces (B, n) in N,
-    in the order of ``Assembly.balls``. ``batched[i]`` says whether sample i
+    in the order of ``Assembly.balls`` (None when asked for positions
+    only). ``batched[i]`` says whether sample i
     was solved by the batched Newton path (else by the full solver).
     ``assembled[i]`` is False for a sample whose own deviations leave no
     position inside every clearance (its parts cannot be put together): its
@@ -53,7 +54,7 @@ class BatchSolution:
 
     asm: Assembly
     x: FloatArray
-    forces: FloatArray
+    forces: FloatArray | None
     potential_energy: FloatArray  # (B,) N*mm
     feasibility_mm: FloatArray  # (B,) largest overshoot of a clearance (0: feasible)
     equilibrium_residual: FloatArray  # (B,) relative
@@ -92,6 +93,8 @@ def solve_batch(
     work: FloatArray,
     radii: FloatArray | None = None,
     centres: FloatArray | None = None,
+    *,
+    forces: bool = True,
 ) -> BatchSolution:
     """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
     cone radii (``Assembly.balls`` order; default: the model's); ``centres``
@@ -103,7 +106,7 @@ def solve_batch(
     (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
     samples/s against 145,000)."""
     with _blas().limit(limits=1, user_api="blas"):
-        return _solve_batch(ws, work, radii, centres)
+        return _solve_batch(ws, work, radii, centres, forces)
 
 
 @functools.cache
@@ -115,7 +118,11 @@ def _blas() -> Any:
 
 
 def _solve_batch(
-    ws: Workspace, work: FloatArray, radii: FloatArray | None, centres: FloatArray | None
+    ws: Workspace,
+    work: FloatArray,
+    radii: FloatArray | None,
+    centres: FloatArray | None,
+    split_forces: bool,
 ) -> BatchSolution:
     from scipy.spatial import cKDTree  # here: a single solve need not import it
 
@@ -212,6 +219,7 @@ def _solve_batch(
                         r[now],
                         c[now],
                         (r[near], c[near]),
+                        split_forces,
                     )
                     failed[now[~ok]] += 1
                     failed[now[wrong_set]] = give_up
@@ -260,7 +268,7 @@ def _solve_batch(
     return BatchSolution(
         asm=ws.asm,
         x=x,
-        forces=lam * norms[:, None] / ws.asm.s,
+        forces=lam * norms[:, None] / ws.asm.s if split_forces else None,
         potential_energy=-np.einsum("bm,bm->b", work, x),
         feasibility_mm=np.maximum(feas, 0.0) * ws.asm.s,
         equilibrium_residual=residual,
@@ -291,12 +299,15 @@ def _newton_batch(
     r: FloatArray,
     c: FloatArray,
     near: tuple[FloatArray, FloatArray] | None = None,
+    split_forces: bool = True,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None, BoolArray]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
     each from its own start (rows of ``x0``, ``lam0``, ``f0``: the nearest
     solved sample's answer and split) and with its own cone radii (rows of
     ``r``) and centres (rows of ``c``); ``near``: the start's own radii and
-    centres (default: the same as the rows').
+    centres (default: the same as the rows'). ``split_forces``: else the
+    positions alone matter, and a redundant set's rows keep Newton's forces
+    where those certify them.
 
     Returns (accepted mask, x, full multipliers, force vectors, their
     certificate, wrong-set mask); a row is accepted only if it converged
@@ -369,8 +380,6 @@ def _newton_batch(
         ws.settings,
     )
     lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
-    if face.determined is None:  # a tilting face: whether it pins x depends on x
-        conv &= faces.determined_rows(ws, face, x, c_surface)
 
     lam[:, list(surface)] = lam_s
     v, rho = face.stack.norms(x, c_surface)
@@ -378,19 +387,29 @@ def _newton_batch(
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
     st = ws.settings
-    # Newton's own forces, each strictly positive (a face's inside its rim)
-    lam_a = lam[:, list(surface) + list(linear)]
-    positive = st.positive_force
-    strict = (
-        np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1)
-        if lam_a.shape[1]
-        else np.ones(B, dtype=bool)
+
+    def pushing(on_surface: list[int], at_apex: list[int]) -> BoolArray:
+        """Newton's forces on these cones, each strictly positive (a face's
+        strictly inside its rim)."""
+        lam_a = lam[:, on_surface + at_apex]
+        positive = st.positive_force
+        if not lam_a.shape[1]:
+            return np.ones(B, dtype=bool)
+        out = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1)
+        if at_apex:
+            lin = stack.take(at_apex)
+            f_norm = np.sqrt(lin.segment_sum(f[:, stack.rows_of(at_apex)] ** 2))
+            inside = (f_norm < (1.0 - positive) * lam[:, at_apex]) | (lin.k == 0)
+            out &= np.all(inside, axis=1)
+        return np.asarray(out)
+
+    strict = pushing(list(surface), list(linear))
+    # a redundant set's: those of its independent part (the others carry none)
+    e_kept = set(e_keep.tolist())
+    kept_strict = pushing(
+        [surface[i] for i in s_keep],
+        [linear[j] for j in range(len(linear)) if ne0 + face.lam_rows[j] in e_kept],
     )
-    if linear:
-        lin = stack.take(linear)
-        f_norm = np.sqrt(lin.segment_sum(f[:, face.linear_rows] ** 2))
-        inside = (f_norm < (1.0 - positive) * lam[:, list(linear)]) | (lin.k == 0)
-        strict &= np.all(inside, axis=1)
     # contacts that touch outside the set (unloaded in the neighbour's split)
     # may share the load: the split rule decides, as when the set is redundant
     in_set = np.zeros(len(ws.balls), dtype=bool)
@@ -409,6 +428,14 @@ def _newton_batch(
     # each strictly positive
     shared = np.full(B, redundant) | outside
     ok = conv.copy()
+    # positions only: Newton's own forces, each strictly positive, certify x
+    # as they are where the contacts they load pin it (the split would only
+    # share them out for the report)
+    own = np.zeros(B, dtype=bool) if split_forces else shared & kept_strict & conv
+    if np.any(own):
+        rows = np.flatnonzero(own)
+        own[rows] = _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
+        shared &= ~own
     if np.any(shared):
         rows = np.flatnonzero(shared)
         apex = st.feasibility_tolerance * ws.max_radius
@@ -425,7 +452,7 @@ def _newton_batch(
             c[rows],
         )
         ok[rows] &= split & _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
-    ok[~shared] &= strict[~shared]
+    ok[~shared] &= (strict | own)[~shared]
     # rigid joints' forces by least squares, for split and own rows alike
     # (the batch reports contact forces only)
     checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
@@ -435,7 +462,16 @@ def _newton_batch(
     # another contact, no other start on this set does better
     crossed = checks.feasibility > st.feasibility_tolerance * ws.max_radius
     wrong_set = conv & strict & crossed if tie is None else np.zeros(B, dtype=bool)
-    return ok & passed, x, lam, f, checks, wrong_set
+    ok &= passed
+    if face.determined is None:
+        # a tilting face: whether it pins x depends on x. A split row's x is
+        # unique where its loaded contacts pin it (``_pinned``), whatever the
+        # face; the others need the face to pin it
+        rows = np.flatnonzero((ok & ~shared & ~own) | wrong_set)
+        pins = faces.determined_rows(ws, face, x[rows], c_surface[rows])
+        ok[rows] &= pins
+        wrong_set[rows] &= pins
+    return ok, x, lam, f, checks, wrong_set
 
 
 def _predicted(
@@ -590,8 +626,7 @@ def _pinned(
     if J.shape[1] < ws.m:
         return np.zeros(B, dtype=bool)
     first, same = linalg.distinct_rows(J.reshape(B, -1))  # each distinct system once
-    sv = np.linalg.svd(J[first], compute_uv=False)
-    return np.asarray(sv[:, ws.m - 1] > st.free_motion_rcond * sv[:, 0])[same]
+    return linalg.full_column_rank_rows(J[first], st.free_motion_rcond)[same]
 
 
 def _independent_rows(

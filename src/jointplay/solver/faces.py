@@ -195,9 +195,7 @@ def determined_rows(
     stacked = np.concatenate(rows, axis=1)
     if stacked.shape[1] < ws.m:
         return np.zeros(B, dtype=bool)
-    sv = np.linalg.svd(stacked, compute_uv=False)
-    rank = np.sum(sv > ws.settings.free_motion_rcond * sv[:, :1], axis=1)
-    return np.asarray(ok & (sv[:, 0] > 0) & (rank == ws.m))
+    return ok & linalg.full_column_rank_rows(stacked, ws.settings.free_motion_rcond)
 
 
 def active_set(

@@ -401,10 +401,9 @@ def _work(asm: Assembly, Z: Any) -> Any:
 def _determined_rows(G: FloatArray, rcond: float) -> NDArray[np.bool_]:
     """For each row of a stack (B, m, n_y): whether G's columns are
     independent, so that a single split balances the loads."""
-    if not G.shape[2] or G.shape[2] > G.shape[1]:
+    if not G.shape[2]:
         return np.zeros(len(G), dtype=bool)
-    sv = np.linalg.svd(G, compute_uv=False)
-    return np.asarray(sv[:, -1] > rcond * sv[:, 0])
+    return linalg.full_column_rank_rows(G, rcond)
 
 
 def _wrenches(asm: Assembly, Z: Any) -> Any:

@@ -90,17 +90,25 @@ class Workspace:
         return pipeline.solve_loads(self, loads, exact=exact)
 
     def solve_batch(
-        self, work: FloatArray, radii: FloatArray | None = None, centres: FloatArray | None = None
+        self,
+        work: FloatArray,
+        radii: FloatArray | None = None,
+        centres: FloatArray | None = None,
+        *,
+        forces: bool = True,
     ) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of
         the loads' work per sample (build rows with ``Assembly.wrench_work``).
         ``radii`` (B, n): each sample's own plays, as scaled cone radii in the
         order of ``Assembly.balls`` (``variation.PlayMap.radii`` builds them).
         ``centres`` (B, rows): each sample's cone centres, stacked like the
-        rows of ``stack.A`` (``deviations.DeviationMap`` builds them)."""
+        rows of ``stack.A`` (``deviations.DeviationMap`` builds them).
+        ``forces``: split each sample's contact forces by the documented rule
+        (``BatchSolution.forces``); a study that reads positions only says
+        False and skips that split where Newton's own forces certify them."""
         from jointplay.solver.batch import solve_batch
 
-        return solve_batch(self, work, radii, centres)
+        return solve_batch(self, work, radii, centres, forces=forces)
 
     def with_radii(self, radii: FloatArray, centre: FloatArray | None = None) -> Workspace:
         """A workspace of the same mechanism with other plays: ``radii`` are

@@ -139,7 +139,7 @@ class Contributions:
         radii = pmap.radii(values[:, :n_plays]) + dmap.radii_shift(deviations)
         centres = dmap.centres(deviations) if dmap.variables else None
         ws = Workspace(asm)
-        batch = ws.solve_batch(work, radii, centres)
+        batch = ws.solve_batch(work, radii, centres, forces=False)
         names = [p.name for p in model.points]
         y = np.zeros((len(measures), len(values)))
         for k, m in enumerate(measures):

@@ -176,7 +176,7 @@ class Envelope:
             return self._over_zones(rigid, ws, dmap, point.body, at, directions, mode)
 
         def motion_of(work: FloatArray) -> FloatArray:
-            motion = ws.solve_batch(work).body_displacement(point.body)
+            motion = ws.solve_batch(work, forces=False).body_displacement(point.body)
             d = np.asarray(motion[:, :3] + np.cross(motion[:, 3:], at))
             d[np.abs(d) < DEFAULT.round_off * asm.s] = 0.0  # round-off of exact zeros
             return d

@@ -176,7 +176,7 @@ def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
     if dmap.variables:
         radii = radii + dmap.radii_shift(deviations)
         centres = dmap.centres(deviations)
-    batch = ws.solve_batch(work, radii, centres)
+    batch = ws.solve_batch(work, radii, centres, forces=False)
     displacement = np.zeros((size, len(model.points), 3))
     for p, point in enumerate(model.points):
         motion = batch.body_displacement(point.body)
