@@ -308,7 +308,7 @@ def test_wobbly_table_example_rocks_onto_the_short_foot_by_hand() -> None:
     )
 
 
-def test_a_faint_push_under_a_large_turn_rocks_the_table_onto_its_low_foot() -> None:
+def faintly_pushed_table() -> jointplay.Model:
     # A table turned hard in two centring balls (1e5 N*mm about z) and pushed
     # down by 0.01 N between its two level feet (at x = -2.5) and its low one
     # (x = 5, 0.1 mm down): it rocks about the level feet onto the low one,
@@ -322,7 +322,7 @@ def test_a_faint_push_under_a_large_turn_rocks_the_table_onto_its_low_foot() -> 
     ball = {"type": "sphere_in_cylinder", "between": ["G", "T"], "axis": up, "clearance": 1.0}
     stop = {"type": "point", "between": ["G", "idle"], "at": [5.0, 0.0, 0.0]}
     c, s = np.cos(2 * np.pi / 3), np.sin(2 * np.pi / 3)
-    m = model_from_dict(
+    return model_from_dict(
         {
             "bodies": [{"name": "G", "ground": True}, {"name": "T"}, {"name": "idle"}],
             "joints": [
@@ -350,6 +350,10 @@ def test_a_faint_push_under_a_large_turn_rocks_the_table_onto_its_low_foot() -> 
             ],
         }
     )
+
+
+def test_a_faint_push_under_a_large_turn_rocks_the_table_onto_its_low_foot() -> None:
+    m = faintly_pushed_table()
     r = solved(m)
     tilt = 0.1 / 7.5  # about y, through the level feet's line x = -2.5
     np.testing.assert_allclose(r.bodies["T"].rotation, [0.0, tilt, -0.2], atol=RAD)
@@ -359,3 +363,30 @@ def test_a_faint_push_under_a_large_turn_rocks_the_table_onto_its_low_foot() -> 
     got = [contact(r, j, "plane").force[0] for j in ("low", "left", "right")]
     np.testing.assert_allclose(got, [low, (0.01 - low) / 2, (0.01 - low) / 2], atol=2e-4)
     np.testing.assert_allclose(r.bodies["idle"].translation, 0.0, atol=MM)
+
+
+def test_the_certificate_refuses_the_table_lifted_off_its_loaded_foot() -> None:
+    """The wrong answer that was once printed: the table of the test above
+    left flat, off its low foot, which keeps its force. It holds every
+    clearance and balances every body; only complementarity tells, and only
+    per contact over its own play: the foot's force is 1e-7 of the largest,
+    its 0.1 mm play all unused (over the largest play, 3.2 mm, that was
+    3e-9 and passed)."""
+    from dataclasses import replace
+
+    from jointplay.solver import certificate, pipeline
+
+    ws = Workspace.of(faintly_pushed_table())
+    g = ws.asm.g
+    g_hat = g / np.linalg.norm(g)
+    sigma = np.zeros(len(ws.balls))
+    right = pipeline.optimum(ws, g_hat, sigma)
+    i = ws.asm.body_index["T"]
+    omega, v_origin = np.array([0.0, 0.0, -0.2]), np.array([0.0, 0.5, 0.0])
+    x = right.x.copy()
+    x[6 * i : 6 * i + 3] = (v_origin + np.cross(omega, ws.asm.body_ref[i])) / ws.asm.s
+    x[6 * i + 3 : 6 * i + 6] = omega / ws.asm.turn[i]
+    lifted = certificate.certify(ws, g_hat, sigma, replace(right, x=x, certificate=None))
+    assert lifted.feasibility_mm <= 1e-9 and lifted.equilibrium_residual <= 1e-8
+    assert lifted.complementarity > 1e-8 and not lifted.certified
+    assert certificate.certify(ws, g_hat, sigma, right).certified

@@ -178,7 +178,10 @@ def check(
         reach = radii + sigma * np.maximum(lam, 0.0)
         feas = np.max(level - reach, axis=1)
         gap = np.abs(lam) * np.abs(reach - level) + np.abs(lam * rho - stack.segment_sum(f * v))
-        comp = np.max(gap, axis=1) / ws.max_radius
+        # each contact's over its own reach: a faint force on a small play
+        # left clear is not hidden by a large play elsewhere
+        own = np.where(reach > 0, reach, ws.max_radius)
+        comp = np.max(gap / own, axis=1)
         min_force = np.min(lam, axis=1)
         outside = np.max(np.sqrt(stack.segment_sum(f * f)) - lam, axis=1)
         force_scale = np.maximum(1.0, np.max(np.abs(lam), axis=1))
