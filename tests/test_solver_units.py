@@ -206,3 +206,14 @@ def test_the_batched_rank_test_gives_the_svds_verdict() -> None:
     assert expected.tolist() == [True] * 5 + [False] * 4  # the cases are what they say
     # fewer rows than unknowns never pin them
     assert not np.any(linalg.full_column_rank_rows(J[:, :5], rcond))
+    # a coarse rcond, which the Gram route alone would not resolve (review):
+    # a smallest singular value 1e-3 of the largest is below 3e-3
+    coarse = linalg.full_column_rank_rows(J, 3e-3)
+    assert coarse.tolist() == [True] + [False] * 8
+    # any scale: no overflow or denormals in the Gram matrices; no verdict
+    # on a matrix with a non-finite entry
+    for scale in (1e-160, 1e155):
+        np.testing.assert_array_equal(linalg.full_column_rank_rows(J * scale, rcond), expected)
+    bad = J[:2].copy()
+    bad[0, 0, 0], bad[1, 0, 0] = np.inf, np.nan
+    assert not np.any(linalg.full_column_rank_rows(bad, rcond))

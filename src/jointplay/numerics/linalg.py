@@ -115,18 +115,26 @@ def full_column_rank(rows: Matrix, m: int, rcond: float = DEFAULT.free_motion_rc
 def full_column_rank_rows(J: FloatArray, rcond: float) -> NDArray[np.bool_]:
     """For a stack of small matrices (B, r, m): whether each has ``m``
     singular values above ``rcond`` of its largest. The Gram matrices'
-    eigenvalues decide the rows that are clearly of full rank (most, at a
-    fifth of an SVD's cost); the others get their SVD."""
+    eigenvalues (of each matrix scaled to entries of at most 1) decide the
+    rows that are clearly of full rank, at about half an SVD's cost; the
+    others get their SVD. A row with a non-finite entry pins nothing."""
     B, r, m = J.shape
+    if not m:
+        return np.ones(B, dtype=bool)
     if r < m or not B:
         return np.zeros(B, dtype=bool)
-    ev = np.linalg.eigvalsh(J.transpose(0, 2, 1) @ J)
-    full = ev[:, 0] > GRAM_CERTAIN * ev[:, -1]
-    unsure = np.flatnonzero(~full)
+    finite = np.all(np.isfinite(J), axis=(1, 2))
+    size = np.max(np.abs(np.where(finite[:, None, None], J, 0.0)), axis=(1, 2))
+    scaled = J / np.where(finite & (size > 0), size, 1.0)[:, None, None]
+    scaled[~finite] = 0.0
+    ev = np.linalg.eigvalsh(scaled.transpose(0, 2, 1) @ scaled)
+    # certain: above round-off, and above rcond squared with room to spare
+    full = ev[:, 0] > max(GRAM_CERTAIN, 4.0 * rcond**2) * ev[:, -1]
+    unsure = np.flatnonzero(~full & finite)
     if unsure.size:
-        sv = np.linalg.svd(J[unsure], compute_uv=False)
+        sv = np.linalg.svd(scaled[unsure], compute_uv=False)
         full[unsure] = (sv[:, 0] > 0) & (sv[:, m - 1] > rcond * sv[:, 0])
-    return np.asarray(full)
+    return np.asarray(full & finite)
 
 
 class SingularSystemError(Exception):

@@ -254,9 +254,11 @@ def refine_active(
 ) -> faces.Point | None:
     """A certified optimum, from the KKT equations of the active set
     ``key`` read from the interior-point answer or, failing that, of every
-    cone near its limit; if some force comes out negative or a cone is
-    pushed past its limit, take a few steps of an active-set method: drop
-    those cones, add these. A large mechanism needs them: there an
+    cone near its limit, of ``key`` with every cone the interior point
+    loads strictly, or of ``key`` without its faint cones (each start once,
+    a set met before is not tried again); if some force comes out negative
+    or a cone is pushed past its limit, take a few steps of an active-set
+    method: drop those cones, add these. A large mechanism needs them: there an
     interior-point answer to 1e-10 cannot tell a slightly loaded contact
     from a nearly touching one. The optimum need not be unique (a tie)."""
     stack = ws.stack
