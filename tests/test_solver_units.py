@@ -206,6 +206,14 @@ def test_the_batched_rank_test_gives_the_svds_verdict() -> None:
     assert expected.tolist() == [True] * 5 + [False] * 4  # the cases are what they say
     # fewer rows than unknowns never pin them
     assert not np.any(linalg.full_column_rank_rows(J[:, :5], rcond))
+    # any two together: both of full rank take the Cholesky route (one
+    # factorization of the stack), any other pair the eigenvalues or the SVD
+    for i in range(len(J)):
+        for j in range(len(J)):
+            got = linalg.full_column_rank_rows(J[[i, j]], rcond)
+            np.testing.assert_array_equal(got, expected[[i, j]])
+            coarse = (sv[[i, j], 0] > 0) & (sv[[i, j], 5] > 3e-3 * sv[[i, j], 0])
+            np.testing.assert_array_equal(linalg.full_column_rank_rows(J[[i, j]], 3e-3), coarse)
     # a coarse rcond, which the Gram route alone would not resolve (review):
     # a smallest singular value 1e-3 of the largest is below 3e-3
     coarse = linalg.full_column_rank_rows(J, 3e-3)

@@ -625,8 +625,9 @@ def _pinned(
     J = np.concatenate(parts, axis=1)
     if J.shape[1] < ws.m:
         return np.zeros(B, dtype=bool)
-    first, same = linalg.distinct_rows(J.reshape(B, -1))  # each distinct system once
-    return linalg.full_column_rank_rows(J[first], st.free_motion_rcond)[same]
+    if np.all(J[0] == J):  # one system (a study whose contacts do not turn)
+        return np.repeat(linalg.full_column_rank_rows(J[:1], st.free_motion_rcond), B)
+    return linalg.full_column_rank_rows(J, st.free_motion_rcond)
 
 
 def _independent_rows(
