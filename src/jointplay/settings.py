@@ -156,7 +156,9 @@ TINY = 1e-300
 #: are above their round-off (a few ``m * eps`` of the largest) by orders of
 #: magnitude, so ``J``'s singular values are surely above a rank tolerance
 #: ``rcond`` whose square is far below it (``free_motion_rcond`` squared is
-#: 1e-18; a coarser one raises the bar to 4 rcond^2): a rank test may trust
-#: them and leave only the rows below to the SVD (not a tolerance of any
-#: answer: both routes give the SVD's verdict).
+#: 1e-18): a rank test may trust them and leave only the rows below to the
+#: SVD (not a tolerance of any answer: both routes give the SVD's verdict).
 GRAM_CERTAIN = sys.float_info.epsilon**0.5
+#: ... and above ``rcond`` squared by this factor (singular values above
+#: twice ``rcond``): the bar when ``rcond`` is coarse.
+GRAM_MARGIN = 4.0

@@ -20,7 +20,7 @@ from scipy.linalg import lapack
 
 from jointplay.geometry import FloatArray
 from jointplay.numerics import free_motions
-from jointplay.settings import DEFAULT, GRAM_CERTAIN
+from jointplay.settings import DEFAULT, GRAM_CERTAIN, GRAM_MARGIN
 
 #: Mechanisms with more unknowns than this (6 per moving body) are assembled
 #: into sparse matrices. Below it, dense LAPACK calls are faster.
@@ -117,9 +117,9 @@ def full_column_rank_rows(J: FloatArray, rcond: float) -> NDArray[np.bool_]:
     singular values above ``rcond`` of its largest.
 
     Each matrix is scaled to entries of at most 1 and its Gram matrix
-    ``G = J^T J`` formed. If every ``G - c tr(G) I`` has a Cholesky factor
-    (``c``: ``GRAM_CERTAIN``, or 4 rcond^2 if larger), every ``G``'s
-    smallest eigenvalue is above ``c`` of its largest, less Cholesky's
+    ``G = J^T J`` formed. If every ``G - c tr(G) I`` has a Cholesky
+    factor (``c``: ``GRAM_CERTAIN``, or ``GRAM_MARGIN`` rcond^2 if larger),
+    every ``G``'s smallest eigenvalue is above ``c`` of its largest, less Cholesky's
     backward error (a few ``m * eps`` of the trace): the SVD's verdict is
     "full rank" for all, at a fifth of the eigenvalues' cost. Else the
     eigenvalues decide the rows that are clearly of full rank, and the SVD
@@ -135,7 +135,7 @@ def full_column_rank_rows(J: FloatArray, rcond: float) -> NDArray[np.bool_]:
     scaled[~finite] = 0.0
     G = scaled.transpose(0, 2, 1) @ scaled
     # certain: above round-off, and above rcond squared with room to spare
-    certain = max(GRAM_CERTAIN, 4.0 * rcond**2)
+    certain = max(GRAM_CERTAIN, GRAM_MARGIN * rcond**2)
     if np.all(finite):
         shift = certain * np.trace(G, axis1=1, axis2=2)
         try:
