@@ -355,7 +355,11 @@ def _newton_batch(
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
     # (the same positions); the forces are split afterwards
-    kept = None if tie is not None else _independent_rows(ws, face, x0[0], c_surface[0])
+    kept = (
+        None
+        if tie is not None
+        else _independent_rows(ws, face, x0[0], c_surface[0], lam0[0, list(surface)])
+    )
     redundant = kept is not None
     s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
     sub = face.stack.take(s_keep)
@@ -631,7 +635,7 @@ def _pinned(
 
 
 def _independent_rows(
-    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray
+    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray, lam: FloatArray
 ) -> tuple[IntArray, IntArray] | None:
     """None if the active rows of ``face`` at ``x`` (each surface cone's
     gradient and the equalities) are independent. Else they are redundant
@@ -646,7 +650,12 @@ def _independent_rows(
     if len(sub.k):
         v, rho = sub.norms(x, centre)
         u = v / np.repeat(np.where(rho > 0, rho, 1.0), sub.k)
-        rows.insert(0, np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B)
+        gradient = np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B
+        # the pivots prefer the contacts a neighbour's split loads most (by at
+        # most a factor 2: rank decisions stay those of the plain rows), so
+        # that Newton's forces on the part kept are positive where they can be
+        top = float(np.max(lam, initial=0.0))
+        rows.insert(0, gradient * (1.0 + np.clip(lam, 0.0, None) / max(top, TINY))[:, None])
     J = np.vstack(rows)
     spring = ws.stack.spring
     soft = np.zeros(len(J), dtype=bool)
