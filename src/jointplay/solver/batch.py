@@ -652,8 +652,9 @@ def _independent_rows(
         u = v / np.repeat(np.where(rho > 0, rho, 1.0), sub.k)
         gradient = np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B
         # the pivots prefer the contacts a neighbour's split loads most (by at
-        # most a factor 2: rank decisions stay those of the plain rows), so
-        # that Newton's forces on the part kept are positive where they can be
+        # most a factor 2, which moves no rank decision but one within 2x of
+        # free_motion_rcond), so that Newton's forces on the part kept are
+        # positive where they can be
         top = float(np.max(lam, initial=0.0))
         rows.insert(0, gradient * (1.0 + np.clip(lam, 0.0, None) / max(top, TINY))[:, None])
     J = np.vstack(rows)
