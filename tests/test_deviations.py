@@ -884,3 +884,27 @@ def test_studies_with_deviations_do_not_depend_on_the_global_frame() -> None:
     assert np.allclose(cb.rss, ca.rss, atol=1e-6, rtol=0)
     ea, eb = Envelope("B").run(a), Envelope("B").run(b)
     assert eb.largest == pytest.approx(ea.largest, abs=MM)
+
+
+def test_a_drawn_guide_tilt_takes_one_newton_step_per_sample(monkeypatch: Any) -> None:
+    """A drawn guide tilt sets the carriage's nut face on its rim at a point
+    of its own in each sample. Newton's start kept the neighbour's point:
+    every sample took a second step (twice the time of the flat guide).
+    Where it touches now follows the rest of the start, and one step holds
+    every equation to round-off."""
+    from jointplay.solver import batch
+
+    B = 200
+    ws, work, radii, centres = tilted_carriage_samples(B)
+    solved_rows = []
+    solve_rows = batch.solve_rows
+
+    def counted(K: FloatArray, rhs: FloatArray) -> Any:
+        solved_rows.append(len(K))
+        return solve_rows(K, rhs)
+
+    monkeypatch.setattr(batch, "solve_rows", counted)
+    result = ws.solve_batch(work, radii, centres, forces=False)
+    assert np.sum(result.batched) >= 0.95 * B
+    assert sum(solved_rows) <= 1.1 * np.sum(result.batched)
+    assert np.max(result.feasibility_mm) <= 1e-9

@@ -493,7 +493,11 @@ def _predicted(
     its centre and radius become the row's (least squares over the face's
     rows). Where the samples move the clearances' centres (deviations), the
     contacts' directions follow the loads rather than the positions, and
-    Newton from there takes one or two steps instead of five to seven."""
+    Newton from there takes one or two steps instead of five to seven. A
+    tilting face (on the rim of its offset) is left out: where on its rim it
+    touches follows the parts' relative tilt, which the others set (a nut's
+    face under a carriage whose guide's tilt is drawn: kept, its direction
+    cost every sample a second Newton step)."""
     r0, c0 = near
     sub = face.stack
     surface, linear = face.key
@@ -504,8 +508,10 @@ def _predicted(
     e_near = e_rows.copy()
     e_near[:, ne0 + face.lam_rows] = r0[:, list(linear)]
     e_near[:, ne0 + face.f_rows] = c0[:, face.linear_rows]
-    M = np.vstack([linalg.dense(sub.A), linalg.dense(Eq)])
-    step = np.hstack([moved, e_rows - e_near]) @ np.linalg.pinv(M).T
+    # a tilting face's direction follows the rest (where it touches its rim)
+    plain = np.repeat(~sub.has_offset, sub.k)
+    M = np.vstack([linalg.dense(sub.A)[plain], linalg.dense(Eq)])
+    step = np.hstack([moved[:, plain], e_rows - e_near]) @ np.linalg.pinv(M).T
     return np.asarray(x0 + step)
 
 
