@@ -166,8 +166,8 @@ def deviations(samples: int, workers: int, repeats: int = 3) -> None:
     """Each study with deviations against itself without them: samples/s of
     each, and their ratio (target: at least 0.8). shaft_deviations.yaml
     (the bore's position and tilt zones), and carriage.yaml with a 0.02 mrad
-    tilt zone on its guide (its nut's face then rests on its rim; a quarter
-    of the samples) against the plain carriage; then the tilted carriage
+    tilt zone on its guide (its nut's face then rests on its rim; as many
+    samples) against the plain carriage; then the tilted carriage
     against its guide tilted by a fixed 0.014 mrad (inside the zone,
     nothing drawn): what drawing costs on the same mechanics. The runs
     alternate, ``repeats`` times each, and the medians are compared: the
@@ -186,7 +186,6 @@ def deviations(samples: int, workers: int, repeats: int = 3) -> None:
 
     tilted = with_guide({"orientation": "0.02 mrad"})
     fixed = with_guide({"orientation": {"angle": "0 mrad", "mean": [0, 1e-5, 1e-5]}})
-    quarter = samples // 4
     ratios = [
         _with_and_without(
             "shaft_deviations.yaml",
@@ -200,7 +199,7 @@ def deviations(samples: int, workers: int, repeats: int = 3) -> None:
             "carriage.yaml, guide tilt 0.02 mrad drawn",
             tilted,
             ("without deviations (a flat guide)", with_plain(tilted)),
-            quarter,
+            samples,
             workers,
             repeats,
         ),
@@ -213,7 +212,7 @@ def deviations(samples: int, workers: int, repeats: int = 3) -> None:
         "carriage.yaml, guide tilt 0.02 mrad drawn, against a fixed tilt",
         tilted,
         ("the guide tilted by a fixed 0.014 mrad", fixed),
-        quarter,
+        samples,
         workers,
         repeats,
     )
