@@ -494,10 +494,12 @@ def _predicted(
     rows). Where the samples move the clearances' centres (deviations), the
     contacts' directions follow the loads rather than the positions, and
     Newton from there takes one or two steps instead of five to seven. A
-    tilting face (on the rim of its offset) is left out: where on its rim it
-    touches follows the parts' relative tilt, which the others set (a nut's
-    face under a carriage whose guide's tilt is drawn: kept, its direction
-    cost every sample a second Newton step)."""
+    tilting face (on the rim of its offset) is left out where the other
+    contacts span its rows: where on its rim it touches then follows the
+    parts' relative tilt, which they set (a nut's face under a carriage
+    whose guide's tilt is drawn: kept, its direction cost every sample a
+    second Newton step). Where the face itself sets the tilt (a shaft on a
+    tight ball and a face), it stays (left out, Newton took 4.5 steps)."""
     r0, c0 = near
     sub = face.stack
     surface, linear = face.key
@@ -508,10 +510,14 @@ def _predicted(
     e_near = e_rows.copy()
     e_near[:, ne0 + face.lam_rows] = r0[:, list(linear)]
     e_near[:, ne0 + face.f_rows] = c0[:, face.linear_rows]
-    # a tilting face's direction follows the rest (where it touches its rim)
+    M = np.vstack([linalg.dense(sub.A), linalg.dense(Eq)])
     plain = np.repeat(~sub.has_offset, sub.k)
-    M = np.vstack([linalg.dense(sub.A)[plain], linalg.dense(Eq)])
-    step = np.hstack([moved[:, plain], e_rows - e_near]) @ np.linalg.pinv(M).T
+    rest = np.vstack([linalg.dense(sub.A)[plain], linalg.dense(Eq)])
+    if not np.all(plain) and np.linalg.matrix_rank(rest) == np.linalg.matrix_rank(M):
+        # the other contacts span the tilting faces' rows: where each face
+        # touches its rim follows the relative tilt they set
+        M, moved = rest, moved[:, plain]
+    step = np.hstack([moved, e_rows - e_near]) @ np.linalg.pinv(M).T
     return np.asarray(x0 + step)
 
 
