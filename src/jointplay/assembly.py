@@ -264,6 +264,14 @@ class BallStack:
         return np.asarray(linalg.nonzero_rows(self.B), dtype=bool)
 
     @cached_property
+    def has_rim(self) -> NDArray[np.bool_]:
+        """(n,): a face that may rest flat at its apex (``A_i x = c_i``) and
+        tilt onto its rim. A cone with no offset reaches its apex only with
+        no play (a ball with a position zone and no clearance): it has no
+        rim, its force vector is free and its force is ``|f_i|``."""
+        return np.asarray(self.has_offset & (self.k > 0))
+
+    @cached_property
     def segment_matrix(self) -> sp.csr_matrix:
         """(sum k, n) sparse indicator of each row's cone."""
         n_rows = int(np.sum(self.k))

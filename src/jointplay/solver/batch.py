@@ -390,6 +390,7 @@ def _newton_batch(
     f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
     lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
     f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
+    faces.rimless_forces(stack, list(linear), lam, f)
     st = ws.settings
 
     def pushing(on_surface: list[int], at_apex: list[int]) -> BoolArray:
@@ -403,7 +404,7 @@ def _newton_batch(
         if at_apex:
             lin = stack.take(at_apex)
             f_norm = np.sqrt(lin.segment_sum(f[:, stack.rows_of(at_apex)] ** 2))
-            inside = (f_norm < (1.0 - positive) * lam[:, at_apex]) | (lin.k == 0)
+            inside = (f_norm < (1.0 - positive) * lam[:, at_apex]) | ~lin.has_rim
             out &= np.all(inside, axis=1)
         return np.asarray(out)
 
@@ -631,7 +632,7 @@ def _pinned(
                 M = M[:, :k]
         else:  # a face flat at its apex may tilt about the rim its force reaches
             u = f[:, rows] / np.maximum(f_norm[:, i : i + 1], TINY)
-            tilt = (k > 0) & (f_norm[:, i] >= (1.0 - st.apex) * lam[:, i])
+            tilt = stack.has_rim[i] & (f_norm[:, i] >= (1.0 - st.apex) * lam[:, i])
         if np.any(tilt):
             w = np.concatenate([u, -np.ones((B, 1))], axis=1)
             w /= np.linalg.norm(w, axis=1, keepdims=True)

@@ -198,6 +198,16 @@ def determined_rows(
     return ok & linalg.full_column_rank_rows(stacked, ws.settings.free_motion_rcond)
 
 
+def rimless_forces(stack: BallStack, linear: list[int], lam: FloatArray, f: FloatArray) -> None:
+    """A cone at its apex with no rim (``BallStack.has_rim``) pushes with
+    ``|f_i|``: its row ``B_i x = r_i`` is empty and leaves ``lam_i`` to
+    round-off. Rows of ``lam`` and ``f`` (or one), in place."""
+    rimless = [i for i in linear if stack.k[i] and not stack.has_rim[i]]
+    if rimless:
+        sub = stack.take(rimless)
+        lam[..., rimless] = np.sqrt(sub.segment_sum(f[..., stack.rows_of(rimless)] ** 2))
+
+
 def active_set(
     ws: Workspace,
     x: FloatArray,

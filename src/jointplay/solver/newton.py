@@ -59,7 +59,7 @@ def weak_forces(ws: Workspace, point: faces.Point, key: faces.FaceKey) -> IntArr
     if linear:
         lin = ws.stack.take(linear)
         f_norm = np.sqrt(lin.segment_sum(point.f[ws.stack.rows_of(linear)] ** 2))
-        at_apex = lin.k > 0
+        at_apex = lin.has_rim
         weak[len(surface) :] |= at_apex & (f_norm >= (1.0 - strict) * point.lam[list(linear)])
     return both[weak]
 
@@ -130,6 +130,7 @@ def assemble_point(
     f[face.surface_rows] = face.stack.surface_forces(v, rho, lam_surface)
     lam[list(linear)] = nu_linear[face.lam_rows]
     f[face.linear_rows] = nu_linear[face.f_rows]
+    faces.rimless_forces(ws.stack, list(linear), lam, f)
     return faces.Point(x, lam, f, method, iterations, active=face.key)
 
 

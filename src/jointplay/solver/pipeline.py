@@ -339,7 +339,7 @@ def active_set_steps(
         tilts = {
             int(i)
             for i in weak
-            if at_apex[i] and ws.stack.k[i] and trial.lam[i] > st.positive_force * lam_top
+            if at_apex[i] and ws.stack.has_rim[i] and trial.lam[i] > st.positive_force * lam_top
         }
         at_apex = at_apex.copy()
         at_apex[list(tilts)] = False
