@@ -25,8 +25,10 @@ at 80 % of the same study without them): examples/studies/shaft_deviations.yaml
 (its bore's play, position zone and parallelism drawn) against the same
 model with the bore's deviation left out, in the same run; then
 carriage.yaml with a tilt zone on its guide against the plain carriage
-(a flat guide), and against the same carriage with its guide tilted by a
-fixed angle (the same mechanics, nothing drawn).
+(a flat guide), the shaft on a ball with no play and a position zone
+against the same shaft without it, and the tilted carriage against the
+same carriage with its guide tilted by a fixed angle (the same mechanics,
+nothing drawn).
 
 Run from the repository root: ``python benchmarks/bench_montecarlo.py``.
 Timing is informative: exits 0.
@@ -165,9 +167,10 @@ def main(argv: list[str] | None = None) -> int:
 def deviations(samples: int, workers: int, repeats: int = 3) -> None:
     """Each study with deviations against itself without them: samples/s of
     each, and their ratio (target: at least 0.8). shaft_deviations.yaml
-    (the bore's position and tilt zones), and carriage.yaml with a 0.02 mrad
+    (the bore's position and tilt zones), carriage.yaml with a 0.02 mrad
     tilt zone on its guide (its nut's face then rests on its rim; as many
-    samples) against the plain carriage; then the tilted carriage
+    samples) against the plain carriage, and the shaft on a ball with no
+    play and a 5 um position zone (a cone of radius 0 at its apex); then the tilted carriage
     against its guide tilted by a fixed 0.014 mrad (inside the zone,
     nothing drawn): what drawing costs on the same mechanics. The runs
     alternate, ``repeats`` times each, and the medians are compared: the
@@ -186,6 +189,13 @@ def deviations(samples: int, workers: int, repeats: int = 3) -> None:
 
     tilted = with_guide({"orientation": "0.02 mrad"})
     fixed = with_guide({"orientation": {"angle": "0 mrad", "mean": [0, 1e-5, 1e-5]}})
+    # the shaft on a tight ball (no play) whose centre is off by a 5 um zone
+    data = shaft.model_dump(by_alias=True, exclude_none=True)
+    for joint in data["joints"]:
+        joint.pop("deviation", None)
+        if joint["name"] == "l1":
+            joint.update(clearance=0, deviation={"position": {"diameter": "5 um"}})
+    tight = jointplay.model_from_dict(data)
     ratios = [
         _with_and_without(
             "shaft_deviations.yaml",
@@ -199,6 +209,14 @@ def deviations(samples: int, workers: int, repeats: int = 3) -> None:
             "carriage.yaml, guide tilt 0.02 mrad drawn",
             tilted,
             ("without deviations (a flat guide)", with_plain(tilted)),
+            samples,
+            workers,
+            repeats,
+        ),
+        _with_and_without(
+            "shaft_deviations.yaml on a tight ball with a 5 um position zone",
+            tight,
+            ("without deviations", with_plain(tight)),
             samples,
             workers,
             repeats,
