@@ -199,10 +199,11 @@ def determined_rows(
 
 
 def rimless_forces(stack: BallStack, linear: list[int], lam: FloatArray, f: FloatArray) -> None:
-    """A cone at its apex with no rim (``BallStack.has_rim``) pushes with
-    ``|f_i|``: its row ``B_i x = r_i`` is empty and leaves ``lam_i`` to
-    round-off. Rows of ``lam`` and ``f`` (or one), in place."""
-    rimless = [i for i in linear if stack.k[i] and not stack.has_rim[i]]
+    """A hard cone at its apex with no rim (``BallStack.has_rim``) pushes
+    with ``|f_i|``: its row ``B_i x = r_i`` is empty, and any ``lam_i >=
+    |f_i|`` is a multiplier (the interior point's, or Newton's round-off).
+    Rows of ``lam`` and ``f`` (or one), in place."""
+    rimless = [i for i in linear if stack.k[i] and not stack.has_rim[i] and stack.spring[i] == 0]
     if rimless:
         sub = stack.take(rimless)
         lam[..., rimless] = np.sqrt(sub.segment_sum(f[..., stack.rows_of(rimless)] ** 2))

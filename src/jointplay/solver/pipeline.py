@@ -158,6 +158,14 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
             point = polish(ws, g_hat, sigma, point)
         ws.last = point if point.active is not None else None
         point = split(ws, g_hat, sigma, point)
+    # a cone with no play and no offset holds only at its apex: whatever the
+    # route, its force is |f| (the interior point's lam may be any above it)
+    tight = np.flatnonzero(ws.stack.r == 0).tolist()
+    if tight:
+        before = point.lam[tight].copy()
+        faces.rimless_forces(ws.stack, tight, point.lam, point.f)
+        if not np.array_equal(before, point.lam[tight]):
+            point.certificate = None
     cert = point.certificate or certificate.certify(ws, g_hat, sigma, point, point.nu)
     fine_ipm = ws.settings.fine_ipm_tolerance
     if not cert.certified and np.any(g_hat) and ws.settings.ipm_tolerance > fine_ipm:
