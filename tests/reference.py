@@ -15,6 +15,7 @@ A contact with a ``stiffness`` k may go past its play by p at an energy k p^2 / 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,10 +28,13 @@ import jointplay
 def frame(axis: Any, up: Any = None) -> np.ndarray:
     """Joint axes as columns (docs/conventions.md, "Joint frame")."""
     x = np.asarray(axis, dtype=float)
-    x = x / np.linalg.norm(x)
+    x = x / math.sqrt(float(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]))
     if up is None:
         up = np.array([0.0, 0.0, 1.0])
-        if np.linalg.norm(np.cross(x, up)) < 1e-9:
+        # the rule's sine of the angle to Z, rounded as jointplay rounds it:
+        # an axis drawn at the threshold (1e-9 off Z) took the other 'up'
+        # with |x cross Z| and gave a frame 6e-8 rad away
+        if math.hypot(float(x[0]), float(x[1])) < 1e-9:
             up = np.array([-np.sign(x[2]), 0.0, 0.0])
     up = np.asarray(up, dtype=float)
     z = np.cross(x, np.cross(up, x))  # up - (up . x) x, without cancellation
