@@ -886,17 +886,11 @@ def test_studies_with_deviations_do_not_depend_on_the_global_frame() -> None:
     assert eb.largest == pytest.approx(ea.largest, abs=MM)
 
 
-def test_a_drawn_guide_tilt_takes_one_newton_step_per_sample(monkeypatch: Any) -> None:
-    """A drawn guide tilt sets the carriage's nut face on its rim at a point
-    of its own in each sample. Newton's start kept the neighbour's point:
-    every sample took a second step (twice the time of the flat guide).
-    Where it touches now follows the rest of the start, and one step holds
-    every equation to round-off."""
+def counting_newton_rows(monkeypatch: Any) -> list[int]:
+    """The rows of each batched Newton step, as the batch solves them."""
     from jointplay.solver import batch
 
-    B = 200
-    ws, work, radii, centres = tilted_carriage_samples(B)
-    solved_rows = []
+    solved_rows: list[int] = []
     solve_rows = batch.solve_rows
 
     def counted(K: FloatArray, rhs: FloatArray) -> Any:
@@ -904,6 +898,19 @@ def test_a_drawn_guide_tilt_takes_one_newton_step_per_sample(monkeypatch: Any) -
         return solve_rows(K, rhs)
 
     monkeypatch.setattr(batch, "solve_rows", counted)
+    return solved_rows
+
+
+def test_a_drawn_guide_tilt_takes_one_newton_step_per_sample(monkeypatch: Any) -> None:
+    """A drawn guide tilt sets the carriage's nut face on its rim at a point
+    of its own in each sample. Newton's start kept the neighbour's point:
+    every sample took a second step (twice the time of the flat guide).
+    Where it touches now follows the rest of the start, and one step holds
+    every equation to round-off."""
+
+    B = 200
+    ws, work, radii, centres = tilted_carriage_samples(B)
+    solved_rows = counting_newton_rows(monkeypatch)
     result = ws.solve_batch(work, radii, centres, forces=False)
     assert np.sum(result.batched) >= 0.95 * B
     assert sum(solved_rows) <= 1.1 * np.sum(result.batched)
@@ -917,7 +924,6 @@ def test_a_face_that_sets_the_tilt_keeps_its_rim_point_in_newton_s_start(
     tilt zone) holds: no other contact spans the face's rows, so Newton's
     start keeps its neighbour's rim point. Left out, as for the carriage's
     nut, every sample took 4.5 Newton steps instead of one (review)."""
-    from jointplay.solver import batch
     from jointplay.solver.workspace import Workspace
     from jointplay.studies.variation import deviation_map, play_map
 
@@ -952,14 +958,7 @@ def test_a_face_that_sets_the_tilt_keeps_its_rim_point_in_newton_s_start(
     pmap, dmap = play_map(ws.asm, "m"), deviation_map(ws.asm)
     d = dmap.sample(rng, B)
     radii = pmap.radii(pmap.sample(rng, B)) + dmap.radii_shift(d)
-    solved_rows = []
-    solve_rows = batch.solve_rows
-
-    def counted(K: FloatArray, rhs: FloatArray) -> Any:
-        solved_rows.append(len(K))
-        return solve_rows(K, rhs)
-
-    monkeypatch.setattr(batch, "solve_rows", counted)
+    solved_rows = counting_newton_rows(monkeypatch)
     work = np.repeat(ws.asm.g[None], B, axis=0)
     result = ws.solve_batch(work, radii, dmap.centres(d), forces=False)
     assert np.sum(result.batched) >= 0.95 * B
