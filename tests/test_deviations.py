@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 
 import jointplay
 from conftest import MM, RAD, spherical_shaft
@@ -171,12 +172,30 @@ def test_a_zone_of_no_size_draws_nothing_so_a_study_keeps_its_random_stream() ->
         ("bore", {"position": "2 percent"}, "length"),
         ("bore", {"orientation": "10 deg"}, "beyond the 0.1 rad"),
         ("bore", {"position": {"diameter": 0.01, "extra": 1}}, "extra"),
+        # the bore slides freely along its axis: a mean shift there moves nothing
+        ("bore", {"position": {"diameter": 0.02, "mean": [0.01, 0, 0]}}, "mean is a shift along x"),
     ],
 )
 def test_bad_deviations_are_named(joint: str, deviation: dict[str, Any], words: str) -> None:
     key = {"ball": "ball", "bore": "bore"}[joint]
     with pytest.raises(jointplay.ModelError, match=words):
         pivoted_shaft(**{key: {"deviation": deviation}})
+
+
+def test_a_mean_s_round_off_on_a_free_axis_is_no_component() -> None:
+    """A mean turned from global axes into the joint frame carries round-off
+    (6e-15 of it) on every axis: along the bore's free slide, or about its
+    axis, that is not a component to refuse (review of issue 21); a real one
+    is (``test_bad_deviations_are_named``)."""
+    data = yaml.safe_load(EXAMPLE.read_text())
+    data["joints"][1]["deviation"]["orientation"] = {"angle": "0.1 mrad", "mean": [6e-20, 1e-5, 0]}
+    tilted = jointplay.model_from_dict(data)
+    assert tilted.joints[1].deviation.orientation.mean == (0.0, 1e-5, 0.0)
+    shift = {"diameter": 0.02, "mean": [1e-19, 0.004, 0.003]}
+    shifted = pivoted_shaft(bore={"deviation": {"position": shift}})
+    plain = pivoted_shaft(bore={"deviation": {"position": {**shift, "mean": [0, 0.004, 0.003]}}})
+    a, b = jointplay.solve(shifted), jointplay.solve(plain)
+    assert np.allclose(a.points["T"].displacement, b.points["T"].displacement, atol=MM, rtol=0)
 
 
 def test_a_zone_contributes_its_gradient_and_the_worst_case_is_exact_over_the_disc() -> None:
@@ -401,6 +420,10 @@ def test_monte_carlo_draws_a_shared_deviation_once_for_all_its_joints() -> None:
         (
             [group(axis=[1, 0, 0], position={"x": {"min": 0, "max": 0.01}})],
             "moves none of",
+        ),
+        (
+            [group(axis=[1, 0, 0], position={"diameter": "1 um", "mean": [0.01, 0, 0]})],
+            "mean is a shift along x",
         ),
         ([group(body="S9", position="1 um")], "there is no body 'S9'"),
         (

@@ -199,10 +199,39 @@ def test_the_report_puts_each_requirement_side_by_side() -> None:
     summary = html[html.index("<h2>Summary</h2>") : html.index("Model</h2>")]
     assert "requirements (nominal plays)" in summary
     worst = "all pass" if row.worst_case_passes else "1 of 1 FAIL"
-    assert f"Over the toleranced plays: worst case {worst}" in summary
+    assert f"Over the tolerances: worst case {worst}" in summary
     low, high = row.mc_interval_ppm
     assert f"Monte Carlo: {row.mc_ppm:.4g} ppm out of spec for" in summary
     assert f"({low:.3g} to {high:.3g} ppm at the confidence of the table)" in summary
+
+
+def test_the_deviation_example_s_report_ranks_deviations_with_plays() -> None:
+    """shaft_deviations.yaml (issue 21's example): its bore's position and
+    tilt zones stand with its play in the contributions, largest share first
+    as in the Pareto beside them; the requirement's row carries the same
+    figures as ``jointplay tolerances``, the samples' range among them, and
+    says how many samples pass the linear stack."""
+    import html as html_lib
+
+    from jointplay.studies.contributions import Contributions
+    from jointplay.studies.tolerances import Tolerances
+
+    model = jointplay.load(STUDIES / "shaft_deviations.yaml")
+    page = Report(samples=2000, seed=0).render(model, "shaft_deviations.yaml")
+    linear = Contributions().run(model)
+    k = linear.measures.index("|d B|")
+    ranked = [linear.plays[i] for i in np.argsort(-linear.worst_case[k], kind="stable")]
+    assert {"l2.deviation.position", "l2.deviation.orientation"} <= set(ranked)
+    table = page[page.index("<h3>Contributions") :]
+    rows = re.findall(r"<tr><td>\|d B\|</td><td>([^<]+)</td>", table)
+    assert rows == ranked
+    (row,) = Tolerances(samples=2000, seed=0).run(model).requirements
+    side = page[page.index("Requirements: worst case, RSS and Monte Carlo side by side") :]
+    assert f"{row.mc_ppm:.4g}" in side and f"{row.rss_ppm:.4g}" in side
+    assert f"{row.mc_low:.5g} .. {row.mc_high:.5g}" in side
+    if row.beyond_stack:
+        assert html_lib.escape(row.beyond_words(2000)) in side
+    assert "Over the tolerances: worst case" in page
 
 
 def test_the_report_opens_with_a_summary_and_the_plays_used() -> None:

@@ -58,6 +58,7 @@ from jointplay.model.fields import (
     _vector_of,
 )
 from jointplay.model.tolerance import Distribution
+from jointplay.settings import DEFAULT
 from jointplay.units import shown, to_base
 
 FloatArray = NDArray[np.float64]
@@ -75,6 +76,14 @@ MOTION_WORDS = (
     "tilt about y",
     "tilt about z",
 )
+
+
+def mean_components(mean: FloatArray) -> list[int]:
+    """The components of a mean torsor that are more than its round-off (a
+    mean given in other axes, turned into the joint frame, has some on every
+    axis)."""
+    floor = DEFAULT.round_off * float(np.max(np.abs(mean), initial=0.0))
+    return [int(a) for a in np.flatnonzero(np.abs(mean) > floor)]
 
 
 def _or_plain(dimension: str) -> Any:
@@ -172,7 +181,11 @@ class OrientationZone(BaseModel):
                 raise ValueError(f"angle: expected a value >= 0, got {shown(out['angle'])}")
             out["angle"] = angle
         if "mean" in out:
-            out["mean"] = _vector("angle")(out["mean"])
+            mean = _vector("angle")(out["mean"])
+            # a tilt turned from other axes carries round-off about the axis
+            if abs(mean[0]) <= DEFAULT.round_off * float(np.linalg.norm(mean)):
+                mean = (0.0, mean[1], mean[2])
+            out["mean"] = mean
         return out
 
     @model_validator(mode="after")

@@ -26,7 +26,13 @@ from pydantic import (
 )
 
 from jointplay.geometry import FloatArray
-from jointplay.model.deviations import MOTION_WORDS, SharedDeviation, Zones, transport
+from jointplay.model.deviations import (
+    MOTION_WORDS,
+    SharedDeviation,
+    Zones,
+    mean_components,
+    transport,
+)
 from jointplay.model.fields import (
     AccelerationVector,
     Direction,
@@ -553,6 +559,16 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
             problems.append(
                 f"a {MOTION_WORDS[unseen[0]]} of its frame moves none of the contacts of its "
                 "joints (they leave that motion free); leave it out"
+            )
+        idle = [
+            a
+            for a in mean_components(dev.mean())
+            if not any(joint.takes(T[:, a]) for joint, T in seen)
+        ]
+        if idle:
+            problems.append(
+                f"its mean is a {MOTION_WORDS[idle[0]]} of its frame, which moves none of the "
+                "contacts of its joints (they leave that motion free); leave that component out"
             )
         found += [EntryError(entry, problem) for problem in problems[:1]]
     return found

@@ -151,7 +151,7 @@ class Report:
         linear = Contributions(case=self.case).run(model, source=source)
         page.contributions(linear)
         if model.requirements:
-            page.tolerances(side_by_side(linear, mc), mc.settings.confidence)
+            page.tolerances(side_by_side(linear, mc), mc.settings.confidence, mc.samples)
 
 
 def _varies(model: Model, case: str | None, source: str) -> bool:
@@ -707,14 +707,17 @@ class _Page:
                         "kink: the contacts change here" if co.kink[k, i] else "",
                     )
                     for k, m in enumerate(co.measures)
-                    for i, p in enumerate(co.plays)
+                    for i, p in sorted(enumerate(co.plays), key=lambda ip: -wc[k, ip[0]])
                 ],
-                "Sensitivities at the nominal plays, and shares of the stacks",
+                "Sensitivities at the nominal, and shares of the stacks (the largest share "
+                "first, as in the Pareto)",
             )
         )
         self.parts.append(_svg(contributions_figure(co)))
 
-    def tolerances(self, rows: Sequence[RequirementTolerances], confidence: float) -> None:
+    def tolerances(
+        self, rows: Sequence[RequirementTolerances], confidence: float, samples: int
+    ) -> None:
         failing = [r for r in rows if not r.worst_case_passes]
         worst_ppm = max(rows, key=lambda r: r.mc_ppm, default=None)
         if rows and worst_ppm is not None:
@@ -723,7 +726,7 @@ class _Page:
                 self.summary_end,
                 "<p>"
                 + html.escape(
-                    "Over the toleranced plays: worst case "
+                    "Over the tolerances: worst case "
                     + (f"{len(failing)} of {len(rows)} FAIL" if failing else "all pass")
                     + f"; Monte Carlo: {worst_ppm.mc_ppm:.4g} ppm out of spec for "
                     f"{worst_ppm.requirement.describe()}, the most of any requirement "
@@ -743,6 +746,7 @@ class _Page:
                     "Cpk",
                     "ppm (RSS)",
                     "MC σ (mm)",
+                    "MC range (mm)",
                     "Pp",
                     "Ppk",
                     "ppm (MC)",
@@ -757,6 +761,7 @@ class _Page:
                         _capability(r.cpk),
                         f"{r.rss_ppm:.4g}",
                         _num(r.mc_sigma, 4),
+                        f"{_num(r.mc_low, 5)} .. {_num(r.mc_high, 5)}",
                         _capability(r.pp),
                         _capability(r.ppk),
                         f"{r.mc_ppm:.4g} [{r.mc_interval_ppm[0]:.3g}, {r.mc_interval_ppm[1]:.3g}]",
@@ -768,6 +773,10 @@ class _Page:
                 "interval). Formulas: docs/conventions.md.",
             )
         )
+        for r in rows:
+            if r.beyond_stack:
+                words = f"{r.requirement.describe()}: {r.beyond_words(samples)}."
+                self.parts.append(f"<p><strong>{html.escape(words)}</strong></p>")
 
     def sweep(self, model: Model, sw: SweepResult, source: str) -> None:
         from jointplay.present.plot import sweep_figure

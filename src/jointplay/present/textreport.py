@@ -449,7 +449,8 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
         for name in ("", "worst case", "RSS", "Monte Carlo"):
             table.add_column(name, justify="left" if not name else "right")
         verdict = "pass" if r.worst_case_passes else "FAIL"
-        table.add_row("mm", f"{r.worst_low:.5g} to {r.worst_high:.5g}", "", "")
+        sampled = f"{r.mc_low:.5g} to {r.mc_high:.5g}"
+        table.add_row("mm", f"{r.worst_low:.5g} to {r.worst_high:.5g}", "", sampled)
         table.add_row("mean (mm)", "", f"{r.nominal:.6g}", f"{r.mc_mean:.6g}")
         table.add_row("sigma (mm)", "", f"{r.rss_sigma:.4g}", f"{r.mc_sigma:.4g}")
         table.add_row("Cp, Pp", "", _cap(r.cp), _cap(r.pp))
@@ -458,6 +459,8 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
         table.add_row("ppm out", verdict, f"{r.rss_ppm:.4g}", f"{r.mc_ppm:.4g}")
         table.add_row("", f"(limits {span})", "(normal law)", f"[{lo:.4g}, {hi:.4g}]")
         parts.append(table)
+        if r.beyond_stack:
+            parts.append(Text(r.beyond_words(mc.samples) + "\n"))
     console.print(_unclipped(console, *parts))
 
 

@@ -15,7 +15,11 @@ results side by side"), for each requirement's measure y: |d| of its point
   (USL - y0) / (3 sigma)); ppm from the normal law of that mean and sigma.
 - *Monte Carlo*: the samples' mean m and standard deviation s; Pp and Ppk as
   Cp and Cpk with m and s; ppm the fraction of samples outside, with its
-  Wilson interval.
+  Wilson interval; the samples' range, and how many of them lie beyond the
+  worst case. The linear stack is no bound: where the response bends over the
+  tolerances (a position zone read as a distance, contacts that change) a
+  sample can pass it, and the report says so. ``jointplay envelope`` gives a
+  proven bound.
 """
 
 from __future__ import annotations
@@ -90,11 +94,24 @@ class RequirementTolerances:
     ppk: float
     mc_ppm: float
     mc_interval_ppm: tuple[float, float]
+    mc_low: float  # the assembled samples' range
+    mc_high: float
+    beyond_stack: int  # samples outside the worst case's [worst_low, worst_high]
 
     @property
     def limits(self) -> tuple[float | None, float]:
         high = self.requirement.max_displacement
         return (-high if self.two_sided else None), high
+
+    def beyond_words(self, samples: int) -> str:
+        """Why the worst case is no bound, when samples pass it ('' if none do)."""
+        if not self.beyond_stack:
+            return ""
+        return (
+            f"{self.beyond_stack:,} of the {samples:,} samples lie beyond the worst case: "
+            "the response is not linear over these tolerances, so the linear stack is no "
+            "bound here; `jointplay envelope` gives a proven one"
+        )
 
     @property
     def worst_case_passes(self) -> bool:
@@ -131,6 +148,9 @@ class RequirementTolerances:
                 "ppk": num(self.ppk),
                 "ppm": self.mc_ppm,
                 "interval_ppm": list(self.mc_interval_ppm),
+                "low": self.mc_low,
+                "high": self.mc_high,
+                "beyond_worst_case": self.beyond_stack,
             },
         }
 
@@ -208,6 +228,8 @@ def _one(
     pp, ppk = _capability(low, high, mean, spread)
     with np.errstate(invalid="ignore"):
         outside = ((np.abs(y) > high) if two_sided else (y > high)) | ~assembled
+    sampled = y[assembled]
+    beyond = int(np.sum((sampled < y0 + fall) | (sampled > y0 + rise)))
     return RequirementTolerances(
         req,
         two_sided,
@@ -225,6 +247,9 @@ def _one(
         ppk,
         1e6 * float(np.mean(outside)),
         (1e6 * interval[0], 1e6 * interval[1]),
+        float(np.min(sampled)) if n else math.nan,
+        float(np.max(sampled)) if n else math.nan,
+        beyond,
     )
 
 
@@ -275,6 +300,9 @@ class TolerancesResult:
                     "mc_ppm": r.mc_ppm,
                     "mc_ppm_low": r.mc_interval_ppm[0],  # the Wilson interval of mc_ppm
                     "mc_ppm_high": r.mc_interval_ppm[1],
+                    "mc_low": r.mc_low,
+                    "mc_high": r.mc_high,
+                    "beyond_worst_case": r.beyond_stack,
                     "kink": r.kink,
                 }
             )

@@ -24,7 +24,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, model_validator
 
 from jointplay.geometry import FloatArray, is_parallel, joint_frame, left_jacobian_inverse, skew
-from jointplay.model.deviations import MOTION_WORDS, Deviation
+from jointplay.model.deviations import MOTION_WORDS, Deviation, mean_components
 from jointplay.model.fields import Direction, Name, Play, Point, PositiveStiffness
 from jointplay.model.tolerance import PLAY_FIELDS
 from jointplay.settings import DEFAULT
@@ -212,6 +212,13 @@ class Joint(BaseModel):
                 raise ValueError(
                     f"deviation: a {_motion_words(np.eye(6)[a])} of the features moves none of "
                     "the joint's contacts (the joint leaves that motion free); leave it out"
+                )
+        for a in mean_components(deviation.mean()):
+            if not self.takes(np.eye(6)[a]):
+                raise ValueError(
+                    f"deviation: its mean is a {_motion_words(np.eye(6)[a])} of the features, "
+                    "which moves none of the joint's contacts (the joint leaves that motion "
+                    "free); leave that component out"
                 )
         return self
 
