@@ -196,6 +196,12 @@ def test_a_mean_s_round_off_on_a_free_axis_is_no_component() -> None:
     plain = pivoted_shaft(bore={"deviation": {"position": {**shift, "mean": [0, 0.004, 0.003]}}})
     a, b = jointplay.solve(shifted), jointplay.solve(plain)
     assert np.allclose(a.points["T"].displacement, b.points["T"].displacement, atol=MM, rtol=0)
+    # the same for a measured part (``--deviations``): the round-off is no zone
+    model = pivoted_shaft(bore={"deviation": {"position": "20 um"}})
+    measured = jointplay.with_deviations(model, {"l2": {"position": [1e-19, 0.004, 0.003]}})
+    exact = jointplay.with_deviations(model, {"l2": {"position": [0, 0.004, 0.003]}})
+    a, b = jointplay.solve(measured), jointplay.solve(exact)
+    assert np.allclose(a.points["T"].displacement, b.points["T"].displacement, atol=MM, rtol=0)
 
 
 def test_a_zone_contributes_its_gradient_and_the_worst_case_is_exact_over_the_disc() -> None:

@@ -177,7 +177,7 @@ def test_samples_beyond_the_linear_stack_are_counted_and_told() -> None:
     """The worst case is the linear stack, not a bound: reading a position zone
     as a distance |d|, the bore's tilt and shift bend the response, and 108 of
     100,000 parts of shaft_deviations lie past its high end (0.1060 against
-    0.1089 mm; review of issue 21). The count and the samples' range are
+    0.1089 mm; review of issue 21; this test draws 20,000). The count and the samples' range are
     reported beside it, with the pointer to the proven bound; the envelope
     over the same tolerances holds every sample."""
     from jointplay.studies.envelope import Envelope
@@ -195,7 +195,7 @@ def test_samples_beyond_the_linear_stack_are_counted_and_told() -> None:
     assert proc.returncode == 0, proc.stderr
     words = " ".join(proc.stdout.split())
     assert f"{r.beyond_stack:,} of the {SAMPLES:,} samples lie beyond the worst case" in words
-    assert "jointplay envelope" in words
+    assert "'jointplay envelope' gives a proven one" in words
     env = Envelope(r.requirement.point).run(model)
     assert np.all(env.contains(d, tol=1e-6))  # mm
     assert float(np.max(y)) <= env.largest + 1e-6  # mm

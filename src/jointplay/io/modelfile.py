@@ -19,7 +19,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from jointplay.errors import ModelError
-from jointplay.model.deviations import SharedDeviation
+from jointplay.model.deviations import SharedDeviation, mean_components
 from jointplay.model.fields import _vector
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import (
@@ -587,7 +587,9 @@ def _measure(entry: dict[str, Any], given: Mapping[str, Any], name: str, source:
         if not any(value):
             entry.pop(kind, None)
         elif kind == "position":
-            entry[kind] = {a: {"min": v, "max": v} for a, v in zip("xyz", value, strict=True) if v}
+            # a component below the value's round-off is 0 (as for a mean)
+            kept = mean_components(value)
+            entry[kind] = {"xyz"[a]: {"min": value[a], "max": value[a]} for a in kept}
         else:
             entry[kind] = {"angle": 0, "mean": list(value)}
 

@@ -36,7 +36,7 @@ few draws outside it. A single solve takes every deviation at its mean.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Annotated, Any, Self
 
@@ -78,12 +78,13 @@ MOTION_WORDS = (
 )
 
 
-def mean_components(mean: FloatArray) -> list[int]:
-    """The components of a mean torsor that are more than its round-off (a
-    mean given in other axes, turned into the joint frame, has some on every
-    axis)."""
-    floor = DEFAULT.round_off * float(np.max(np.abs(mean), initial=0.0))
-    return [int(a) for a in np.flatnonzero(np.abs(mean) > floor)]
+def mean_components(mean: FloatArray | Sequence[float]) -> list[int]:
+    """The components of a mean (or measured) torsor that are more than its
+    round-off (one given in other axes, turned into the joint frame, has some
+    on every axis)."""
+    size = np.abs(np.asarray(mean, dtype=float))
+    floor = DEFAULT.round_off * float(np.max(size, initial=0.0))
+    return [int(a) for a in np.flatnonzero(size > floor)]
 
 
 def _or_plain(dimension: str) -> Any:

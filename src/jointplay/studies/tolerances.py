@@ -110,7 +110,7 @@ class RequirementTolerances:
         return (
             f"{self.beyond_stack:,} of the {samples:,} samples lie beyond the worst case: "
             "the response is not linear over these tolerances, so the linear stack is no "
-            "bound here; `jointplay envelope` gives a proven one"
+            "bound here; the command 'jointplay envelope' gives a proven one"
         )
 
     @property
@@ -142,14 +142,14 @@ class RequirementTolerances:
                 "ppm": self.rss_ppm,
             },
             "monte_carlo": {
-                "mean": self.mc_mean,
+                "mean": num(self.mc_mean),
                 "sigma": self.mc_sigma,
                 "pp": num(self.pp),
                 "ppk": num(self.ppk),
                 "ppm": self.mc_ppm,
                 "interval_ppm": list(self.mc_interval_ppm),
-                "low": self.mc_low,
-                "high": self.mc_high,
+                "low": num(self.mc_low),
+                "high": num(self.mc_high),
                 "beyond_worst_case": self.beyond_stack,
             },
         }
