@@ -157,7 +157,9 @@ class SingularSystemError(Exception):
     """A linear system had no accurate solution."""
 
 
-def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> FloatArray:
+def solve_kkt(
+    K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0, floor: float = 0.0
+) -> FloatArray:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
     equations). A singular but consistent system (statically indeterminate
     forces) gets a solution: the plain factors' if round-off lets them solve
@@ -169,17 +171,23 @@ def solve_kkt(K: Matrix, rhs: FloatArray, n_primal: int, prox: float = 0.0) -> F
     ``prox`` > 0: the system is expected to be singular up to round-off (a
     tied face); the step is the regularized-and-refined one, which stays
     nearest the current point in every unknown (a plain solve would take the
-    round-off's huge step along the singular directions)."""
+    round-off's huge step along the singular directions).
+
+    ``floor``: a residual that small is solved whatever the right side's
+    size (Newton's own stopping point: near it, its right side is so small
+    that a tolerance relative to it falls below round-off; a 100-shaft
+    bearing chain's step stopped at 2.9e-16 against 7.5e-17 asked, and every
+    polish of it failed)."""
     size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
     scale = max(1.0, float(abs(K).max()))
     if not prox:
         # plain factors, with a few steps of iterative refinement (long chains need them)
-        step = _refined(K, _factored(K), rhs, DEFAULT.kkt_plain * size, 4)
+        step = _refined(K, _factored(K), rhs, max(DEFAULT.kkt_plain * size, floor), 4)
         if step is not None:
             return step
     # Quasi-definite regularization, refined against K: on a consistent
     # system, the solution nearest the current point
-    tol = DEFAULT.kkt_refined * size
+    tol = max(DEFAULT.kkt_refined * size, floor)
     step = proximal_solve(K, rhs, n_primal, max(prox, DEFAULT.kkt_round_off * scale), tol)
     if step is not None and float(np.max(np.abs(rhs - K @ step))) <= tol:
         return step

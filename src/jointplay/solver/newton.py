@@ -247,7 +247,9 @@ def newton(
             # proximal steps where a tie may be (dense: small systems, whose
             # refinement is cheap); a large system's only when its plain step
             # is absurd (they converge slowly on a long chain's weak modes)
-            step = linalg.solve_kkt(Kmat, -F, m, 0.0 if sparse else prox)
+            # a step solves its system once its residual is below where Newton stops
+            floor = settings.round_off * min(force_scale, length_scale)
+            step = linalg.solve_kkt(Kmat, -F, m, 0.0 if sparse else prox, floor)
             if (
                 prox
                 and sparse
@@ -256,7 +258,7 @@ def newton(
                     or float(np.max(np.abs(step[m:]), initial=0.0)) > settings.far * force_scale
                 )
             ):  # round-off's step along a tie or an indeterminate force
-                step = linalg.solve_kkt(Kmat, -F, m, prox)
+                step = linalg.solve_kkt(Kmat, -F, m, prox, floor)
         except linalg.SingularSystemError:
             break
         x = x + step[:m]
