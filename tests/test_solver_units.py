@@ -225,3 +225,74 @@ def test_the_batched_rank_test_gives_the_svds_verdict() -> None:
     bad = J[:2].copy()
     bad[0, 0, 0], bad[1, 0, 0] = np.inf, np.nan
     assert not np.any(linalg.full_column_rank_rows(bad, rcond))
+
+
+def test_newton_converges_on_a_bearing_chain_s_active_set() -> None:
+    """Near its answer, Newton's right side is tiny (7.5e-7) and the step
+    large (2e-3): a KKT tolerance relative to the right side alone (7.5e-17)
+    lay below the round-off of the step's residual (2.9e-16), every step was
+    refused, and no polish of a 100-shaft bearing chain converged. A step is
+    solved once its residual is below Newton's own stopping point."""
+    from jointplay.io.generate import bearing_chain
+
+    ws = Workspace.of(bearing_chain(100))
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    sigma = np.zeros(len(ws.balls))
+    start = pipeline.interior_point(ws, g_hat, sigma)
+    key = faces.active_set(ws, start.x, start.lam, start.f, ws.stack)
+    found = newton.kkt_point(ws, g_hat, sigma, key, start.x, start.lam, 0, "p", 30, pinned=False)
+    assert found is not None
+    _, _, level = ws.stack.levels(found.x)
+    on = list(key[0])
+    assert np.max(np.abs(level[on] - ws.stack.r[on])) <= 1e-12 * ws.max_radius
+
+
+def test_a_split_that_cannot_balance_the_loads_is_refused() -> None:
+    """The sparse force split's least squares over a subset of the contacts
+    (those the cone program loads) may not reach the loads: it used to
+    return its least-squares miss (5.9e-9 of 0.08 on a bearing chain), which
+    the certificate then refused; now it says there is none."""
+    from jointplay.settings import DEFAULT
+    from jointplay.solver import forces
+
+    G = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
+    P = sp.identity(2, format="csr")
+    consistent = np.array([1.0, 2.0, 3.0])
+    y = forces._least_squares(P, G, consistent, np.zeros(2), DEFAULT)
+    assert y is not None and np.allclose(G @ y, consistent, rtol=0, atol=1e-12)
+    assert forces._least_squares(P, G, np.array([1.0, 1.0, 0.0]), np.zeros(2), DEFAULT) is None
+
+
+@pytest.mark.parametrize("kind", ["bearing", "chain"])
+def test_a_large_face_s_rank_test_agrees_with_the_free_motions_rows_and_is_quick(
+    kind: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A large face's rank test leaves out the rows that pin the free motions
+    (``K``): through the least-norm metric they couple each body to its
+    neighbours' neighbours, and the elimination then went two bodies a round
+    (501 rounds for 1,000 shafts). Without them it halves the chain each
+    round, and gives the same verdict: a tie on the bearing chain (its axial
+    positions), none on the tube string."""
+    from jointplay.io.generate import bearing_chain, tube_string
+    from jointplay.numerics import free_motions
+
+    n = 200
+    ws = Workspace.of(bearing_chain(n) if kind == "bearing" else tube_string(n))
+    assert ws.sparse
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    start = pipeline.interior_point(ws, g_hat, np.zeros(len(ws.balls)))
+    key = faces.active_set(ws, start.x, start.lam, start.f, ws.stack)
+    face = faces.face_of(ws, key)
+    rows = linalg.vstack([face.L, face.stack.A], ws.m)
+    with_k = linalg.full_column_rank(linalg.vstack([ws.Eq, rows], ws.m), ws.m)
+    rounds: list[int] = []
+    eliminate = free_motions._eliminate
+
+    def counted(*args: object) -> object:
+        out = eliminate(*args)  # type: ignore[arg-type]
+        rounds.append(out.rounds)
+        return out
+
+    monkeypatch.setattr(free_motions, "_eliminate", counted)
+    assert faces.pins_position(ws, rows) == with_k == (kind == "chain")
+    assert rounds and max(rounds) <= 2 * np.log2(n) + 2, rounds
