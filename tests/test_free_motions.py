@@ -147,13 +147,13 @@ def test_a_chain_is_eliminated_in_few_rounds_and_without_fill(closed: bool) -> N
     from jointplay.numerics.free_motions import (
         ELIMINATED_TOGETHER_DEGREE,
         _eliminate,
-        _largest_singular_value,
+        largest_singular_value,
     )
 
     assert ELIMINATED_TOGETHER_DEGREE == 2
     n = 256
     C, m = constraint_rows(tube_string(n, closed=closed))
-    elim = _eliminate(C, m, 1e-9, _largest_singular_value(C))
+    elim = _eliminate(C, m, 1e-9, largest_singular_value(C))
     assert sorted(elim.order) == list(range(n))
     assert elim.rounds <= 2 * np.log2(n) + 2, elim.rounds
     assert max(len(p.others) for p in elim.pivots.values()) <= 2

@@ -224,9 +224,10 @@ def _checked(C: sp.spmatrix, m: int) -> sp.csr_matrix:
     return sp.csr_matrix(C)
 
 
-def _largest_singular_value(C: sp.csr_matrix) -> float:
+def largest_singular_value(C: sp.spmatrix) -> float:
     """C's largest singular value, by power iteration on C^T C (to a few
     percent, which is all a relative threshold needs)."""
+    C = sp.csr_matrix(C)
     rng = np.random.default_rng(20140101)
     v = rng.standard_normal(C.shape[1])
     previous = 0.0
@@ -249,7 +250,7 @@ def null_basis(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond)
     C = _checked(C, m)
     if C.shape[0] == 0 or C.nnz == 0:
         return sp.identity(m, format="csc")
-    s_max = _largest_singular_value(C)
+    s_max = largest_singular_value(C)
     elim = _eliminate(C, m, rcond, s_max)
     position = {body: i for i, body in enumerate(elim.order)}
     # bodies eliminated before k whose pivot rows involve k
@@ -264,12 +265,16 @@ def null_basis(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond)
     return _orthonormal(vectors, m)
 
 
-def column_rank_deficit(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> int:
-    """How many independent motions ``C`` does not move (0: its rows pin every unknown)."""
+def column_rank_deficit(
+    C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond, s_max: float | None = None
+) -> int:
+    """How many independent motions ``C`` does not move (0: its rows pin
+    every unknown): singular values below ``rcond`` times C's largest, or
+    times ``s_max`` if given (another matrix's scale, to compare with its count)."""
     C = _checked(C, m)
     if C.shape[0] == 0 or C.nnz == 0:
         return m
-    elim = _eliminate(C, m, rcond, _largest_singular_value(C))
+    elim = _eliminate(C, m, rcond, largest_singular_value(C) if s_max is None else s_max)
     return sum(V.shape[1] for _, V in elim.free)
 
 

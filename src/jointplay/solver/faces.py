@@ -150,10 +150,16 @@ def pins_position(ws: Workspace, rows: Matrix) -> bool:
     joints' equalities ``E`` leave N's motions free and no others. A large
     mechanism is tested that way: K's rows go through the least-norm metric,
     which couples neighbours, and eliminating them costs a round per pair of
-    bodies (a 1,000-shaft chain: 501 rounds against 10)."""
+    bodies (a 1,000-shaft chain: 501 rounds against 10). The count is taken
+    at the free motions' own threshold (relative to every limit row's
+    scale): at the rows' own, smaller, one a motion N holds weakly could be
+    counted as held and hide one the rows leave free (a review)."""
     if ws.sparse:
         deficit = free_motions.column_rank_deficit(
-            linalg.vstack([ws.E, rows], ws.m), ws.m, ws.settings.free_motion_rcond
+            linalg.vstack([ws.E, rows], ws.m),
+            ws.m,
+            ws.settings.free_motion_rcond,
+            ws.limit_scale,
         )
         return bool(deficit <= ws.N.shape[1])
     all_rows = linalg.vstack([ws.Eq, rows], ws.m)

@@ -443,16 +443,18 @@ def _least_squares(
     to round-off) corrected by the ``z`` of least ``|P (given + z)|`` with
     ``G z = b - G given``: one KKT solve, singular where G's rows depend on
     each other, regularized (``kkt_round_off``) and refined to round-off
-    (``linalg.proximal_solve``). None unless ``G y = b`` holds to
-    ``kkt_refined`` of ``b``: a subset of the contacts (those the cone
-    program loads) may not balance the loads exactly, and its least-squares
-    answer then misses by more than the split it would refine (a 100-shaft
-    bearing chain: 5.9e-9 of 0.08, to which the certificate said no)."""
+    (``linalg.proximal_solve``). None when ``G y = b`` holds neither to
+    ``kkt_refined`` of ``b`` nor as well as for ``given``: a subset of the
+    contacts (those the cone program loads) may not balance the loads
+    exactly, and its least-squares answer then misses by more than the split
+    it would refine (a 100-shaft bearing chain: 5.9e-9 of 0.08, against
+    1.1e-11 for the cone program's split, to which it fell back)."""
     n_y = G.shape[1]
     round_off, kkt_round_off = settings.round_off, settings.kkt_round_off
     if not linalg.is_sparse(G):
         y, ok = _split_newton(P[None], G[None], b[None], np.arange(n_y), [], settings)
         return y[0] if ok[0] else None
+    size_b = float(np.max(np.abs(b), initial=0.0))
     PtP = sp.csr_matrix(P.T @ P)
     K = sp.bmat([[PtP, G.T], [G, None]], format="csc")
     rhs = np.r_[-(PtP @ given), b - G @ given]
@@ -463,7 +465,8 @@ def _least_squares(
         return None
     y = np.asarray(given + step[:n_y])
     miss = float(np.max(np.abs(G @ y - b), initial=0.0))
-    return y if miss <= settings.kkt_refined * float(np.max(np.abs(b), initial=0.0)) else None
+    bar = max(settings.kkt_refined * size_b, float(np.max(np.abs(G @ given - b), initial=0.0)))
+    return y if miss <= bar else None
 
 
 def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:

@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from jointplay.assembly import Assembly, assemble
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Load, Model
-from jointplay.numerics import linalg
+from jointplay.numerics import free_motions, linalg
 from jointplay.result import Result, describe_free_motions
 from jointplay.settings import SolverSettings
 from jointplay.solver import certificate, conic, held
@@ -68,6 +68,13 @@ class Workspace:
     @classmethod
     def of(cls, model: Model, settings: SolverSettings | None = None) -> Workspace:
         return cls(assemble(model), settings)
+
+    @cached_property
+    def limit_scale(self) -> float:
+        """The largest singular value of the rows that limit motion: the
+        scale of the free motions' rank threshold (a large mechanism's face
+        tests count against it, ``faces.pins_position``)."""
+        return free_motions.largest_singular_value(held.limit_rows(self))
 
     @cached_property
     def interior_program(self) -> conic.ConeProgram:
