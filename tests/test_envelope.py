@@ -287,8 +287,11 @@ def test_bad_envelope_options_exit_2(tmp_path: Path, args: list[str], words: str
     assert words in out.output
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_probes_that_drive_no_free_motion_are_all_kept() -> None:
-    # the lathe slide's probes drive nothing free: all 206 directions, none listed
+    # the lathe slide's probes drive nothing free: all 206 directions, none listed.
+    # Some rows diverge from far starts in the batch; their overflow stays
+    # inside it (it printed nine RuntimeWarnings through the API before)
     # (judged against the probe itself, as a solve judges a load: not against
     # the round-off of the probes' part on the free motions)
     model = jointplay.load(ROOT / "examples" / "gallery" / "lathe_slide.yaml")

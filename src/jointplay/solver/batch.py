@@ -383,6 +383,11 @@ def _newton_batch(
         nu_k,
         ws.settings,
     )
+    # a row that did not converge is no answer (``ok`` below needs ``conv``):
+    # its start stands in for it, so that a diverged row's overflow reaches
+    # no check (a far start on the lathe slide's probes: inf, then NaN)
+    lost = ~conv
+    x[lost], lam_k[lost], nu_k[lost] = x0[lost], lam0[:, list(surface)][:, s_keep][lost], 0.0
     lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
 
     lam[:, list(surface)] = lam_s
@@ -556,52 +561,55 @@ def _newton_rows(
     K0[m + na :, :m] = Eq
     todo = np.arange(B)
     conv = np.zeros(B, dtype=bool)
-    for it in range(settings.batch_newton_steps + 1):
-        xs = x[todo]
-        v = xs @ A.T - c_rows[todo]
-        rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
-        directed = np.all(rho > 0, axis=1)
-        if not np.all(directed):  # a contact at its centre has no direction: full solver
-            todo, xs, v, rho = todo[directed], xs[directed], v[directed], rho[directed]
-        ls = lam[todo]
-        u = v / np.repeat(rho, k, axis=1) if na else v
-        Ju = (u @ T).reshape(-1, na, m) if na else None
-        grad = q[todo] + nu[todo] @ Eq
-        if Ju is not None:
-            grad += np.einsum("bi,bim->bm", ls, Ju) + ls @ Bo
-        F = np.concatenate(
-            [
-                grad,
-                rho + xs @ Bo.T - r[todo] - soft[todo] * ls,
-                xs @ Eq.T - e[todo] - eq_soft[todo] * nu[todo],
-            ],
-            axis=1,
-        )
-        err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
-        done = err <= settings.round_off
-        conv[todo[done]] = True
-        keep = ~done
-        if it >= settings.batch_give_up:  # far from quadratic convergence: a wrong start or set
-            keep &= err <= settings.batch_continue
-        if not np.any(keep):
-            break
-        todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
-        Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
-        Kb[:, m + np.arange(na), m + np.arange(na)] = -soft[todo]
-        Kb[:, m + na + np.arange(ne), m + na + np.arange(ne)] = -eq_soft[todo]
-        if Ju is not None:
-            Ju = Ju[keep]
-            c = ls / rho
-            AtCA = (np.repeat(c, k, axis=1) @ AA).reshape(-1, m, m)
-            Kb[:, :m, :m] = AtCA - (Ju * c[:, :, None]).transpose(0, 2, 1) @ Ju
-            J = Ju + Bo
-            Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
-            Kb[:, m : m + na, :m] = J
-        step, regular = solve_rows(Kb, -F)
-        todo, step = todo[regular], step[regular]  # a singular row is left to the full solver
-        x[todo] += step[:, :m]
-        lam[todo] += step[:, m : m + na]
-        nu[todo] += step[:, m + na :]
+    # a row that diverges from a far start overflows: its error is then inf
+    # or NaN, which fails both tests below, and the row leaves
+    with np.errstate(over="ignore", invalid="ignore"):
+        for it in range(settings.batch_newton_steps + 1):
+            xs = x[todo]
+            v = xs @ A.T - c_rows[todo]
+            rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
+            directed = np.all(rho > 0, axis=1)
+            if not np.all(directed):  # a contact at its centre has no direction: full solver
+                todo, xs, v, rho = todo[directed], xs[directed], v[directed], rho[directed]
+            ls = lam[todo]
+            u = v / np.repeat(rho, k, axis=1) if na else v
+            Ju = (u @ T).reshape(-1, na, m) if na else None
+            grad = q[todo] + nu[todo] @ Eq
+            if Ju is not None:
+                grad += np.einsum("bi,bim->bm", ls, Ju) + ls @ Bo
+            F = np.concatenate(
+                [
+                    grad,
+                    rho + xs @ Bo.T - r[todo] - soft[todo] * ls,
+                    xs @ Eq.T - e[todo] - eq_soft[todo] * nu[todo],
+                ],
+                axis=1,
+            )
+            err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
+            done = err <= settings.round_off
+            conv[todo[done]] = True
+            keep = ~done
+            if it >= settings.batch_give_up:  # far from quadratic convergence: a wrong start or set
+                keep &= err <= settings.batch_continue
+            if not np.any(keep):
+                break
+            todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
+            Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
+            Kb[:, m + np.arange(na), m + np.arange(na)] = -soft[todo]
+            Kb[:, m + na + np.arange(ne), m + na + np.arange(ne)] = -eq_soft[todo]
+            if Ju is not None:
+                Ju = Ju[keep]
+                c = ls / rho
+                AtCA = (np.repeat(c, k, axis=1) @ AA).reshape(-1, m, m)
+                Kb[:, :m, :m] = AtCA - (Ju * c[:, :, None]).transpose(0, 2, 1) @ Ju
+                J = Ju + Bo
+                Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
+                Kb[:, m : m + na, :m] = J
+            step, regular = solve_rows(Kb, -F)
+            todo, step = todo[regular], step[regular]  # a singular row is left to the full solver
+            x[todo] += step[:, :m]
+            lam[todo] += step[:, m : m + na]
+            nu[todo] += step[:, m + na :]
     # rows still in ``todo`` did not converge
     return conv
 
