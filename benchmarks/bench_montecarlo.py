@@ -238,8 +238,9 @@ def deviations(samples: int, workers: int, repeats: int = 3) -> None:
 
 
 def with_plain(model: jointplay.Model) -> jointplay.Model:
-    """``model`` without its deviations."""
+    """``model`` without its deviations (the joints' own and the shared ones)."""
     data = model.model_dump(by_alias=True, exclude_none=True)
+    data.pop("deviations", None)
     for joint in data["joints"]:
         joint.pop("deviation", None)
     return jointplay.model_from_dict(data)
