@@ -102,6 +102,12 @@ def null_space(C: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> M
     return np.ascontiguousarray(Vt[rank:].T)
 
 
+def rank(M: FloatArray, rcond: float = DEFAULT.free_motion_rcond) -> int:
+    """A dense matrix's rank: its singular values above ``rcond`` of the largest."""
+    sv = np.linalg.svd(M, compute_uv=False)
+    return int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
+
+
 def full_column_rank(rows: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> bool:
     """Whether only ``d = 0`` has ``rows @ d = 0`` (the rows pin every unknown)."""
     if rows.shape[0] < m:

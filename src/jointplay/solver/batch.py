@@ -351,6 +351,7 @@ def _newton_batch(
                 c_surface[shifted],
                 (near[0][shifted], near[1][shifted]),
                 ne0,
+                ws.settings.free_motion_rcond,
             )
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
@@ -365,7 +366,8 @@ def _newton_batch(
     sub = face.stack.take(s_keep)
     sub_rows = face.stack.rows_of(s_keep)
     lam_s = np.zeros((B, na))
-    lam_k = lam0[:, list(surface)][:, s_keep]
+    lam_start = lam0[:, list(surface)][:, s_keep]
+    lam_k = lam_start.copy()
     nu = np.zeros((B, ne))
     nu_k = np.zeros((B, len(e_keep)))
     soft_s = sigma[:, list(surface)][:, s_keep]
@@ -387,7 +389,7 @@ def _newton_batch(
     # its start stands in for it, so that a diverged row's overflow reaches
     # no check (a far start on the lathe slide's probes: inf, then NaN)
     lost = ~conv
-    x[lost], lam_k[lost], nu_k[lost] = x0[lost], lam0[:, list(surface)][:, s_keep][lost], 0.0
+    x[lost], lam_k[lost], nu_k[lost] = x0[lost], lam_start[lost], 0.0
     lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
 
     lam[:, list(surface)] = lam_s
@@ -493,6 +495,7 @@ def _predicted(
     c_surface: FloatArray,
     near: tuple[FloatArray, FloatArray],
     ne0: int,
+    rcond: float,
 ) -> FloatArray:
     """Newton's start for each row: its neighbour's position ``x0`` moved so
     that each active cone keeps the neighbour's direction of contact while
@@ -519,7 +522,7 @@ def _predicted(
     M = np.vstack([linalg.dense(sub.A), linalg.dense(Eq)])
     plain = np.repeat(~sub.has_offset, sub.k)
     rest = np.vstack([linalg.dense(sub.A)[plain], linalg.dense(Eq)])
-    if not np.all(plain) and np.linalg.matrix_rank(rest) == np.linalg.matrix_rank(M):
+    if not np.all(plain) and linalg.rank(rest, rcond) == linalg.rank(M, rcond):
         # the other contacts span the tilting faces' rows: where each face
         # touches its rim follows the relative tilt they set
         M, moved = rest, moved[:, plain]
