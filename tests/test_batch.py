@@ -93,6 +93,49 @@ def test_batch_matches_one_by_one_solves() -> None:
     np.testing.assert_allclose(batch.gap_used()[:, [0, 2]], 1.0, atol=1e-12)
 
 
+def test_a_turned_load_starts_newton_at_its_answer(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Why ``batch._load_predicted`` exists: from its neighbour's answer,
+    Newton on a turned load converged only where the turn was small (the
+    paper's force turned about the shaft in 360 steps: three passes of up
+    to eight steps, 34 us per load). The balance is linear in the contacts'
+    force vectors; on a set whose balance fixes them, the forces of the new
+    load give the directions of contact and these the position: the start
+    is the answer. One pass, no Newton step, the same answers."""
+    import jointplay.solver.batch as batch_module
+
+    data = spherical_shaft()
+    forces = rotated_forces(360)
+    reference = Workspace.of(model_from_dict(data))
+    W = reference.asm.wrench_work("S1", [300, 0, 0])
+    work = np.hstack([forces, np.zeros_like(forces)]) @ W.T
+
+    passes: list[int] = []
+    steps: list[int] = []
+    real_batch, real_rows = batch_module._newton_batch, batch_module.solve_rows
+
+    def counted_batch(ws: Any, key: Any, g_hat: np.ndarray, *rest: Any, **kw: Any) -> Any:
+        passes.append(len(g_hat))
+        return real_batch(ws, key, g_hat, *rest, **kw)
+
+    def counted_rows(K: np.ndarray, rhs: np.ndarray) -> Any:
+        steps.append(len(K))
+        return real_rows(K, rhs)
+
+    monkeypatch.setattr(batch_module, "_newton_batch", counted_batch)
+    monkeypatch.setattr(batch_module, "solve_rows", counted_rows)
+    got = Workspace.of(model_from_dict(data)).solve_batch(work)
+    assert passes == [359] and steps == [] and got.full_solves == 1
+
+    monkeypatch.setattr(batch_module, "_load_predicted", lambda face, Eq, x0, lam0, *_: (x0, lam0))
+    passes.clear()
+    plain = Workspace.of(model_from_dict(data)).solve_batch(work)
+    assert len(passes) > 1 and len(steps) > 0  # from the neighbours: passes and steps
+    np.testing.assert_allclose(got.x, plain.x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.forces, plain.forces, rtol=0, atol=1e-12)
+    assert np.all(got.feasibility_mm <= 1e-9 * 0.1)
+    assert np.all(got.equilibrium_residual <= 1e-8)
+
+
 def test_batch_with_ties_and_zero_rows() -> None:
     data = spherical_shaft()
     ws = Workspace.of(model_from_dict(data))
@@ -158,6 +201,9 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
         return step, regular
 
     monkeypatch.setattr(batch_module, "solve_rows", singular_sometimes)
+    # with the loads' prediction the starts are the answers and Newton takes no
+    # step: off, it starts from the neighbour's answer and takes several
+    monkeypatch.setattr(batch_module, "_load_predicted", lambda face, Eq, x0, lam0, *_: (x0, lam0))
     ws = Workspace.of(model_from_dict(data))
     got = ws.solve_batch(work)
     assert calls[0] > 4  # the rows were stacked, and two of them dropped
