@@ -12,6 +12,7 @@ active set is then tried on the others, until none is left.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -20,7 +21,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from jointplay.assembly import Assembly, BallStack, IntArray
-from jointplay.errors import UnassembledError
+from jointplay.errors import SolverError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix, solve_rows
@@ -88,6 +89,50 @@ class BatchSolution:
         return stack.gap_used(stack.levels(self.x)[2])
 
 
+@dataclass(frozen=True)
+class Seed:
+    """A sample solved before a batch, to start its Newton like a sample the
+    batch solved itself: unit loads, scaled radii and centres, the answer's
+    scaled unknowns and multipliers, and its active set (or a tie's)."""
+
+    g_hat: FloatArray
+    r: FloatArray
+    c: FloatArray
+    x: FloatArray
+    lam: FloatArray
+    f: FloatArray
+    key: FaceKey
+
+
+def seed(
+    ws: Workspace,
+    work: FloatArray,
+    radii: FloatArray | None = None,
+    centres: FloatArray | None = None,
+) -> Seed | None:
+    """The full solve of one sample (loads' work ``work``, and the model's
+    plays and centres unless given) as a ``Seed``; None for a large (sparse)
+    mechanism, whose rows are solved one by one, for no load, and for an
+    answer with no active set to start from."""
+    norm = float(np.linalg.norm(work))
+    if ws.asm.sparse or norm == 0.0:
+        return None
+    r = ws.stack.r if radii is None else np.asarray(radii, dtype=float)
+    c = ws.stack.centres() if centres is None else np.asarray(centres, dtype=float)
+    solver = ws if radii is None and centres is None else ws.with_radii(r, centres)
+    solver.last = None  # a start of its own: the same seed in every process
+    g_hat = np.asarray(work, dtype=float) / norm
+    try:
+        with _blas().limit(limits=1, user_api="blas"):
+            point = pipeline.optimum(solver, g_hat, ws.softness(norm))
+    except (UnassembledError, SolverError):
+        return None  # no start: the batch meets this sample's trouble itself, if at all
+    key = point.active if point.active is not None else point.tie
+    if key is None:
+        return None
+    return Seed(g_hat, r, c, point.x, point.lam, point.f, key)
+
+
 def solve_batch(
     ws: Workspace,
     work: FloatArray,
@@ -95,6 +140,7 @@ def solve_batch(
     centres: FloatArray | None = None,
     *,
     forces: bool = True,
+    seeds: Sequence[Seed] = (),
 ) -> BatchSolution:
     """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
     cone radii (``Assembly.balls`` order; default: the model's); ``centres``
@@ -106,7 +152,7 @@ def solve_batch(
     (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
     samples/s against 145,000)."""
     with _blas().limit(limits=1, user_api="blas"):
-        return _solve_batch(ws, work, radii, centres, forces)
+        return _solve_batch(ws, work, radii, centres, forces, seeds)
 
 
 @functools.cache
@@ -123,6 +169,7 @@ def _solve_batch(
     radii: FloatArray | None,
     centres: FloatArray | None,
     split_forces: bool,
+    seeds: Sequence[Seed] = (),
 ) -> BatchSolution:
     from scipy.spatial import cKDTree  # here: a single solve need not import it
 
@@ -157,19 +204,31 @@ def _solve_batch(
         if not np.all(np.isfinite(c)):
             raise ValueError("centres must be finite")
         varied = True
+    # the seeds follow the samples as rows solved already (dense mechanisms:
+    # a large one's rows are solved one by one)
+    seeds = seeds if not ws.asm.sparse else ()
+    if seeds:
+        g_hat = np.vstack([g_hat, *(s.g_hat for s in seeds)])
+        r = np.vstack([r, *(s.r for s in seeds)])
+        c = np.vstack([c, *(s.c for s in seeds)])
+        sigma = np.vstack([sigma, np.zeros((len(seeds), n_balls))])  # read for samples only
+    rows_all = B + len(seeds)
     # the nearest solved sample (loads, and plays when they vary) starts Newton
     scale = max(ws.max_radius, TINY)
     features = np.hstack([g_hat, r / scale, c / scale]) if varied else g_hat
 
-    x = np.zeros((B, ws.m))
-    lam = np.zeros((B, n_balls))
-    f = np.zeros((B, ws.stack.A.shape[0]))
-    batched = np.zeros(B, dtype=bool)
-    assembled = np.ones(B, dtype=bool)
-    feas = np.zeros(B)  # each row's certificate, where it was certified
-    residual = np.zeros(B)
+    x = np.zeros((rows_all, ws.m))
+    lam = np.zeros((rows_all, n_balls))
+    f = np.zeros((rows_all, ws.stack.A.shape[0]))
+    batched = np.zeros(rows_all, dtype=bool)
+    assembled = np.ones(rows_all, dtype=bool)
+    feas = np.zeros(rows_all)  # each row's certificate, where it was certified
+    residual = np.zeros(rows_all)
     pending = np.flatnonzero(norms > 0)
     solved_by_set: dict[FaceKey, list[IntArray]] = {}  # active set -> solved rows
+    for j, known in enumerate(seeds):
+        x[B + j], lam[B + j], f[B + j] = known.x, known.lam, known.f
+        solved_by_set.setdefault(known.key, []).append(np.array([B + j]))
     # active set -> how often each row failed from it: a row is not tried
     # again after ``batch_give_up`` failures (else every full solve would
     # re-run Newton on every pending row: time quadratic in the samples)
@@ -264,6 +323,8 @@ def _solve_batch(
             else:
                 x[row] = rest.x
             full += 1
+    x, lam, f, batched, assembled = x[:B], lam[:B], f[:B], batched[:B], assembled[:B]
+    feas, residual = feas[:B], residual[:B]
     x[~assembled] = np.nan
     lam[~assembled] = np.nan
     return BatchSolution(
