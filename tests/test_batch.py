@@ -136,6 +136,31 @@ def test_a_turned_load_starts_newton_at_its_answer(monkeypatch: pytest.MonkeyPat
     assert np.all(got.equilibrium_residual <= 1e-8)
 
 
+def test_a_start_solved_before_the_batch_starts_its_newton() -> None:
+    """``batch.solved_start``: a sample solved before the batch starts Newton
+    like one the batch solved itself (no full solve is left to do), the
+    answers are the batch's own, the workspace's warm start is kept, and a
+    start from another model is refused in words."""
+    from jointplay.solver import batch as batch_module
+
+    data = spherical_shaft()
+    ws = Workspace.of(model_from_dict(data))
+    forces = rotated_forces(24)
+    W = ws.asm.wrench_work("S1", [300, 0, 0])
+    work = np.hstack([forces, np.zeros_like(forces)]) @ W.T
+    ws.solve()
+    before = ws.last
+    start = batch_module.solved_start(ws, ws.asm.g)
+    assert start is not None and ws.last is before
+    got = ws.solve_batch(work, starts=[start])
+    plain = Workspace.of(model_from_dict(data)).solve_batch(work)
+    assert got.full_solves == 0 and plain.full_solves == 1
+    np.testing.assert_allclose(got.x, plain.x, rtol=0, atol=1e-12)
+    other = Workspace.of(model_from_dict(table_on_feet([0.0, 0.0, 0.0])))
+    with pytest.raises(ValueError, match="this workspace's model"):
+        other.solve_batch(other.asm.g[None], starts=[start])
+
+
 def test_batch_with_ties_and_zero_rows() -> None:
     data = spherical_shaft()
     ws = Workspace.of(model_from_dict(data))

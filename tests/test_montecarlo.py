@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -102,7 +103,9 @@ def test_same_seed_same_numbers_whatever_the_workers() -> None:
     assert not np.array_equal(one.plays, other.plays)
 
 
-def test_a_chunk_starts_from_the_nominal_answer_and_not_from_its_own_full_solve() -> None:
+def test_a_chunk_starts_from_the_nominal_answer_and_not_from_its_own_full_solve(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """Why ``montecarlo._prepared`` exists: every chunk assembled the model
     and fully solved its own first sample before Newton could start
     (chunks of 10,000 ran 9 to 13 % slower than chunks of 50,000). The
@@ -113,10 +116,11 @@ def test_a_chunk_starts_from_the_nominal_answer_and_not_from_its_own_full_solve(
     from jointplay.studies import montecarlo
 
     model = jointplay.load(Path(__file__).parents[1] / "examples" / "studies" / "carriage.yaml")
+    monkeypatch.setattr(montecarlo, "_PREPARED", OrderedDict())  # as in a fresh process
     study = MonteCarlo(samples=600, seed=4, chunk=200)
-    alone = montecarlo.solve_chunk(model, study, 2, 200, "a run")
+    alone = montecarlo._solve_chunk(model, study, 2, 200, "a run")
     made = montecarlo._PREPARED[("a run", None)]
-    after = [montecarlo.solve_chunk(model, study, i, 200, "a run") for i in (0, 1, 2)]
+    after = [montecarlo._solve_chunk(model, study, i, 200, "a run") for i in (0, 1, 2)]
     assert montecarlo._PREPARED[("a run", None)] is made  # assembled and solved once
     assert all(chunk.full_solves == 0 for chunk in after)
     assert np.array_equal(alone.displacement, after[2].displacement)
@@ -127,7 +131,7 @@ def test_a_chunk_starts_from_the_nominal_answer_and_not_from_its_own_full_solve(
     radii = pmap.radii(alone.plays)
     lmap = montecarlo.load_map(asm)
     work = lmap.work(alone.loads) if lmap.variables else np.tile(lmap.g0, (len(radii), 1))
-    reference = plain.solve_batch(work, radii, forces=False)  # no seed: its own full solves
+    reference = plain.solve_batch(work, radii, forces=False)  # no start: its own full solves
     assert reference.full_solves >= 1
     tip = model.points[0]
     motion = reference.body_displacement(tip.body)

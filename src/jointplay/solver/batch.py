@@ -90,7 +90,7 @@ class BatchSolution:
 
 
 @dataclass(frozen=True)
-class Seed:
+class Start:
     """A sample solved before a batch, to start its Newton like a sample the
     batch solved itself: unit loads, scaled radii and centres, the answer's
     scaled unknowns and multipliers, and its active set (or a tie's)."""
@@ -104,33 +104,48 @@ class Seed:
     key: FaceKey
 
 
-def seed(
+def solved_start(
     ws: Workspace,
     work: FloatArray,
     radii: FloatArray | None = None,
     centres: FloatArray | None = None,
-) -> Seed | None:
+) -> Start | None:
     """The full solve of one sample (loads' work ``work``, and the model's
-    plays and centres unless given) as a ``Seed``; None for a large (sparse)
-    mechanism, whose rows are solved one by one, for no load, and for an
-    answer with no active set to start from."""
+    plays and centres unless given) as a ``Start``; None for a large (sparse)
+    mechanism, whose rows are solved one by one, for no load, for a sample
+    the full solver declines, and for an answer with no active set to start
+    from. ``ws``'s warm start is left as it was."""
     norm = float(np.linalg.norm(work))
     if ws.asm.sparse or norm == 0.0:
         return None
     r = ws.stack.r if radii is None else np.asarray(radii, dtype=float)
     c = ws.stack.centres() if centres is None else np.asarray(centres, dtype=float)
     solver = ws if radii is None and centres is None else ws.with_radii(r, centres)
-    solver.last = None  # a start of its own: the same seed in every process
+    kept = solver.last
+    solver.last = None  # a start of its own: the same answer in every process
     g_hat = np.asarray(work, dtype=float) / norm
     try:
         with _blas().limit(limits=1, user_api="blas"):
             point = pipeline.optimum(solver, g_hat, ws.softness(norm))
     except (UnassembledError, SolverError):
         return None  # no start: the batch meets this sample's trouble itself, if at all
+    finally:
+        solver.last = kept
     key = point.active if point.active is not None else point.tie
     if key is None:
         return None
-    return Seed(g_hat, r, c, point.x, point.lam, point.f, key)
+    return Start(g_hat, r, c, point.x, point.lam, point.f, key)
+
+
+def _check_starts(ws: Workspace, starts: Sequence[Start]) -> None:
+    shapes = (ws.m, len(ws.balls), ws.stack.A.shape[0])
+    for known in starts:
+        parts = (known.g_hat, known.r, known.c, known.x, known.lam, known.f)
+        sizes = (shapes[0], shapes[1], shapes[2], shapes[0], shapes[1], shapes[2])
+        if any(np.shape(p) != (n,) for p, n in zip(parts, sizes, strict=True)):
+            raise ValueError("starts must come from this workspace's model (batch.solved_start)")
+        if not all(np.all(np.isfinite(p)) for p in parts):
+            raise ValueError("starts must be finite")
 
 
 def solve_batch(
@@ -140,7 +155,7 @@ def solve_batch(
     centres: FloatArray | None = None,
     *,
     forces: bool = True,
-    seeds: Sequence[Seed] = (),
+    starts: Sequence[Start] = (),
 ) -> BatchSolution:
     """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
     cone radii (``Assembly.balls`` order; default: the model's); ``centres``
@@ -152,7 +167,7 @@ def solve_batch(
     (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
     samples/s against 145,000)."""
     with _blas().limit(limits=1, user_api="blas"):
-        return _solve_batch(ws, work, radii, centres, forces, seeds)
+        return _solve_batch(ws, work, radii, centres, forces, starts)
 
 
 @functools.cache
@@ -169,7 +184,7 @@ def _solve_batch(
     radii: FloatArray | None,
     centres: FloatArray | None,
     split_forces: bool,
-    seeds: Sequence[Seed] = (),
+    starts: Sequence[Start] = (),
 ) -> BatchSolution:
     from scipy.spatial import cKDTree  # here: a single solve need not import it
 
@@ -204,15 +219,16 @@ def _solve_batch(
         if not np.all(np.isfinite(c)):
             raise ValueError("centres must be finite")
         varied = True
-    # the seeds follow the samples as rows solved already (dense mechanisms:
+    # the starts follow the samples as rows solved already (dense mechanisms:
     # a large one's rows are solved one by one)
-    seeds = seeds if not ws.asm.sparse else ()
-    if seeds:
-        g_hat = np.vstack([g_hat, *(s.g_hat for s in seeds)])
-        r = np.vstack([r, *(s.r for s in seeds)])
-        c = np.vstack([c, *(s.c for s in seeds)])
-        sigma = np.vstack([sigma, np.zeros((len(seeds), n_balls))])  # read for samples only
-    rows_all = B + len(seeds)
+    _check_starts(ws, starts)
+    starts = starts if not ws.asm.sparse else ()
+    if starts:
+        g_hat = np.vstack([g_hat, *(s.g_hat for s in starts)])
+        r = np.vstack([r, *(s.r for s in starts)])
+        c = np.vstack([c, *(s.c for s in starts)])
+        sigma = np.vstack([sigma, np.zeros((len(starts), n_balls))])  # read for samples only
+    rows_all = B + len(starts)
     # the nearest solved sample (loads, and plays when they vary) starts Newton
     scale = max(ws.max_radius, TINY)
     features = np.hstack([g_hat, r / scale, c / scale]) if varied else g_hat
@@ -226,7 +242,7 @@ def _solve_batch(
     residual = np.zeros(rows_all)
     pending = np.flatnonzero(norms > 0)
     solved_by_set: dict[FaceKey, list[IntArray]] = {}  # active set -> solved rows
-    for j, known in enumerate(seeds):
+    for j, known in enumerate(starts):
         x[B + j], lam[B + j], f[B + j] = known.x, known.lam, known.f
         solved_by_set.setdefault(known.key, []).append(np.array([B + j]))
     # active set -> how often each row failed from it: a row is not tried
@@ -309,9 +325,9 @@ def _solve_batch(
         assert point.certificate is not None  # optimum certifies or raises
         feas[first] = point.certificate.feasibility_mm / ws.asm.s
         residual[first] = point.certificate.equilibrium_residual
-        seed = point.active if point.active is not None else point.tie
-        if seed is not None and dense:
-            solved_by_set.setdefault(seed, []).append(np.array([first]))
+        found = point.active if point.active is not None else point.tie
+        if found is not None and dense:
+            solved_by_set.setdefault(found, []).append(np.array([first]))
 
     if centres is not None or ws.stack.centre is not None:
         # with no load, the rest position: where the centres put it

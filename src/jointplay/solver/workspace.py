@@ -25,7 +25,7 @@ from jointplay.settings import SolverSettings
 from jointplay.solver import certificate, conic, held
 
 if TYPE_CHECKING:
-    from jointplay.solver.batch import BatchSolution, Seed
+    from jointplay.solver.batch import BatchSolution, Start
     from jointplay.solver.faces import Face, FaceKey, Point
 
 
@@ -103,7 +103,7 @@ class Workspace:
         centres: FloatArray | None = None,
         *,
         forces: bool = True,
-        seeds: Sequence[Seed] = (),
+        starts: Sequence[Start] = (),
     ) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of
         the loads' work per sample (build rows with ``Assembly.wrench_work``).
@@ -114,11 +114,11 @@ class Workspace:
         ``forces``: split each sample's contact forces by the documented rule
         (``BatchSolution.forces``); a study that reads positions only says
         False and skips that split where Newton's own forces certify them.
-        ``seeds``: samples solved before (``batch.seed``) that start Newton
-        like the batch's own solved samples (a study's chunks share one)."""
+        ``starts``: samples solved before (``batch.solved_start``) that start
+        Newton like the batch's own solved samples (a study's chunks share one)."""
         from jointplay.solver.batch import solve_batch
 
-        return solve_batch(self, work, radii, centres, forces=forces, seeds=seeds)
+        return solve_batch(self, work, radii, centres, forces=forces, starts=starts)
 
     def with_radii(self, radii: FloatArray, centre: FloatArray | None = None) -> Workspace:
         """A workspace of the same mechanism with other plays: ``radii`` are

@@ -31,7 +31,7 @@ from jointplay.assembly import Assembly, assemble
 from jointplay.errors import ModelError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
-from jointplay.solver.batch import Seed, seed
+from jointplay.solver.batch import Start, solved_start
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import (
@@ -107,6 +107,7 @@ class MonteCarlo:
                 progress(done, self.samples)
             if self.target_rel_error is not None and _converged(model, self, parts):
                 break
+        _PREPARED.pop((run, self.case), None)  # this process's; a worker's ages out
         return _result(model, self, parts)
 
 
@@ -177,7 +178,7 @@ class _Prepared:
     pmap: PlayMap
     lmap: LoadMap
     dmap: DeviationMap
-    seeds: tuple[Seed, ...]
+    starts: tuple[Start, ...]
 
 
 #: ``_prepared``'s answers in this process, by study run (the newest few).
@@ -188,7 +189,7 @@ _PREPARED_KEPT = 4  # runs: a process may serve a few studies at once (Dask)
 def _prepare(model: Model, case: str | None) -> _Prepared:
     asm = assemble(model)
     lmap = load_map(asm, case)
-    nominal = seed(Workspace(asm), lmap.g0)
+    nominal = solved_start(Workspace(asm), lmap.g0)
     return _Prepared(
         asm,
         play_map(asm, model.name or "<model>"),
@@ -216,14 +217,19 @@ def _prepared(model: Model, case: str | None, run: str | None) -> _Prepared:
         hit = _PREPARED[key] = _prepare(model, case)
         while len(_PREPARED) > _PREPARED_KEPT:
             _PREPARED.popitem(last=False)
+    else:
+        _PREPARED.move_to_end(key)
     return hit
 
 
-def solve_chunk(
-    model: Model, mc: MonteCarlo, index: int, size: int, run: str | None = None
-) -> _Chunk:
-    """Chunk ``index`` of the study: its ``size`` samples, drawn and solved.
-    ``run``: the study run's token (``_prepared``)."""
+def solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int) -> _Chunk:
+    """Chunk ``index`` of the study: its ``size`` samples, drawn and solved."""
+    return _solve_chunk(model, mc, index, size, None)
+
+
+def _solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int, run: str | None) -> _Chunk:
+    """``solve_chunk`` within study run ``run`` (a token that ``MonteCarlo.run``
+    makes): what ``_prepared`` makes for the run serves its other chunks."""
     prepared = _prepared(model, mc.case, run)
     asm, pmap, lmap, dmap = prepared.asm, prepared.pmap, prepared.lmap, prepared.dmap
     rng = np.random.default_rng([mc.seed, index])
@@ -238,7 +244,7 @@ def solve_chunk(
     if dmap.variables:
         radii = radii + dmap.radii_shift(deviations)
         centres = dmap.centres(deviations)
-    batch = ws.solve_batch(work, radii, centres, forces=False, seeds=prepared.seeds)
+    batch = ws.solve_batch(work, radii, centres, forces=False, starts=prepared.starts)
     displacement = np.zeros((size, len(model.points), 3))
     for p, point in enumerate(model.points):
         motion = batch.body_displacement(point.body)
@@ -266,7 +272,7 @@ def _solve_chunks(
     scheduler: str | None,
     run: str,
 ) -> list[_Chunk]:
-    return run_chunks(solve_chunk, model, [(mc, i, n, run) for i, n in chunks], workers, scheduler)
+    return run_chunks(_solve_chunk, model, [(mc, i, n, run) for i, n in chunks], workers, scheduler)
 
 
 def _z(confidence: float) -> float:
