@@ -7,10 +7,11 @@ assembly builds (see ``SPARSE_FROM``).
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,23 @@ from jointplay.settings import DEFAULT, GRAM_CERTAIN, GRAM_MARGIN
 SPARSE_FROM = 240
 
 Matrix = Any  # a dense 2-D FloatArray or a scipy sparse matrix
+
+
+def one_blas_thread() -> AbstractContextManager[Any]:
+    """BLAS (numpy's and scipy's) in one thread for the duration: a solve is
+    many small matrices, which more threads only slow down, and on a busy
+    2-core machine a thread that waits for the other core is far worse (a
+    30-shaft bearing chain: 0.53 s in one thread, 2.7 s in two while another
+    process ran; a study's processes compete for the cores as well)."""
+    return _blas().limit(limits=1, user_api="blas")  # type: ignore[no-any-return]
+
+
+@functools.cache
+def _blas() -> Any:
+    """The BLAS libraries loaded, found once (0.6 ms; each limit then 14 us)."""
+    from threadpoolctl import ThreadpoolController  # here: the CLI starts without it
+
+    return ThreadpoolController()
 
 
 def is_sparse(a: Matrix) -> bool:

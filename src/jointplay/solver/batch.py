@@ -11,10 +11,9 @@ active set is then tried on the others, until none is left.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -125,7 +124,7 @@ def solved_start(
     solver.last = None  # a start of its own: the same answer in every process
     g_hat = np.asarray(work, dtype=float) / norm
     try:
-        with _blas().limit(limits=1, user_api="blas"):
+        with linalg.one_blas_thread():
             point = pipeline.optimum(solver, g_hat, ws.softness(norm))
     except (UnassembledError, SolverError):
         return None  # no start: the batch meets this sample's trouble itself, if at all
@@ -166,16 +165,8 @@ def solve_batch(
     only slow down, and a study's processes would compete for the cores
     (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
     samples/s against 145,000)."""
-    with _blas().limit(limits=1, user_api="blas"):
+    with linalg.one_blas_thread():
         return _solve_batch(ws, work, radii, centres, forces, starts)
-
-
-@functools.cache
-def _blas() -> Any:
-    """The BLAS libraries loaded (numpy's and scipy's), to limit their threads."""
-    from threadpoolctl import ThreadpoolController
-
-    return ThreadpoolController()
 
 
 def _solve_batch(

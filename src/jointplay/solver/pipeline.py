@@ -38,6 +38,7 @@ from jointplay.assembly import assemble
 from jointplay.errors import SolverError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Load, Model
+from jointplay.numerics import linalg
 from jointplay.result import EQUILIBRIUM_TOLERANCE, Result, build_result
 from jointplay.settings import SolverSettings
 from jointplay.solver import certificate, conic, faces, forces, held, newton, ties
@@ -71,10 +72,15 @@ def solve_loads(
 ) -> Result:
     """The certified equilibrium of ``ws``'s model under its loads, or under
     ``loads`` instead (``exact``: with exact rotations, see ``exact.py``)."""
-    if exact:
-        from jointplay.solver.exact import solve_exact
+    with linalg.one_blas_thread():
+        if exact:
+            from jointplay.solver.exact import solve_exact
 
-        return solve_exact(ws, loads)
+            return solve_exact(ws, loads)
+        return _solve_loads(ws, loads)
+
+
+def _solve_loads(ws: Workspace, loads: Sequence[Load] | None) -> Result:
     start = time.perf_counter()
     if loads is None:
         loads = ws.asm.model.loads_of(None)

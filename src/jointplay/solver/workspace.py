@@ -46,7 +46,9 @@ class Workspace:
         self.E = assembly.E
         self.sparse = assembly.sparse
         #: the free motions (dense, or sparse for a large mechanism)
-        self.N = linalg.null_space(held.limit_rows(self), self.m, self.settings.free_motion_rcond)
+        with linalg.one_blas_thread():
+            rcond = self.settings.free_motion_rcond
+            self.N = linalg.null_space(held.limit_rows(self), self.m, rcond)
         #: rows that hold the answer orthogonal to N in the least-norm metric
         self.K = (
             sp.csr_matrix((assembly.metric_matrix @ self.N).T)
