@@ -365,3 +365,63 @@ def test_a_large_face_s_rank_test_counts_at_the_free_motions_threshold() -> None
     face = sp.csr_matrix(np.vstack([r for i, r in enumerate(rows) if i != free]))
     with_k = linalg.full_column_rank(linalg.vstack([ws.Eq, face], m), m)
     assert faces.pins_position(ws, face) is with_k is False  # type: ignore[arg-type]
+
+
+def test_a_contact_that_holds_a_face_s_free_motion_joins_it_before_a_tie_is_declared(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """On a 10,000-segment tube string the interior point left 377 spigot
+    ends open by 1.3 % of their play, with forces of 2e-9 of the largest:
+    neither the slack nor the force said "active", the face they left
+    allowed a tilt, and the solve took the tie route and was declined after
+    74 s. Here one end of an 8-segment string is opened the same way, along
+    the motion the face without it leaves free: the polish adds the contacts
+    that hold that motion (``faces.holders``) and comes back to the optimum;
+    without them it finds nothing certified."""
+    from dataclasses import replace
+
+    from jointplay.io.generate import tube_string
+
+    ws = Workspace.of(tube_string(8))
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    sigma = np.zeros(len(ws.balls))
+    best = pipeline.optimum(ws, g_hat, sigma)
+    assert best.active is not None
+    c = 12  # segment 4's spigot, its end on the previous segment's side
+    assert ws.balls[c].contact.name == "end-"
+    reduced = tuple(tuple(i for i in part if i != c) for part in best.active)
+    assert c in {*best.active[0], *best.active[1]}
+    face = faces.face_of(ws, (reduced[0], reduced[1]))
+    assert not faces.is_determined(ws, face, best.x)
+    assert faces.holders(ws, face, best.x) == [c]
+    # open the end by 1.3 % of its play along the face's free motion
+    st = ws.stack
+    free = linalg.null_space(linalg.vstack([ws.E, faces._held_rows(ws, face, best.x)], ws.m), ws.m)
+    v, rho, _ = st.levels(best.x)
+    rows = slice(st.start[c], st.start[c] + st.k[c])
+    grad = (v[rows] / rho[c]) @ linalg.dense(st.A[rows]) + linalg.dense(st.B[c : c + 1])[0]
+    d = free @ (free.T @ grad)
+    target = st.r[c] * (1 - 0.013)
+    lo, hi = 0.0, 1.0
+    while st.levels(best.x - hi * d)[2][c] > target:
+        hi *= 2
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if st.levels(best.x - mid * d)[2][c] > target else (lo, mid)
+    x = best.x - hi * d
+    level = st.levels(x)[2]
+    assert 1 - level[c] / st.r[c] == pytest.approx(0.013, rel=1e-6)
+    assert np.max((level - st.r) / st.r) < 1e-12  # the others stay within their play
+    lam, f = best.lam.copy(), best.f.copy()
+    faint = 2e-9 * float(np.max(lam))
+    f[rows] *= faint / lam[c]
+    lam[c] = faint
+    start = replace(best, x=x, lam=lam, f=f, certificate=None, active=None)
+
+    found = pipeline.refine_active(ws, g_hat, sigma, start, (reduced[0], reduced[1]))
+    assert found is not None and found.certificate is not None and found.certificate.certified
+    assert found.active == best.active
+    np.testing.assert_allclose(found.x, best.x, rtol=0, atol=1e-12)
+
+    monkeypatch.setattr(faces, "holders", lambda *args: [])
+    assert pipeline.refine_active(ws, g_hat, sigma, start, (reduced[0], reduced[1])) is None

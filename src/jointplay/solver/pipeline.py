@@ -267,8 +267,9 @@ def refine_active(
     ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
 ) -> faces.Point | None:
     """A certified optimum, from the KKT equations of the active set
-    ``key`` read from the interior-point answer or, failing that, of every
-    cone near its limit, of ``key`` with every cone the interior point
+    ``key`` read from the interior-point answer or, failing that, of ``key``
+    with the cones that hold a motion its face leaves free (``faces.holders``),
+    of every cone near its limit, of ``key`` with every cone the interior point
     loads strictly, or of ``key`` without its faint cones (each start once,
     a set met before is not tried again); if some force comes out negative
     or a cone is pushed past its limit, take a few steps of an active-set
@@ -296,8 +297,21 @@ def refine_active(
     loaded = set(np.flatnonzero(point.lam > st.positive_force * top).tolist())
     seen: set[frozenset[int]] = set()
     held_now = {*key[0], *key[1]}
-    for start in (held_now, near, held_now | loaded, held_now - faint):
-        found = active_set_steps(ws, g_hat, sigma, point, start, at_apex, seen)
+
+    def with_holders() -> set[int]:  # only if the interior point's face leaves a motion free
+        face = faces.face_of(ws, key)
+        if faces.is_determined(ws, face, point.x):
+            return held_now
+        return held_now | set(faces.holders(ws, face, point.x))
+
+    for start in (
+        lambda: held_now,
+        with_holders,
+        lambda: near,
+        lambda: held_now | loaded,
+        lambda: held_now - faint,
+    ):
+        found = active_set_steps(ws, g_hat, sigma, point, start(), at_apex, seen)
         if found is not None:
             return found
     return None
