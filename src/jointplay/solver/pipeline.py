@@ -28,7 +28,7 @@ program when the face does not pin the position; the finer retry.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -304,13 +304,14 @@ def refine_active(
             return held_now
         return held_now | set(faces.holders(ws, face, point.x))
 
-    for start in (
+    starts: tuple[Callable[[], set[int]], ...] = (
         lambda: held_now,
         with_holders,
         lambda: near,
         lambda: held_now | loaded,
         lambda: held_now - faint,
-    ):
+    )
+    for start in starts:
         found = active_set_steps(ws, g_hat, sigma, point, start(), at_apex, seen)
         if found is not None:
             return found
