@@ -243,15 +243,24 @@ def largest_singular_value(C: sp.spmatrix) -> float:
     return float(np.linalg.norm(C @ v))
 
 
-def null_basis(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> sp.csc_matrix:
+def null_basis(
+    C: sp.spmatrix,
+    m: int,
+    rcond: float = DEFAULT.free_motion_rcond,
+    orthonormal: bool = True,
+    s_max: float | None = None,
+) -> sp.csc_matrix:
     """Sparse orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``
     (a singular value of a body's block below ``rcond`` times C's largest
-    counts as zero)."""
+    counts as zero). ``orthonormal=False``: a basis of unit columns, not
+    orthogonalized (enough to tell what they move: the QR of vectors that
+    run down a long chain is dense, 2 s for 377 of a 10,000-body string).
+    ``s_max``: the scale of the threshold, if not C's largest singular value
+    (another matrix's, as in ``column_rank_deficit``)."""
     C = _checked(C, m)
     if C.shape[0] == 0 or C.nnz == 0:
         return sp.identity(m, format="csc")
-    s_max = largest_singular_value(C)
-    elim = _eliminate(C, m, rcond, s_max)
+    elim = _eliminate(C, m, rcond, largest_singular_value(C) if s_max is None else s_max)
     position = {body: i for i, body in enumerate(elim.order)}
     # bodies eliminated before k whose pivot rows involve k
     dependents: dict[int, list[int]] = {}
@@ -262,7 +271,23 @@ def null_basis(C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond)
     for j, V in sorted(elim.free, key=lambda free: free[0]):  # in body order
         for q in range(V.shape[1]):
             vectors.append(_back_substitute(j, V[:, q], elim, position, dependents))
-    return _orthonormal(vectors, m)
+    if orthonormal:
+        return _orthonormal(vectors, m)
+    return _unit_columns(vectors, m)
+
+
+def _unit_columns(vectors: list[dict[int, FloatArray]], m: int) -> sp.csc_matrix:
+    """The vectors (body -> 6 entries) as sparse columns of unit norm."""
+    if not vectors:
+        return sp.csc_matrix((m, 0))
+    rows = [(6 * np.array(list(v))[:, None] + np.arange(6)).ravel() for v in vectors]
+    vals = [np.concatenate(list(v.values())) for v in vectors]
+    cols = np.repeat(np.arange(len(vectors)), [len(r) for r in rows])
+    out = sp.csc_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), cols)), shape=(m, len(vectors))
+    )
+    norms = np.sqrt(np.asarray(out.multiply(out).sum(axis=0)).ravel())
+    return sp.csc_matrix(out @ sp.diags(1.0 / norms))
 
 
 def column_rank_deficit(

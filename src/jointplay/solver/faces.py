@@ -182,11 +182,9 @@ def _held_rows(ws: Workspace, face: Face, x: FloatArray) -> Matrix | None:
     None when a tilting cone rests at its apex (it holds no direction)."""
     sub = face.stack
     v, rho = sub.norms(x)
-    rows = [face.L]
-    for i in range(len(sub.k)):
-        if not sub.has_offset[i]:
-            rows.append(sub.cone_rows(i))
-            continue
+    plain = np.flatnonzero(~sub.has_offset)  # all at once: a long chain has 40,000
+    rows = [face.L, sub.A[sub.rows_of(plain)]]
+    for i in np.flatnonzero(sub.has_offset).tolist():
         if rho[i] == 0.0:
             return None
         w = np.append(v[sub.start[i] : sub.start[i] + sub.k[i]] / rho[i], -1.0) / np.sqrt(2)
@@ -198,24 +196,32 @@ def _held_rows(ws: Workspace, face: Face, x: FloatArray) -> Matrix | None:
 def holders(ws: Workspace, face: Face, x: FloatArray) -> list[int]:
     """The cones outside ``face`` that would hold a motion it leaves free
     (besides the mechanism's free motions, which move no cone): those whose
-    rows move along one. A face that leaves a motion free is a tie only if
-    these cannot join it: on a long chain the interior point may leave such
-    a contact open, its force below its tolerance (a 10,000-segment tube
-    string: 377 spigot ends 1.3 % of their play open, with forces of 2e-9;
-    with them Newton pins every position, without them the face ties)."""
+    rows move along one; none if the face pins the position. A face that
+    leaves a motion free is a tie only if these cannot join it: on a long
+    chain the interior point may leave such a contact open, its force below
+    its tolerance (a 10,000-segment tube string: 377 spigot ends 1.3 % of
+    their play open, with forces of 2e-9; with them Newton pins every
+    position, without them the face ties)."""
     rows = _held_rows(ws, face, x)
     if rows is None:
         return []
-    free = linalg.null_space(linalg.vstack([ws.E, rows], ws.m), ws.m, ws.settings.free_motion_rcond)
-    if not free.shape[1]:
+    C = linalg.vstack([ws.E, rows], ws.m)
+    rcond = ws.settings.free_motion_rcond
+    if ws.sparse:  # the count that decides ``is_determined``, from the same elimination
+        scale = ws.limit_scale
+        free = free_motions.null_basis(C, ws.m, rcond, orthonormal=False, s_max=scale)
+        if free.shape[1] <= ws.N.shape[1]:
+            return []
+    elif pins_position(ws, rows):
         return []
+    else:
+        free = linalg.null_space(C, ws.m, rcond)
     stack = ws.stack
     moved = linalg.row_norms(stack.A @ free) ** 2
     size = linalg.row_norms(stack.A) ** 2
     cone_moved = np.sqrt(stack.segment_sum(moved)) + linalg.row_norms(stack.B @ free)
     cone_size = np.sqrt(stack.segment_sum(size)) + linalg.row_norms(stack.B)
     inside = set(face.key[0]) | set(face.key[1])
-    rcond = ws.settings.free_motion_rcond
     return [int(i) for i in np.flatnonzero(cone_moved > rcond * cone_size) if int(i) not in inside]
 
 

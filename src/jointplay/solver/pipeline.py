@@ -298,11 +298,8 @@ def refine_active(
     seen: set[frozenset[int]] = set()
     held_now = {*key[0], *key[1]}
 
-    def with_holders() -> set[int]:  # only if the interior point's face leaves a motion free
-        face = faces.face_of(ws, key)
-        if faces.is_determined(ws, face, point.x):
-            return held_now
-        return held_now | set(faces.holders(ws, face, point.x))
+    def with_holders() -> set[int]:  # none if the interior point's face pins the position
+        return held_now | set(faces.holders(ws, faces.face_of(ws, key), point.x))
 
     starts: tuple[Callable[[], set[int]], ...] = (
         lambda: held_now,
