@@ -371,7 +371,7 @@ def test_a_contact_that_holds_a_face_s_free_motion_joins_it_before_a_tie_is_decl
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """On a 10,000-segment tube string the interior point left 377 spigot
-    ends open by 1.3 % of their play, with forces of 2e-9 of the largest:
+    ends open by up to 1.3 % of their play, with forces down to 2e-9 of the largest:
     neither the slack nor the force said "active", the face they left
     allowed a tilt, and the solve took the tie route and was declined after
     74 s. Here one end of an 8-segment string is opened the same way, along

@@ -23,7 +23,7 @@ call it free and this elimination held. Bodies go in rounds of least degree
 stacked), so a chain or a tree makes no fill and a chain of n bodies takes
 about log2(n) rounds; a free motion that one body makes alone (a
 shaft's spin) stays a vector on that body. The basis returned is sparse and
-orthonormal.
+orthonormal (or, asked, of unit columns only: ``null_basis``).
 """
 
 from __future__ import annotations
@@ -250,7 +250,7 @@ def null_basis(
     orthonormal: bool = True,
     s_max: float | None = None,
 ) -> sp.csc_matrix:
-    """Sparse orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``
+    """Sparse basis (m, p), orthonormal, of the motions ``d`` with ``C d = 0``
     (a singular value of a body's block below ``rcond`` times C's largest
     counts as zero). ``orthonormal=False``: a basis of unit columns, not
     orthogonalized (enough to tell what they move: the QR of vectors that

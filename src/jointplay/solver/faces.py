@@ -199,9 +199,11 @@ def holders(ws: Workspace, face: Face, x: FloatArray) -> list[int]:
     rows move along one; none if the face pins the position. A face that
     leaves a motion free is a tie only if these cannot join it: on a long
     chain the interior point may leave such a contact open, its force below
-    its tolerance (a 10,000-segment tube string: 377 spigot ends 1.3 % of
-    their play open, with forces of 2e-9; with them Newton pins every
-    position, without them the face ties)."""
+    its tolerance (a 10,000-segment tube string: 377 spigot ends up to
+    1.3 % of their play open, with forces down to 2e-9 of the largest; with
+    them Newton pins every position, without them the face ties). Every
+    cone such a motion moves is named, however far from its limit: the
+    start is judged by Newton and the certificate, not by its size."""
     rows = _held_rows(ws, face, x)
     if rows is None:
         return []
@@ -218,11 +220,10 @@ def holders(ws: Workspace, face: Face, x: FloatArray) -> list[int]:
         free = linalg.null_space(C, ws.m, rcond)
     stack = ws.stack
     moved = linalg.row_norms(stack.A @ free) ** 2
-    size = linalg.row_norms(stack.A) ** 2
     cone_moved = np.sqrt(stack.segment_sum(moved)) + linalg.row_norms(stack.B @ free)
-    cone_size = np.sqrt(stack.segment_sum(size)) + linalg.row_norms(stack.B)
     inside = set(face.key[0]) | set(face.key[1])
-    return [int(i) for i in np.flatnonzero(cone_moved > rcond * cone_size) if int(i) not in inside]
+    held = np.flatnonzero(cone_moved > rcond * stack.cone_size)
+    return [int(i) for i in held if int(i) not in inside]
 
 
 def determined_rows(

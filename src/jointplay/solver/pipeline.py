@@ -21,7 +21,7 @@ convex, so Clarabel's interior-point answer is the global optimum. Then:
    interior-point tolerance, then declined.
 
 The routes, in order: warm start (Newton on the last active set); interior
-point, then polish (active-set rounds from three starts); least-norm face
+point, then polish (active-set rounds from five starts); least-norm face
 program when the face does not pin the position; the finer retry.
 """
 
