@@ -624,6 +624,8 @@ class _ZoneProgram:
         self.cones = cones
         self.Pq = sp.csc_matrix((m + nd, m + nd))
         self.settings = conic.options(ws.settings)
+        # one solver for every direction: each support only changes the cost
+        self.solver = conic.KeptSolver(self.Pq, self.A, self.b, self.cones, self.settings)
         # an inaccurate support is kept inside every clearance to the
         # certificate's tolerance, its value to ``support_gap``
         self.tol = ws.settings.feasibility_tolerance * ws.max_radius
@@ -632,13 +634,11 @@ class _ZoneProgram:
     def support(self, u: FloatArray) -> FloatArray | None:
         """The support point d (mm) in direction u, or None if the point goes
         on for ever along u (a part lifting off its one-sided supports)."""
-        import clarabel
-
         from jointplay.solver import conic
 
         q = np.zeros(self.A.shape[1])
         q[: self.m] = -(u @ self.P)
-        sol = clarabel.DefaultSolver(self.Pq, q, self.A, self.b, self.cones, self.settings).solve()
+        sol = self.solver.solve(q)
         if conic.outcome(sol) == "unbounded":
             return None
         if conic.outcome(sol) == "infeasible":
