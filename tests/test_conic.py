@@ -44,3 +44,32 @@ def test_check_raises_a_jointplay_error_not_an_assert() -> None:
     bad = replace(result, certificate=replace(result.certificate, certified=False))
     with pytest.raises(jointplay.SolverError, match="uncertified result"):
         bad.check()
+
+
+@pytest.mark.parametrize("allowed", [True, False], ids=["updated", "made anew"])
+def test_a_kept_solver_answers_each_cost_as_a_new_solver_does(
+    allowed: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``conic.KeptSolver`` (an envelope's directions): one solver given each
+    new cost with ``update``, where Clarabel allows it, else a new solver
+    each time; either way each answer is that of a new solver for its cost,
+    to the interior-point tolerance (an updated solver's path differs from a
+    new one's: 3.5e-12 apart on the paper's shaft, not bit for bit)."""
+    import numpy as np
+
+    from jointplay.solver import Workspace
+
+    ws = Workspace.of(jointplay.load(PAPER / "6.1.6.1.yaml"))
+    prog = ws.interior_program
+    if not allowed:
+        monkeypatch.setattr(clarabel.DefaultSolver, "is_data_update_allowed", lambda self: False)
+    kept = conic.KeptSolver(prog.P, prog.A, prog.b, prog.cones, prog.settings)
+    rng = np.random.default_rng(3)
+    for q in [*rng.standard_normal((3, ws.m)), -ws.asm.g / np.linalg.norm(ws.asm.g)]:
+        got = kept.solve(q)
+        new = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
+        assert conic.outcome(got) == conic.outcome(new) == "optimal"
+        tol = ws.settings.ipm_tolerance  # both stop at it (unit loads, scaled unknowns)
+        np.testing.assert_allclose(got.x, new.x, rtol=0, atol=tol)
+        np.testing.assert_allclose(got.z, new.z, rtol=0, atol=tol)
+    assert (kept.kept is not None) == allowed

@@ -163,9 +163,9 @@ def _upper(P: Matrix | None, m: int) -> sp.csc_matrix:
 
 
 def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
-    # a new solver each time: one kept and updated answers the same to
-    # round-off only (1e-27 mm on wobbly_table's second case), and a
-    # workspace's answers would depend on the solves before them
+    # a new solver each time: one kept and updated answers as a new one
+    # does to the interior-point tolerance only (3.5e-12 apart on the
+    # paper's shaft), so a workspace's answers would depend on its history
     sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
     if outcome(sol) == "unbounded":  # a one-sided motion (_check_driven took the rest)
         motion = held.driven_motion(ws, -q[: ws.m], np.asarray(sol.x))
@@ -231,11 +231,11 @@ class KeptSolver:
     """One cone program's Clarabel solver, kept for a sequence of linear
     costs ``q`` (an envelope's directions): each is given to it with
     ``update(q=...)``, which keeps its KKT matrix's analysis (the paper's
-    shaft: 80 us a solve against 125 for a new solver). Its answers equal a
-    new solver's to round-off only, so it serves one run's own sequence,
-    never a workspace's solves (``run``). Where the installed Clarabel does
-    not allow the update (its presolve removed rows), each solve makes a
-    new solver."""
+    shaft: 80 us a solve against 125 for a new solver). Its answers are a
+    new solver's to the interior-point tolerance, not bit for bit, so it
+    serves one run's own sequence, never a workspace's solves (``run``).
+    Where the installed Clarabel does not allow the update (its presolve
+    removed rows), each solve makes a new solver."""
 
     def __init__(self, P: Any, A: Any, b: FloatArray, cones: list[Any], settings: Any):
         self.data = (P, A, b, cones, settings)
