@@ -290,12 +290,14 @@ def _solve_batch(
                     )
                     failed[now[~ok]] += 1
                     failed[now[wrong_set]] = give_up
-                    if not np.any(ok) and np.all(near >= B):
+                    if part == 0 and not np.any(ok) and np.all(near >= B):
                         # a start from before the batch (a study's nominal
-                        # answer) is a guess: a set that fails on every row it
-                        # was tried on is not tried on the rest from it (a
+                        # answer) is a guess: a set that fails on every row of
+                        # its first part is not tried on the rest from it (a
                         # tilted guide's samples all lie on another set: trying
-                        # each from the nominal one halved the carriage's rate)
+                        # each from the nominal one halved the carriage's
+                        # rate); a row solved on the set later may start them
+                        start_distance[active][tried[chunk:]] = np.inf
                         break
                     if np.any(ok):
                         won = now[ok]
