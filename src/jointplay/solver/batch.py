@@ -244,6 +244,7 @@ def _solve_batch(
     start_distance: dict[FaceKey, FloatArray] = {}
     queried: dict[FaceKey, int] = {}  # active set -> its solved rows already queried
     give_up = ws.settings.batch_give_up
+    guess_rows = ws.settings.batch_guess_rows
     full = 0
     # the batched Newton works on dense stacks; a large (sparse) mechanism's
     # rows are solved one by one (warm-started from the one before when the
@@ -290,7 +291,8 @@ def _solve_batch(
                     )
                     failed[now[~ok]] += 1
                     failed[now[wrong_set]] = give_up
-                    if part == 0 and not np.any(ok) and np.all(near >= B):
+                    guess = part == 0 and np.all(near >= B) and len(now) >= guess_rows
+                    if guess and not np.any(ok):
                         # a start from before the batch (a study's nominal
                         # answer) is a guess: a set that fails on every row of
                         # its first part is not tried on the rest from it (a
