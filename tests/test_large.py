@@ -71,17 +71,21 @@ def test_long_string_is_certified(closed: bool) -> None:
         assert tip == pytest.approx(sum(plays), abs=MM)
 
 
-def test_a_3000_segment_string_is_polished() -> None:
+@pytest.mark.parametrize("n", [3000, 10_000])
+def test_a_long_string_is_polished(n: int) -> None:
     """Long chains make ill-conditioned KKT systems: their plain sparse LU
     steps, refined, must keep the answer polished. (A round-off shift of the
-    factored matrix once cost this string its certificate.)"""
-    result = jointplay.solve(tube_string(3000))
+    factored matrix once cost the 3,000-segment string its certificate.)
+    Issue 18: chains of 10,000 bodies are certified. The interior point
+    left 377 spigot ends of that string open (``faces.holders``), and it
+    was declined after 74 s; now it is polished (8 s, 454 MB, in bench_scaling)."""
+    result = jointplay.solve(tube_string(n))
     result.check()
     assert result.certificate.method == "polished"
     assert result.certificate.feasibility_mm <= 1e-9
-    data = tube_string_dict(3000)
+    data = tube_string_dict(n)
     plays = [j["axial_clearance"] / 2 for j in data["joints"] if j["type"] == "revolute"]
-    assert result.bodies["T3000"].translation[0] == pytest.approx(sum(plays), abs=MM)
+    assert result.bodies[f"T{n}"].translation[0] == pytest.approx(sum(plays), abs=MM)
 
 
 def test_free_spins_of_a_long_string_come_out_zero(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -105,16 +109,3 @@ def test_a_driven_spin_in_a_long_string_is_reported() -> None:
         jointplay.solve(model_from_dict(data))
     assert err.value.body in {f"T{i}" for i in range(40, 61)}
     assert "rotation about the global X axis" in str(err.value)
-
-
-def test_a_10000_segment_string_is_polished() -> None:
-    """Issue 18: chains of 10,000 bodies are certified. The interior point
-    left 377 spigot ends open (``faces.holders``), and this string was
-    declined after 74 s; now it is polished (9 s, 455 MB, in bench_scaling)."""
-    result = jointplay.solve(tube_string(10_000))
-    result.check()
-    assert result.certificate.method == "polished"
-    assert result.certificate.feasibility_mm <= 1e-9
-    data = tube_string_dict(10_000)
-    plays = [j["axial_clearance"] / 2 for j in data["joints"] if j["type"] == "revolute"]
-    assert result.bodies["T10000"].translation[0] == pytest.approx(sum(plays), abs=MM)
