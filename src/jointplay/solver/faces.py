@@ -209,15 +209,12 @@ def holders(ws: Workspace, face: Face, x: FloatArray) -> list[int]:
         return []
     C = linalg.vstack([ws.E, rows], ws.m)
     rcond = ws.settings.free_motion_rcond
-    if ws.sparse:  # the count that decides ``is_determined``, from the same elimination
-        scale = ws.limit_scale
-        free = free_motions.null_basis(C, ws.m, rcond, orthonormal=False, s_max=scale)
-        if free.shape[1] <= ws.N.shape[1]:
-            return []
-    elif pins_position(ws, rows):
-        return []
+    if ws.sparse:  # at the free motions' threshold, as ``pins_position`` counts
+        free = free_motions.null_basis(C, ws.m, rcond, orthonormal=False, s_max=ws.limit_scale)
     else:
         free = linalg.null_space(C, ws.m, rcond)
+    if free.shape[1] <= ws.N.shape[1]:  # only the free motions: the face pins the position
+        return []
     stack = ws.stack
     moved = linalg.row_norms(stack.A @ free) ** 2
     cone_moved = np.sqrt(stack.segment_sum(moved)) + linalg.row_norms(stack.B @ free)
