@@ -69,48 +69,56 @@ class _Elimination:
 def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
     """C's rows grouped by the set of bodies they touch, each group a dense
     block over those bodies' columns (vectorized: a large mechanism has
-    hundreds of thousands of rows)."""
+    hundreds of thousands of rows). Groups of one body come first, by body,
+    then those of two, by their pair, then the rare rows of more bodies;
+    within a group, rows keep their order."""
     C = sp.csr_matrix(C, copy=True)  # the caller's matrix stays as it is
     C.sum_duplicates()  # repeated entries add up, as in any sparse product
     C.eliminate_zeros()
+    nb1 = C.shape[1] // 6 + 1
     row_of = np.repeat(np.arange(C.shape[0]), np.diff(C.indptr))
     body_of = C.indices // 6
     # each row's bodies, as (row, body) pairs in order
-    pair = np.unique(row_of.astype(np.int64) * (C.shape[1] // 6 + 1) + body_of)
-    pair_row, pair_body = np.divmod(pair, C.shape[1] // 6 + 1)
+    pair = np.unique(row_of.astype(np.int64) * nb1 + body_of)
+    pair_row, pair_body = np.divmod(pair, nb1)
     count = np.bincount(pair_row, minlength=C.shape[0])
-    first = np.concatenate([[0], np.cumsum(count)[:-1]])
-    keys: dict[tuple[int, ...], list[int]] = {}
-    two = count == 2  # the common case, a joint between two bodies
-    one = count == 1
-    for same, touched in ((np.flatnonzero(one), 1), (np.flatnonzero(two), 2)):
-        if not len(same):
-            continue
-        bodies = pair_body[first[same][:, None] + np.arange(touched)]
-        order = np.lexsort(bodies.T[::-1])
-        same, bodies = same[order], bodies[order]
-        cut = np.flatnonzero(np.any(np.diff(bodies, axis=0) != 0, axis=1)) + 1
-        for chunk_rows, chunk_bodies in zip(
-            np.split(same, cut), np.split(bodies, cut), strict=True
-        ):
-            keys[tuple(chunk_bodies[0].tolist())] = chunk_rows.tolist()
-    for row in np.flatnonzero(count > 2):  # rows that touch more bodies (rare)
-        key = tuple(pair_body[first[row] : first[row] + count[row]].tolist())
-        keys.setdefault(key, []).append(int(row))
-    # scatter every entry into one buffer that holds the groups' blocks
-    n_rows = np.array([len(rows) for rows in keys.values()], dtype=np.intp)
-    width = 6 * np.array([len(key) for key in keys], dtype=np.intp)
-    offset = np.concatenate([[0], np.cumsum(n_rows * width)[:-1]]).astype(np.intp)
+    first = np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.intp)
+    # rows of one or two bodies (a joint between two: the common case), by a
+    # code that sorts one-body groups before two-body ones, each by bodies
+    simple = np.flatnonzero((count == 1) | (count == 2))
+    b0 = pair_body[first[simple]]
+    b1 = np.where(count[simple] == 2, pair_body[np.minimum(first[simple] + 1, len(pair) - 1)], -1)
+    code = np.where(b1 < 0, b0, nb1 + b0 * nb1 + b1)
+    order = np.argsort(code, kind="stable")
+    rows_sorted, code_sorted = simple[order], code[order]
+    starts = np.flatnonzero(np.r_[len(code_sorted) > 0, code_sorted[1:] != code_sorted[:-1]])
+    size = np.diff(np.r_[starts, len(rows_sorted)])
+    keys: list[tuple[int, ...]] = [
+        (b,) if c < 0 else (b, c)
+        for b, c in zip(b0[order][starts].tolist(), b1[order][starts].tolist(), strict=True)
+    ]
     group_of = np.zeros(C.shape[0], dtype=np.intp)
     local_row = np.zeros(C.shape[0], dtype=np.intp)
-    for index, rows in enumerate(keys.values()):
-        group_of[rows] = index
+    group_of[rows_sorted] = np.repeat(np.arange(len(starts)), size)
+    local_row[rows_sorted] = np.arange(len(rows_sorted)) - np.repeat(starts, size)
+    n_rows = size.tolist()
+    wide: dict[tuple[int, ...], list[int]] = {}
+    for row in np.flatnonzero(count > 2).tolist():  # rows that touch more bodies (rare)
+        bodies = tuple(pair_body[first[row] : first[row] + count[row]].tolist())
+        wide.setdefault(bodies, []).append(row)
+    for key, rows in wide.items():
+        group_of[rows] = len(keys)
         local_row[rows] = np.arange(len(rows))
-    nb1 = C.shape[1] // 6 + 1
+        keys.append(key)
+        n_rows.append(len(rows))
+    # scatter every entry into one buffer that holds the groups' blocks
+    n_rows_a = np.array(n_rows, dtype=np.intp)
+    width = 6 * np.array([len(key) for key in keys], dtype=np.intp)
+    offset = np.concatenate([[0], np.cumsum(n_rows_a * width)[:-1]]).astype(np.intp)
     rank = np.searchsorted(pair, row_of.astype(np.int64) * nb1 + body_of) - first[row_of]
     group = group_of[row_of]
     flat = offset[group] + local_row[row_of] * width[group] + 6 * rank + C.indices % 6
-    buffer = np.zeros(int(np.sum(n_rows * width)))
+    buffer = np.zeros(int(np.sum(n_rows_a * width)))
     buffer[flat] = C.data
     return [
         (key, buffer[offset[g] : offset[g] + n_rows[g] * width[g]].reshape(n_rows[g], width[g]))
