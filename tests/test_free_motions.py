@@ -174,6 +174,21 @@ def test_free_motions_come_in_body_order_and_a_bearing_chain_is_certified() -> N
     assert result.certificate.certified and result.equilibrium_residual < 1e-9
 
 
+@pytest.mark.parametrize("shafts", [21, 36, 38, 39])
+def test_the_retry_takes_another_path_and_degenerate_bearing_chains_certify(shafts: int) -> None:
+    """The one retry of an answer that fails its certificate changes the
+    interior point's static regularization as well as its tolerance
+    (``fine_ipm_regularization``). Bearing chains are degenerate: the
+    interior point stops "almost solved" on an active set whose contacts
+    cannot all touch (a loop of contacts over a dozen shafts, 1e-8 apart),
+    and its face's least-norm point goes past one of them. With the finer
+    tolerance alone the retry stopped on the same set, and these chains were
+    declined (21 and 39 shafts on clarabel 0.11; 36, 38 and 39 on 0.10)."""
+    result = jointplay.solve(bearing_chain(shafts))
+    result.check()  # certified, and balanced per body in newtons
+    assert result.certificate.feasibility_mm <= 1e-6
+
+
 def test_rows_are_grouped_by_the_bodies_they_touch_in_one_documented_order() -> None:
     """The elimination takes each body's rows in the order ``_row_blocks``
     gives them (its round-off depends on it): groups of one body by body,

@@ -116,6 +116,7 @@ def options(
     # against a long lever, the default leaves some programs "AlmostSolved"
     refine = settings.ipm_refinement
     out.iterative_refinement_reltol = out.iterative_refinement_abstol = refine
+    out.static_regularization_constant = settings.ipm_regularization
     # the KKT factorization every answer here was checked with (0.10's
     # default): 0.11's "auto" picks another, whose end points declined 157 of
     # the property tests' 2,338 mechanisms (2 % allowed; pyproject.toml)

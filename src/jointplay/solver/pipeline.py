@@ -177,7 +177,14 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
     if not cert.certified and np.any(g_hat) and ws.settings.ipm_tolerance > fine_ipm:
         # a nearly degenerate mechanism can leave the interior-point answer
         # (and its polish) 1e-7 mm off at the usual tolerance: once more, finer
-        fine = Workspace(ws.asm, replace(ws.settings, ipm_tolerance=fine_ipm, warm_start=False))
+        # and on another path (``fine_ipm_regularization``)
+        retry = replace(
+            ws.settings,
+            ipm_tolerance=fine_ipm,
+            ipm_regularization=ws.settings.fine_ipm_regularization,
+            warm_start=False,
+        )
+        fine = Workspace(ws.asm, retry)
         try:
             point = optimum(fine, g_hat, sigma)
         except SolverError:
