@@ -199,16 +199,23 @@ def test_rows_are_grouped_by_the_bodies_they_touch_in_one_documented_order() -> 
     from jointplay.numerics.free_motions import _row_blocks
 
     rng = np.random.default_rng(7)
-    for _ in range(200):
-        n_bodies = int(rng.integers(1, 10))
-        m = 6 * n_bodies
-        dense = np.zeros((int(rng.integers(1, 30)), m))
-        for row in dense:
-            for body in rng.choice(n_bodies, int(rng.integers(1, min(4, n_bodies) + 1)), False):
-                cols = 6 * body + rng.choice(6, int(rng.integers(1, 7)), replace=False)
-                row[cols] = rng.standard_normal(len(cols))
-        C = sp.csr_matrix(dense)
-        C.data[rng.integers(0, C.nnz)] = 0.0  # a stored zero moves no body
+    special = [
+        sp.csr_matrix((0, 12)),  # no rows
+        sp.csr_matrix((3, 12)),  # rows with no entries
+        sp.csr_matrix(np.kron(np.eye(2), np.ones((1, 18)))),  # only rows of three bodies
+    ]
+    for case in range(200 + len(special)):
+        if case < len(special):
+            C = special[case]
+        else:
+            n_bodies = int(rng.integers(1, 10))
+            dense = np.zeros((int(rng.integers(1, 30)), 6 * n_bodies))
+            for row in dense:
+                for body in rng.choice(n_bodies, int(rng.integers(1, min(4, n_bodies) + 1)), False):
+                    cols = 6 * body + rng.choice(6, int(rng.integers(1, 7)), replace=False)
+                    row[cols] = rng.standard_normal(len(cols))
+            C = sp.csr_matrix(dense)
+            C.data[rng.integers(0, C.nnz)] = 0.0  # a stored zero moves no body
         dense = C.toarray()
         groups: dict[tuple[int, ...], list[int]] = {}
         for i, row in enumerate(dense):
