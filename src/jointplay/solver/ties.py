@@ -143,6 +143,7 @@ def polish_least_norm(
             x,
             np.maximum(lam[on_surface], 0.0),
             settings=st,
+            repeated_rows=True,  # a sparse face keeps its rows (``independent_rows``)
         )
         if polished is None:
             break
