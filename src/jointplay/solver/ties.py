@@ -99,12 +99,20 @@ def least_norm(
         # badly scaled (levers of 100 m on plays of 0.1 mm): the active-set
         # Newton alone, from the optimum, with no other contact active
         x = polish_least_norm(
-            ws, point.x, np.zeros(len(rest.k)), np.zeros(rest.A.shape[0]), rest, Eq, e, strict=True
+            ws,
+            point.x,
+            np.zeros(len(rest.k)),
+            np.zeros(rest.A.shape[0]),
+            rest,
+            Eq,
+            e,
+            strict=True,
+            face=True,
         )
     else:
         z = np.asarray(sol.z)
         lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
-        x = polish_least_norm(ws, np.asarray(sol.x), lam_rest, f_rest, rest, Eq, e)
+        x = polish_least_norm(ws, np.asarray(sol.x), lam_rest, f_rest, rest, Eq, e, face=True)
     # any optimal forces are complementary to every optimal position:
     # those of ``point`` hold at x, which keeps its active cones as they were
     return faces.Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
@@ -119,11 +127,15 @@ def polish_least_norm(
     Eq: Matrix,
     e: FloatArray,
     strict: bool = False,
+    face: bool = False,
 ) -> FloatArray:
     """Newton on the KKT equations of the least-norm program from its
     interior point ``x``, with a few active-set rounds (cones pushed past
     their limit join); ``x`` itself if that does not end feasible (or,
-    ``strict``, SolverError)."""
+    ``strict``, SolverError). ``face``: ``Eq`` holds a tied face's rows,
+    which repeat each other (kept as they are in a sparse system), so its
+    steps are regularized from the start (``newton``'s ``repeated_rows``);
+    the workspace's own equalities alone (no load) are independent."""
     metric = ws.asm.metric_matrix
     surface, linear = faces.active_set(ws, x, lam, f, rest, float(np.max(np.abs(metric @ x))))
     active = {*surface, *linear}
@@ -143,7 +155,7 @@ def polish_least_norm(
             x,
             np.maximum(lam[on_surface], 0.0),
             settings=st,
-            repeated_rows=True,  # a sparse face keeps its rows (``independent_rows``)
+            repeated_rows=face,
         )
         if polished is None:
             break
