@@ -376,6 +376,14 @@ class ContactTables:
     leaning: IntArray  # contacts whose centre of pressure moves with the force
     centre: FloatArray  # (J, 3) joint centres, mm
     R_world_joint: FloatArray  # (J, 3, 3)
+    contact_name: tuple[str, ...]  # (nc,)
+    turn_lever: FloatArray  # (nc,) mm per rad of a drive's backlash, nan for a play in mm
+    joint_name: tuple[str, ...]  # (J,)
+    joint_type: tuple[str, ...]  # (J,)
+    between: tuple[tuple[str, str], ...]  # (J,) bodies a, b
+    between_index: IntArray  # (J, 2) moving-body index of a and b, -1 for the ground
+    by_joint: IntArray  # (nc,) the contacts in joint order (file order within a joint)
+    first_contact: IntArray  # (J + 1,) joint j's contacts: by_joint[first[j] : first[j + 1]]
 
 
 def _wrench_map(contacts: Sequence[ContactRows], sparse: bool) -> Matrix:
@@ -509,6 +517,13 @@ class Assembly:
         return replace(self, contacts=contacts)
 
     @cached_property
+    def model_warnings(self) -> tuple[str, ...]:
+        """``Model.warnings``, worked out once for all of this assembly's
+        answers (a 10,000-joint model takes 0.2 s; the model, which a copy
+        may change, does not keep them)."""
+        return self.model.warnings
+
+    @cached_property
     def body_index(self) -> dict[str, int]:
         return {name: i for i, name in enumerate(self.body_names)}
 
@@ -560,19 +575,32 @@ class Assembly:
             np.zeros(6) if c.contact.offset is None else c.contact.offset for c in self.balls
         ]
         contacts = self.contacts
+        joint_of = np.array([c.joint_index for c in contacts], dtype=np.intp)
+        by_joint = np.argsort(joint_of, kind="stable").astype(np.intp)
         return ContactTables(
             tau_map,
             _wrench_map(self.balls, self.sparse),
             np.array(offsets).reshape(-1, 6),
             _wrench_map(self.fixed, self.sparse),
             np.array([not c.is_fixed for c in contacts], dtype=bool),
-            np.array([c.joint_index for c in contacts], dtype=np.intp),
+            joint_of,
             np.array([c.contact.point for c in contacts], dtype=float).reshape(-1, 3),
             np.array(
                 [n for n, c in enumerate(contacts) if c.contact.lever is not None], dtype=np.intp
             ),
             np.array([jt.centre for jt in joints], dtype=float).reshape(-1, 3),
             np.array([jt.R_world_joint for jt in joints], dtype=float).reshape(-1, 3, 3),
+            tuple(c.contact.name for c in contacts),
+            np.array([c.contact.turn_lever for c in contacts], dtype=float),  # None: nan
+            tuple(jt.name for jt in joints),
+            tuple(jt.type_name for jt in joints),
+            tuple(jt.between for jt in joints),
+            np.array(
+                [[self.body_index.get(name, -1) for name in jt.between] for jt in joints],
+                dtype=np.intp,
+            ).reshape(-1, 2),
+            by_joint,
+            np.searchsorted(joint_of[by_joint], np.arange(len(joints) + 1)).astype(np.intp),
         )
 
     @cached_property

@@ -8,12 +8,13 @@ joint centre in the joint frame, and the state of each contact; and the
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import NDArray
 
 from jointplay.errors import SolverError
 from jointplay.finite import IDENTITY, Linearization, Placement, linearization
@@ -150,6 +151,113 @@ class BodyResult:
         return {"translation": _list(self.translation), "rotation": _list(self.rotation)}
 
 
+RowT = TypeVar("RowT")
+
+
+class Rows(Mapping[str, RowT]):
+    """``{name: row}``, read-only, whose rows are made from an answer's
+    stacked arrays when first read: a large mechanism's answer has tens of
+    thousands of joints and contacts, and most readers look at a few.
+    ``make(i)`` makes the row of the ``i``-th name (a table's method, so
+    that the mapping pickles as plain data)."""
+
+    def __init__(self, names: tuple[str, ...], make: Callable[[int], RowT]):
+        self._names = names
+        self._make = make
+        self._index: dict[str, int] | None = None
+        self._made: dict[int, RowT] = {}
+
+    def __getitem__(self, name: str) -> RowT:
+        if self._index is None:
+            self._index = {n: i for i, n in enumerate(self._names)}
+        i = self._index[name]
+        row = self._made.get(i)
+        if row is None:
+            row = self._made[i] = self._make(i)
+        return row
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+    def __repr__(self) -> str:
+        return f"Rows({list(self._names)!r})"
+
+
+@dataclass(frozen=True)
+class BodyTable:
+    """Every body's displacement, stacked (``Model.bodies`` order)."""
+
+    name: tuple[str, ...]
+    translation: FloatArray  # (n, 3) mm
+    rotation: FloatArray  # (n, 3) rad
+
+    def row(self, i: int) -> BodyResult:
+        return BodyResult(self.name[i], self.translation[i], self.rotation[i])
+
+
+@dataclass(frozen=True)
+class ContactTable:
+    """Every contact's state, stacked (``Assembly.contacts`` order): the
+    fields of ``ContactResult``."""
+
+    name: tuple[str, ...]
+    gap_used: FloatArray
+    in_contact: NDArray[np.bool_]
+    force: FloatArray  # (nc, 3)
+    point: FloatArray  # (nc, 3)
+    penetration: FloatArray
+    torque: FloatArray  # (nc, 3)
+    is_turn: NDArray[np.bool_]  # a drive's backlash: penetration in rad
+
+    def row(self, c: int) -> ContactResult:
+        return ContactResult(
+            self.name[c],
+            float(self.gap_used[c]),
+            bool(self.in_contact[c]),
+            self.force[c],
+            self.point[c],
+            float(self.penetration[c]),
+            self.torque[c],
+            "rad" if self.is_turn[c] else "mm",
+        )
+
+
+@dataclass(frozen=True)
+class JointTable:
+    """Every joint's torsor and reaction, stacked (``Model.joints`` order):
+    the fields of ``JointResult``; its contacts ``by_joint[first[j] : first[j + 1]]``."""
+
+    name: tuple[str, ...]
+    type: tuple[str, ...]
+    between: tuple[tuple[str, str], ...]
+    centre: FloatArray  # (J, 3)
+    R_world_joint: FloatArray  # (J, 3, 3)
+    translation: FloatArray  # (J, 3)
+    rotation: FloatArray  # (J, 3)
+    reaction: FloatArray  # (J, 6): force, moment
+    contacts: ContactTable
+    by_joint: IntArray
+    first: IntArray
+
+    def row(self, j: int) -> JointResult:
+        own = self.by_joint[self.first[j] : self.first[j + 1]].tolist()
+        return JointResult(
+            self.name[j],
+            self.type[j],
+            self.between[j],
+            self.centre[j],
+            self.R_world_joint[j],
+            self.translation[j],
+            self.rotation[j],
+            tuple(self.contacts.row(c) for c in own),
+            self.reaction[j, :3],
+            self.reaction[j, 3:],
+        )
+
+
 @dataclass(frozen=True)
 class _Known:
     """A lazy value already known (what a pickled ``Result`` keeps)."""
@@ -164,9 +272,9 @@ class _Known:
 class Result:
     status: str
     potential_energy: float  # N*mm
-    bodies: dict[str, BodyResult]
-    joints: dict[str, JointResult]
-    points: dict[str, PointResult]
+    bodies: Mapping[str, BodyResult]
+    joints: Mapping[str, JointResult]
+    points: Mapping[str, PointResult]
     certificate: Certificate
     #: Worst imbalance of loads and contact forces over the moving bodies,
     #: computed in global axes from the reported forces (relative to the
@@ -293,7 +401,9 @@ def build_result(
     order), ``ball_vectors`` their force vectors (N, stacked like the rows
     of ``asm.stack.A``; see ``Contact``); ``rigid_forces``: the multipliers
     (N, N*mm) of the fixed rows (``asm.fixed`` order, rows stacked); ``loads`` and ``g``: the loads
-    solved for and their work.
+    solved for and their work. Every number is computed here, for every
+    body, joint and contact at once (``Assembly.tables``); the per-joint
+    objects are made when read (``Rows``).
     """
     model = asm.model
     n = len(asm.body_names)
@@ -301,17 +411,13 @@ def build_result(
     omega = asm.turn[:, None] * X[:, 3:]
     v_origin = asm.s * X[:, :3] - cross(omega, asm.body_ref)
     omega, v_origin = _clean_rows(omega, asm.s / asm.ell), _clean_rows(v_origin, asm.s)
-    index = asm.body_index
-    zero = np.zeros(3)
-    bodies: dict[str, BodyResult] = {}
-    for b in model.bodies:
-        i = index.get(b.name)
-        if i is None:
-            bodies[b.name] = BodyResult(b.name, zero, zero)
-        else:
-            bodies[b.name] = BodyResult(b.name, v_origin[i], omega[i])
+    names = tuple(b.name for b in model.bodies)
+    translation, rotation = np.zeros((len(names), 3)), np.zeros((len(names), 3))
+    moving = np.array([asm.body_index.get(name, -1) for name in names], dtype=np.intp)
+    has = moving >= 0
+    translation[has], rotation[has] = v_origin[moving[has]], omega[moving[has]]
+    bodies = Rows(names, BodyTable(names, translation, rotation).row)
 
-    # every contact at once (``Assembly.tables``): large mechanisms have thousands
     T = asm.tables
     stack = asm.stack
     _, _, level = stack.levels(x)
@@ -328,6 +434,8 @@ def build_result(
     gap[T.is_ball] = used
     past = np.zeros(nc)
     past[T.is_ball] = penetration
+    is_turn = ~np.isnan(T.turn_lever)
+    past[is_turn] /= T.turn_lever[is_turn]
     local = T.local_point.copy()
     ball_of = np.cumsum(T.is_ball) - 1
     for c in T.leaning:  # the centre of pressure of a tilting face moves
@@ -340,45 +448,38 @@ def build_result(
     # what the contact adds besides its force at its point: a drive's torque
     torque = wrench[:, 3:] - cross(local, wrench[:, :3])
     torque = _clean_rows(torque, np.maximum(TINY, np.max(np.abs(wrench[:, 3:]), axis=1)))
-    wrench_sum = np.zeros((len(model.joints), 6))
-    np.add.at(wrench_sum, T.joint_of, wrench)
-
-    per_joint: dict[int, list[ContactResult]] = {}
-    touching = gap >= TOUCHING
-    gaps, pasts = gap.tolist(), past.tolist()
-    for c_index, c in enumerate(asm.contacts):
-        lever = c.contact.turn_lever
-        state = ContactResult(
-            c.contact.name,
-            gaps[c_index],
-            bool(touching[c_index]),
-            force[c_index] + 0.0,
-            point[c_index],
-            pasts[c_index] if lever is None else pasts[c_index] / lever,
-            torque[c_index] + 0.0,
-            "mm" if lever is None else "rad",
-        )
-        per_joint.setdefault(c.joint_index, []).append(state)
+    reaction = np.zeros((len(model.joints), 6))
+    np.add.at(reaction, T.joint_of, wrench)
+    contacts = ContactTable(
+        T.contact_name,
+        gap,
+        gap >= TOUCHING,
+        force + 0.0,  # + 0.0 turns -0.0 into 0.0
+        point,
+        past,
+        torque + 0.0,
+        is_turn,
+    )
 
     taus = (T.tau_map @ x).reshape(-1, 6)
     t_rel, w_rel = _clean_rows(taus[:, :3], asm.s), _clean_rows(taus[:, 3:], asm.s / asm.ell)
-    joints: dict[str, JointResult] = {}
-    for jdx, joint in enumerate(model.joints):
-        joints[joint.name] = JointResult(
-            joint.name,
-            joint.type_name,
-            joint.between,
-            joint.centre,
-            joint.R_world_joint,
-            t_rel[jdx],
-            w_rel[jdx],
-            tuple(per_joint.get(jdx, [])),
-            wrench_sum[jdx, :3],
-            wrench_sum[jdx, 3:],
-        )
+    table = JointTable(
+        T.joint_name,
+        T.joint_type,
+        T.between,
+        T.centre,
+        T.R_world_joint,
+        t_rel,
+        w_rel,
+        reaction,
+        contacts,
+        T.by_joint,
+        T.first_contact,
+    )
+    joints = Rows(T.joint_name, table.row)
 
     points = points_of(model, bodies)
-    residual = equilibrium_residual(asm, joints, loads)
+    residual = equilibrium_residual(asm, reaction, loads)
     energy = -float(g @ x) + 0.0  # no load: 0, not -0
     reach_mm = stack.r * asm.s + penetration
     return Result(
@@ -393,20 +494,21 @@ def build_result(
         describe_free,
         lambda: linearization(asm, x, reach_mm),
         requirements_of(model, points),
-        model.warnings,
+        asm.model_warnings,
     )
 
 
 def equilibrium_residual(
     asm: Assembly,
-    joints: dict[str, JointResult],
+    reaction: FloatArray,
     loads: tuple[Load, ...],
     place: dict[str, Placement] | None = None,
 ) -> float:
     """The worst imbalance of each moving body, in global axes: the applied
     loads plus the reactions of its joints, forces relative to the largest
     force in the balance (a load or a joint's reaction) and moments relative
-    to it times the length scale.
+    to it times the length scale. ``reaction`` (J, 6): each joint's force
+    and moment on b, in its joint frame, about its centre.
 
     ``place``: the bodies' exact placements (an answer with exact rotations);
     the loads then act at their displaced points, and each joint's reaction
@@ -420,53 +522,54 @@ def equilibrium_residual(
     ref = asm.body_ref
     if place:
         ref = np.array([place.get(name, IDENTITY)(asm.body_ref[i]) for name, i in index.items()])
-    scale = 0.0
-    for load in loads:
-        i = index[load.body]
-        force = np.zeros(3) if load.force is None else np.array(load.force)
-        moment = np.zeros(3) if load.torque is None else np.array(load.torque)
-        if load.at is not None:
-            at = place.get(load.body, IDENTITY)(np.array(load.at))
-            moment = moment + cross(at - ref[i], force)
-        F[i] += force
-        M[i] += moment
-        scale = max(scale, float(np.linalg.norm(force)), float(np.linalg.norm(moment)) / asm.ell)
+    if not loads:
+        return 0.0
+    on = np.array([index[load.body] for load in loads], dtype=np.intp)
+    force = np.array([(0.0, 0.0, 0.0) if ld.force is None else ld.force for ld in loads], float)
+    moment = np.array([(0.0, 0.0, 0.0) if ld.torque is None else ld.torque for ld in loads], float)
+    at_rows = [q for q, ld in enumerate(loads) if ld.at is not None]
+    if at_rows:
+        at = np.array([loads[q].at for q in at_rows], dtype=float)
+        if place:
+            at = np.array(
+                [place.get(loads[q].body, IDENTITY)(p) for q, p in zip(at_rows, at, strict=True)]
+            )
+        moment[at_rows] += cross(at - ref[on[at_rows]], force[at_rows])
+    np.add.at(F, on, force)
+    np.add.at(M, on, moment)
+    scale = max(_largest_norm(force), _largest_norm(moment) / asm.ell)
     if scale == 0.0:
         return 0.0
-    jrs = list(joints.values())
-    if jrs:  # every joint at once: large mechanisms have thousands
-        R_wj = np.stack([jr.R_world_joint for jr in jrs])
-        centre = np.stack([jr.centre for jr in jrs])
-        rf = np.stack([jr.reaction_force for jr in jrs])
-        rm = np.stack([jr.reaction_moment for jr in jrs])
-        scale = max(
-            scale,
-            float(np.max(np.linalg.norm(rf, axis=1))),
-            float(np.max(np.linalg.norm(rm, axis=1))) / asm.ell,
-        )
+    T = asm.tables
+    if len(reaction):  # every joint at once: large mechanisms have thousands
+        rf, rm = reaction[:, :3], reaction[:, 3:]
+        scale = max(scale, _largest_norm(rf), _largest_norm(rm) / asm.ell)
+        centre = T.centre
         if place:
-            a_places = [place.get(jr.between[0], IDENTITY) for jr in jrs]
-            R = np.stack([pl.R for pl in a_places]) @ R_wj
+            a_places = [place.get(a, IDENTITY) for a, _ in T.between]
+            R = np.stack([pl.R for pl in a_places]) @ T.R_world_joint
             centre = np.stack([pl(c) for pl, c in zip(a_places, centre, strict=True)])
         else:
-            R = R_wj
+            R = T.R_world_joint
         force = np.einsum("jab,jb->ja", R, rf)
-        moment_centre = np.einsum("jab,jb->ja", R, rm)
-        for sign, side in ((-1.0, 0), (1.0, 1)):
-            idx = np.array([index.get(jr.between[side], -1) for jr in jrs])
-            on = idx >= 0
-            rows = idx[on]
-            np.add.at(F, rows, sign * force[on])
-            lever_force = cross(centre[on] - ref[rows], force[on])
-            np.add.at(M, rows, sign * (moment_centre[on] + lever_force))
-    worst = max(
-        float(np.max(np.linalg.norm(F, axis=1))) if n else 0.0,
-        float(np.max(np.linalg.norm(M, axis=1))) / asm.ell if n else 0.0,
-    )
+        moment = np.einsum("jab,jb->ja", R, rm)
+        # on b as given, on a against it (a moving body on either side)
+        body = T.between_index.T.ravel()
+        moving = body >= 0
+        body, sign = body[moving], np.repeat([-1.0, 1.0], len(reaction))[moving, None]
+        force, moment, centre = (np.concatenate([v, v])[moving] for v in (force, moment, centre))
+        np.add.at(F, body, sign * force)
+        np.add.at(M, body, sign * (moment + cross(centre - ref[body], force)))
+    worst = max(_largest_norm(F), _largest_norm(M) / asm.ell)
     return worst / scale
 
 
-def points_of(model: Model, bodies: dict[str, BodyResult]) -> dict[str, PointResult]:
+def _largest_norm(rows: FloatArray) -> float:
+    """The largest Euclidean norm of the rows of ``rows`` (n, 3); 0 for none."""
+    return float(np.sqrt(np.max(np.einsum("ij,ij->i", rows, rows), initial=0.0)))
+
+
+def points_of(model: Model, bodies: Mapping[str, BodyResult]) -> dict[str, PointResult]:
     """The functional points' displacements, from the bodies' results."""
     return {
         p.name: PointResult(
@@ -505,7 +608,9 @@ class RequirementResult:
         }
 
 
-def requirements_of(model: Model, points: dict[str, PointResult]) -> tuple[RequirementResult, ...]:
+def requirements_of(
+    model: Model, points: Mapping[str, PointResult]
+) -> tuple[RequirementResult, ...]:
     """Each of the model's requirements on these functional points."""
     return tuple(
         RequirementResult(req, float(req.measure(points[req.point].displacement)))

@@ -337,6 +337,9 @@ def _build(
             total[3:],
         )
     points = points_of(model, bodies)
+    reactions = np.array(
+        [np.r_[jr.reaction_force, jr.reaction_moment] for jr in joints.values()]
+    ).reshape(-1, 6)
     energy = 0.0
     for ld in loads:
         if ld.force is not None:
@@ -350,9 +353,9 @@ def _build(
         joints,
         points,
         Certificate(True, "exact", 0.0, 0.0, 0.0, 0.0, 0),
-        equilibrium_residual(asm, joints, loads, place),
+        equilibrium_residual(asm, reactions, loads, place),
         0.0,
         ws.free_motions,
         requirements=requirements_of(model, points),
-        model_warnings=model.warnings,
+        model_warnings=asm.model_warnings,
     )
