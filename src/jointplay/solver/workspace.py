@@ -50,11 +50,12 @@ class Workspace:
             rcond = self.settings.free_motion_rcond
             self.N = linalg.null_space(held.limit_rows(self), self.m, rcond)
         #: rows that hold the answer orthogonal to N in the least-norm metric
-        self.K = (
-            sp.csr_matrix((assembly.metric_matrix @ self.N).T)
-            if self.sparse
-            else assembly.metric_times(self.N).T
-        )
+        if not self.sparse:
+            self.K = assembly.metric_times(self.N).T
+        elif self.N.shape[1]:
+            self.K = sp.csr_matrix((assembly.metric_matrix @ self.N).T)
+        else:  # none: the metric (0.2 s at 10,000 joints) waits for a tie, if any
+            self.K = sp.csr_matrix((0, self.m))
         self.Eq = linalg.vstack([self.E, self.K], self.m)
         largest = float(np.max(stack.r)) if len(stack.r) else 0.0
         self.max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
