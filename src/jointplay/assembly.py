@@ -382,7 +382,7 @@ class ContactTables:
     joint_type: tuple[str, ...]  # (J,)
     between: tuple[tuple[str, str], ...]  # (J,) bodies a, b
     between_index: IntArray  # (J, 2) moving-body index of a and b, -1 for the ground
-    by_joint: IntArray  # (nc,) the contacts in joint order (file order within a joint)
+    by_joint: IntArray  # (nc,) the contacts by joint, each joint's in its ``cones`` order
     first_contact: IntArray  # (J + 1,) joint j's contacts: by_joint[first[j] : first[j + 1]]
 
 

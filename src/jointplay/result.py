@@ -176,8 +176,17 @@ class Rows(Mapping[str, RowT]):
             row = self._made[i] = self._make(i)
         return row
 
+    def __contains__(self, name: object) -> bool:
+        if self._index is None:
+            self._index = {n: i for i, n in enumerate(self._names)}
+        return name in self._index
+
     def __iter__(self) -> Iterator[str]:
         return iter(self._names)
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the rows made so far: the tables hold their numbers."""
+        return {"_names": self._names, "_make": self._make, "_index": None, "_made": {}}
 
     def __len__(self) -> int:
         return len(self._names)
@@ -537,7 +546,11 @@ def equilibrium_residual(
         moment[at_rows] += cross(at - ref[on[at_rows]], force[at_rows])
     np.add.at(F, on, force)
     np.add.at(M, on, moment)
-    scale = max(_largest_norm(force), _largest_norm(moment) / asm.ell)
+    # each load's own norm, as one vector (the rounding of every release before)
+    scale = max(
+        max(float(np.linalg.norm(v)) for v in force),
+        max(float(np.linalg.norm(v)) for v in moment) / asm.ell,
+    )
     if scale == 0.0:
         return 0.0
     T = asm.tables
@@ -566,7 +579,7 @@ def equilibrium_residual(
 
 def _largest_norm(rows: FloatArray) -> float:
     """The largest Euclidean norm of the rows of ``rows`` (n, 3); 0 for none."""
-    return float(np.sqrt(np.max(np.einsum("ij,ij->i", rows, rows), initial=0.0)))
+    return float(np.max(np.linalg.norm(rows, axis=1), initial=0.0))
 
 
 def points_of(model: Model, bodies: Mapping[str, BodyResult]) -> dict[str, PointResult]:
