@@ -87,7 +87,8 @@ class SolverSettings:
     newton_stall: float = 0.5
     #: Newton on a face that pins the position is accepted when its
     #: equations hold to this (relative): well above where it stops, well
-    #: below the certificate.
+    #: below the certificate. A force this small (relative to the largest)
+    #: is Newton's round-off: its contact does not bound a tie.
     newton_accept: float = 1e-11
     #: An active force below this fraction of the largest is not strictly
     #: positive: its contact may leave the active set.
