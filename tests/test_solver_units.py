@@ -176,6 +176,37 @@ def test_the_proximal_solve_converges_to_the_solution_nearest_zero() -> None:
     assert np.allclose(step, np.linalg.lstsq(K, rhs, rcond=None)[0], rtol=0, atol=1e-10)
 
 
+def test_the_certificate_measures_a_weld_s_turn_across_the_mechanism() -> None:
+    """A rigid joint's rows are a point's displacement (mm) and a turn (rad);
+    the certificate counts a turn w as the opening w * ell it makes across
+    the mechanism, as it counts every clearance in mm. It counted w itself:
+    a weld left turned by 4.5e-10 rad across 10.6 mm (4.7e-9 mm open) was
+    certified at 4.5e-10 "mm" (weld_left_open_by_a_tie, found by the
+    property search), and one turned by 1e-10 rad across the paper's shaft
+    (length 100 mm) would be certified at 1e-10 mm for 1e-8 mm."""
+    from conftest import spherical_shaft
+    from jointplay.solver import certificate
+
+    data = spherical_shaft()
+    data["bodies"] = [*data["bodies"], {"name": "S2"}]  # type: ignore[list-item]
+    data["joints"] = [  # type: ignore[list-item]
+        *data["joints"],  # type: ignore[misc]
+        {"name": "weld", "type": "rigid", "between": ["S1", "S2"], "at": [300, 0, 0]},
+    ]
+    ws = Workspace.of(jointplay.model_from_dict(data))
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    sigma = np.zeros(len(ws.balls))
+    point = pipeline.optimum(ws, g_hat, sigma)
+    assert point.certificate is not None and point.certificate.feasibility_mm < 1e-12
+    turn = 1e-10  # rad, S2 alone about z: the weld opens, nothing else moves
+    x = point.x.copy()
+    x[6 * 1 + 5] += turn / ws.asm.turn[1]
+    opened = faces.Point(x, point.lam, point.f, point.method)
+    got = certificate.certify(ws, g_hat, sigma, opened, point.nu).feasibility_mm
+    assert got == pytest.approx(turn * ws.asm.ell, rel=1e-6)
+    assert ws.asm.ell == pytest.approx(100.0)  # the shaft: 1e-8 mm, not 1e-10
+
+
 def test_the_status_map_and_the_program_agree_on_a_solve(paper: Workspace) -> None:
     """One raw Clarabel call on the workspace's program is ``optimal`` in our
     words, and its dual is the optimum's contact forces before the polish."""

@@ -609,6 +609,16 @@ class Assembly:
         return BallStack.of(self.balls, self.m, self.sparse)
 
     @cached_property
+    def E_length(self) -> FloatArray:
+        """(rows of E,) mm per unit of each rigid row: 1 for a point's
+        displacement (mm), the mechanism's length for a rotation's row (rad):
+        a weld turned by w is open by about w * ell across the mechanism."""
+        if not self.fixed:
+            return np.zeros(0)
+        rows = np.vstack([c.contact.rows for c in self.fixed])
+        return np.where(np.any(rows[:, :3] != 0.0, axis=1), 1.0, self.ell)
+
+    @cached_property
     def E(self) -> Matrix:
         """Equality rows (rigid joints and zero-clearance contacts)."""
         return _rows_matrix([(c.cols, c.block) for c in self.fixed], self.m, self.sparse)

@@ -189,7 +189,8 @@ def check(
         feas = comp = min_force = outside = np.zeros(B)
         force_scale = np.ones(B)
     if ws.E.shape[0]:
-        feas = np.maximum(feas, np.max(np.abs(linalg.times(ws.E, x)), axis=1))
+        opening = np.abs(linalg.times(ws.E, x)) * ws.asm.E_length
+        feas = np.maximum(feas, np.max(opening, axis=1))
     balance, nu_used = ws.balance.residual(g_hat, lam, f, nu)
     return Checks(feas, balance, min_force, outside, comp, force_scale, nu_used)
 
