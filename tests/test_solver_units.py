@@ -176,14 +176,24 @@ def test_the_proximal_solve_converges_to_the_solution_nearest_zero() -> None:
     assert np.allclose(step, np.linalg.lstsq(K, rhs, rcond=None)[0], rtol=0, atol=1e-10)
 
 
-def test_the_certificate_measures_a_weld_s_turn_across_the_mechanism() -> None:
-    """A rigid joint's rows are a point's displacement (mm) and a turn (rad);
-    the certificate counts a turn w as the opening w * ell it makes across
-    the mechanism, as it counts every clearance in mm. It counted w itself:
-    a weld left turned by 4.5e-10 rad across 10.6 mm (4.7e-9 mm open) was
-    certified at 4.5e-10 "mm" (weld_left_open_by_a_tie, found by the
-    property search), and one turned by 1e-10 rad across the paper's shaft
-    (length 100 mm) would be certified at 1e-10 mm for 1e-8 mm."""
+TIGHT_DRIVE = {"type": "revolute", "axis": [1, 0, 0], "length": 40, "clearance": 0}
+TIGHT_DRIVE |= {"axial_clearance": 0, "backlash": 0}
+
+
+@pytest.mark.parametrize(
+    ("joint", "axis"), [({"type": "rigid"}, 5), (TIGHT_DRIVE, 3)], ids=["weld", "tight drive"]
+)
+def test_the_certificate_measures_a_rigid_turn_across_the_mechanism(
+    joint: dict[str, Any], axis: int
+) -> None:
+    """A rigid row of a turn alone (a weld's, or a tight drive's: the angle
+    times its lever) counts as the opening w * ell that the turn makes
+    across the mechanism, as every other feasibility is in mm. The weld's
+    turn was counted as if it were mm: a weld left turned by 4.5e-10 rad
+    across 10.6 mm (4.7e-9 mm open) was certified
+    (open/weld_left_open_by_a_tie, found by the property search). A tight
+    drive's row is counted over its own lever first, not times ell twice
+    (a review: that declined right answers)."""
     from conftest import spherical_shaft
     from jointplay.solver import certificate
 
@@ -191,20 +201,20 @@ def test_the_certificate_measures_a_weld_s_turn_across_the_mechanism() -> None:
     data["bodies"] = [*data["bodies"], {"name": "S2"}]  # type: ignore[list-item]
     data["joints"] = [  # type: ignore[list-item]
         *data["joints"],  # type: ignore[misc]
-        {"name": "weld", "type": "rigid", "between": ["S1", "S2"], "at": [300, 0, 0]},
+        {"name": "tight", "between": ["S1", "S2"], "at": [300, 0, 0], **joint},
     ]
     ws = Workspace.of(jointplay.model_from_dict(data))
     g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
     sigma = np.zeros(len(ws.balls))
     point = pipeline.optimum(ws, g_hat, sigma)
     assert point.certificate is not None and point.certificate.feasibility_mm < 1e-12
-    turn = 1e-10  # rad, S2 alone about z: the weld opens, nothing else moves
+    turn = 1e-10  # rad, S2 alone, about the joint's axis (x) or z: only its turn rows see it
     x = point.x.copy()
-    x[6 * 1 + 5] += turn / ws.asm.turn[1]
+    x[6 * 1 + axis] += turn / ws.asm.turn[1]
     opened = faces.Point(x, point.lam, point.f, point.method)
     got = certificate.certify(ws, g_hat, sigma, opened, point.nu).feasibility_mm
+    assert ws.asm.ell >= 100.0  # the shaft: 1e-8 mm or more, not 1e-10 (nor 2e-7 a drive)
     assert got == pytest.approx(turn * ws.asm.ell, rel=1e-6)
-    assert ws.asm.ell == pytest.approx(100.0)  # the shaft: 1e-8 mm, not 1e-10
 
 
 def test_the_status_map_and_the_program_agree_on_a_solve(paper: Workspace) -> None:

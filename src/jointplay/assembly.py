@@ -610,13 +610,17 @@ class Assembly:
 
     @cached_property
     def E_length(self) -> FloatArray:
-        """(rows of E,) mm per unit of each rigid row: 1 for a point's
-        displacement (mm), the mechanism's length for a rotation's row (rad):
-        a weld turned by w is open by about w * ell across the mechanism."""
+        """(rows of E,) the factor that turns each rigid row's residual into
+        mm across the mechanism: 1 for a point's displacement (mm); for a
+        row of a turn alone, ``ell`` over the row's own lever (a weld's turn
+        row is the angle: ``ell``; a tight drive's is the angle times its
+        lever rho: ``ell / rho``). A turn w opens a weld by about w * ell."""
         if not self.fixed:
             return np.zeros(0)
         rows = np.vstack([c.contact.rows for c in self.fixed])
-        return np.where(np.any(rows[:, :3] != 0.0, axis=1), 1.0, self.ell)
+        lever = np.linalg.norm(rows[:, 3:], axis=1)
+        turn = ~np.any(rows[:, :3] != 0.0, axis=1) & (lever > 0.0)
+        return np.where(turn, self.ell / np.where(turn, lever, 1.0), 1.0)
 
     @cached_property
     def E(self) -> Matrix:

@@ -87,8 +87,7 @@ class SolverSettings:
     newton_stall: float = 0.5
     #: Newton on a face that pins the position is accepted when its
     #: equations hold to this (relative): well above where it stops, well
-    #: below the certificate. A force this small (relative to the largest)
-    #: is Newton's round-off: its contact does not bound a tie.
+    #: below the certificate.
     newton_accept: float = 1e-11
     #: An active force below this fraction of the largest is not strictly
     #: positive: its contact may leave the active set.

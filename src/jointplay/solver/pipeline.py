@@ -357,11 +357,8 @@ def active_set_steps(
         if not past.size:
             trial.certificate = certificate.certify(ws, g_hat, sigma, trial)
             if trial.certificate.certified:
-                # a cone with no force (to Newton's round-off) does not bound
-                # the tie; a faint one does: its force is real (a 5e-6 N*mm
-                # turn held 5 mm off a spin axis, compliant_point_on_a_faint_turn)
-                top = float(np.max(trial.lam, initial=0.0))
-                unloaded = {int(i) for i in weak if trial.lam[i] <= st.newton_accept * top}
+                # a cone with no force (to round-off) does not bound the tie
+                unloaded = set(weak.tolist())
                 trial.active = (
                     tuple(i for i in trial_key[0] if i not in unloaded),
                     tuple(i for i in trial_key[1] if i not in unloaded),
