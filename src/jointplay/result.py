@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
@@ -164,12 +165,13 @@ class Rows(Mapping[str, RowT]):
     def __init__(self, names: tuple[str, ...], make: Callable[[int], RowT]):
         self._names = names
         self._make = make
-        self._index: dict[str, int] | None = None
         self._made: dict[int, RowT] = {}
 
+    @cached_property
+    def _index(self) -> dict[str, int]:
+        return {n: i for i, n in enumerate(self._names)}
+
     def __getitem__(self, name: str) -> RowT:
-        if self._index is None:
-            self._index = {n: i for i, n in enumerate(self._names)}
         i = self._index[name]
         row = self._made.get(i)
         if row is None:
@@ -177,8 +179,6 @@ class Rows(Mapping[str, RowT]):
         return row
 
     def __contains__(self, name: object) -> bool:
-        if self._index is None:
-            self._index = {n: i for i, n in enumerate(self._names)}
         return name in self._index
 
     def __iter__(self) -> Iterator[str]:
@@ -186,7 +186,7 @@ class Rows(Mapping[str, RowT]):
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickled without the rows made so far: the tables hold their numbers."""
-        return {"_names": self._names, "_make": self._make, "_index": None, "_made": {}}
+        return {"_names": self._names, "_make": self._make, "_made": {}}
 
     def __len__(self) -> int:
         return len(self._names)
