@@ -145,18 +145,24 @@ def _rows_matrix(blocks: Sequence[tuple[IntArray, FloatArray]], m: int, sparse: 
         return out
     if not blocks:
         return sp.csr_matrix((0, m))
-    # one pass over the blocks to size the entries, then fill them in place
+    # each block's entries go to their place in one buffer, a shape at a time
+    # (thousands of blocks share a few shapes: a Python step per block costs more)
     ks = np.array([block.shape[0] for _, block in blocks], dtype=np.intp)
     cs = np.array([len(cols) for cols, _ in blocks], dtype=np.intp)
     nnz = ks * cs
+    first = np.cumsum(nnz) - nnz
     rows = np.repeat(np.arange(n_rows), np.repeat(cs, ks))
     cols_all = np.empty(int(nnz.sum()), dtype=np.intp)
     vals = np.empty(int(nnz.sum()))
-    at = 0
-    for (cols, block), size in zip(blocks, nnz, strict=True):
-        cols_all[at : at + size].reshape(block.shape)[:] = cols
-        vals[at : at + size] = block.ravel()
-        at += size
+    shape_code = ks * (m + 1) + cs
+    for code in np.unique(shape_code).tolist():
+        which = np.flatnonzero(shape_code == code)
+        k, c = divmod(code, m + 1)
+        if not k or not c:
+            continue
+        at = first[which][:, None, None] + np.arange(k * c).reshape(k, c)
+        cols_all[at] = np.stack([blocks[i][0] for i in which.tolist()])[:, None, :]
+        vals[at] = np.stack([blocks[i][1] for i in which.tolist()])
     return sp.csr_matrix((vals, (rows, cols_all)), shape=(n_rows, m))
 
 
@@ -389,7 +395,7 @@ class ContactTables:
 def _wrench_map(contacts: Sequence[ContactRows], sparse: bool) -> Matrix:
     """Block-diagonal ``-rows.T`` of the contacts (their duals stacked)."""
     k = np.array([c.k for c in contacts], dtype=np.intp)
-    rows = np.vstack([c.contact.rows for c in contacts]) if contacts else np.zeros((0, 6))
+    rows = np.concatenate([c.contact.rows for c in contacts]) if contacts else np.zeros((0, 6))
     owner = np.repeat(np.arange(len(contacts)), k)
     i = (6 * owner[:, None] + np.arange(6)).ravel()
     j = np.repeat(np.arange(rows.shape[0]), 6)
@@ -431,12 +437,19 @@ class Assembly:
         return self.m > linalg.SPARSE_FROM
 
     @cached_property
+    def is_ball(self) -> NDArray[np.bool_]:
+        """(contacts,) whether each contact is a clearance cone (else fixed rows)."""
+        return np.array([not c.is_fixed for c in self.contacts], dtype=bool)
+
+    @cached_property
     def balls(self) -> tuple[ContactRows, ...]:
-        return tuple(c for c in self.contacts if not c.is_fixed)
+        pairs = zip(self.contacts, self.is_ball.tolist(), strict=True)
+        return tuple(c for c, ball in pairs if ball)
 
     @cached_property
     def fixed(self) -> tuple[ContactRows, ...]:
-        return tuple(c for c in self.contacts if c.is_fixed)
+        pairs = zip(self.contacts, self.is_ball.tolist(), strict=True)
+        return tuple(c for c, ball in pairs if not ball)
 
     @cached_property
     def metric(self) -> FloatArray:
@@ -582,7 +595,7 @@ class Assembly:
             _wrench_map(self.balls, self.sparse),
             np.array(offsets).reshape(-1, 6),
             _wrench_map(self.fixed, self.sparse),
-            np.array([not c.is_fixed for c in contacts], dtype=bool),
+            self.is_ball,
             joint_of,
             np.array([c.contact.point for c in contacts], dtype=float).reshape(-1, 3),
             np.array(
@@ -700,12 +713,13 @@ def assemble(model: Model) -> Assembly:
         for jdx in source.joints:
             mean = source.torsor_at(jdx, joints[jdx]) @ source.deviation.mean()
             deviated[jdx] = deviated.get(jdx, np.zeros(6)) + mean
+    blocks_of = _contact_blocks(joints, G_list, s)
     contacts: list[ContactRows] = []
     for jdx, (joint, G) in enumerate(zip(joints, G_list, strict=True)):
         cones = joint.cones
         if not cones:
             continue
-        blocks = (np.vstack([c.rows for c in cones]) / s) @ G.block
+        blocks = blocks_of[jdx]
         spring = joint.stiffness or 0.0
         # a deviation moves each play's centre, and a face's limit along its normal
         delta = deviated.get(jdx, np.zeros(6))
@@ -759,6 +773,36 @@ def load_work(
         g[6 * i : 6 * i + 3] += s * force
         g[6 * i + 3 : 6 * i + 6] += turn[i] * moment
     return g
+
+
+def _contact_blocks(
+    joints: Sequence[Joint], G_list: Sequence[JointMap], s: float
+) -> dict[int, FloatArray]:
+    """Each joint's contact rows on its bodies' columns, ``(rows / s) @ G.block``
+    (joint index -> (its cones' rows, columns)), for joints of the same shape
+    at once: a large mechanism has thousands (a stack of equal shapes gives
+    each product exactly as one at a time does)."""
+    with_cones = [jdx for jdx, joint in enumerate(joints) if joint.cones]
+    if not with_cones:
+        return {}
+    cones = [c.rows for jdx in with_cones for c in joints[jdx].cones]
+    rows = np.concatenate(cones) / s
+    per_joint = np.array([len(joints[jdx].cones) for jdx in with_cones], dtype=np.intp)
+    k_cone = np.array([r.shape[0] for r in cones], dtype=np.intp)
+    k = np.add.reduceat(k_cone, np.cumsum(per_joint) - per_joint)
+    first = np.cumsum(k) - k
+    width = np.array([len(G_list[jdx].cols) for jdx in with_cones], dtype=np.intp)
+    out: dict[int, FloatArray] = {}
+    shape = k * 13 + width  # widths are 6 or 12
+    for code in np.unique(shape).tolist():
+        which = np.flatnonzero(shape == code)
+        k_j = int(k[which[0]])
+        taken = [with_cones[i] for i in which.tolist()]
+        products = rows[first[which][:, None] + np.arange(k_j)] @ np.stack(
+            [G_list[jdx].block for jdx in taken]
+        )
+        out.update(zip(taken, products, strict=True))
+    return out
 
 
 def _joint_maps(
