@@ -31,6 +31,7 @@ from __future__ import annotations
 import functools
 import heapq
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -78,8 +79,12 @@ def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
     nb1 = C.shape[1] // 6 + 1
     row_of = np.repeat(np.arange(C.shape[0]), np.diff(C.indptr))
     body_of = C.indices // 6
-    # each row's bodies, as (row, body) pairs in order
-    pair = np.unique(row_of.astype(np.int64) * nb1 + body_of)
+    # each row's bodies, as (row, body) pairs in order: the entries' codes
+    # are sorted (canonical CSR), so each pair is where its code changes
+    code_of = row_of.astype(np.int64) * nb1 + body_of
+    new_pair = np.ones(len(code_of), dtype=bool)
+    new_pair[1:] = code_of[1:] != code_of[:-1]
+    pair = code_of[new_pair]
     pair_row, pair_body = np.divmod(pair, nb1)
     count = np.bincount(pair_row, minlength=C.shape[0])
     first = np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.intp)
@@ -115,7 +120,7 @@ def _row_blocks(C: sp.csr_matrix) -> list[tuple[tuple[int, ...], FloatArray]]:
     n_rows_a = np.array(n_rows, dtype=np.intp)
     width = 6 * np.array([len(key) for key in keys], dtype=np.intp)
     offset = np.concatenate([[0], np.cumsum(n_rows_a * width)[:-1]]).astype(np.intp)
-    rank = np.searchsorted(pair, row_of.astype(np.int64) * nb1 + body_of) - first[row_of]
+    rank = np.cumsum(new_pair) - 1 - first[row_of]  # each entry's body among its row's
     group = group_of[row_of]
     flat = offset[group] + local_row[row_of] * width[group] + 6 * rank + C.indices % 6
     buffer = np.zeros(int(np.sum(n_rows_a * width)))
@@ -160,25 +165,38 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
             taken.append(j)
             blocked.add(j)
             blocked.update(near[j])
-        # each taken body's rows over (j, its neighbours), grouped by shape
-        groups: dict[tuple[int, int], list[tuple[int, tuple[int, ...], FloatArray]]] = {}
+        # each taken body's rows over (j, its neighbours), stacked by shape;
+        # bodies whose row blocks have the same sizes and places are filled
+        # together (a Python step per block costs more than the SVDs)
+        shapes: dict[tuple[int, int], list[tuple[int, tuple[int, ...]]]] = {}
+        slot: dict[int, int] = {}  # body -> its place in its shape's stack
+        patterns: dict[tuple[Any, ...], list[tuple[int, list[FloatArray]]]] = {}
         for j in taken:
             others = tuple(sorted(near[j]))
             where = {body: i for i, body in enumerate((j, *others))}
             mine = [store.pop(b) for b in sorted(on[j])]
-            R = np.zeros((sum(rows.shape[0] for _, rows in mine), 6 * (1 + len(others))))
-            at = 0
-            for bodies, rows in mine:
-                end = at + rows.shape[0]
-                for q, body in enumerate(bodies):
-                    c = 6 * where[body]
-                    R[at:end, c : c + 6] = rows[:, 6 * q : 6 * q + 6]
-                at = end
-            groups.setdefault(R.shape, []).append((j, others, R))
+            places = tuple(
+                (rows.shape[0], tuple(where[b] for b in bodies)) for bodies, rows in mine
+            )
+            shape = (sum(rows.shape[0] for _, rows in mine), 6 * (1 + len(others)))
+            members = shapes.setdefault(shape, [])
+            slot[j] = len(members)
+            members.append((j, others))
+            patterns.setdefault((shape, places), []).append((j, [rows for _, rows in mine]))
             left.discard(j)
             out.order.append(j)
-        for members in groups.values():
-            stack = np.stack([R for _, _, R in members])
+        stacks = {shape: np.zeros((len(members), *shape)) for shape, members in shapes.items()}
+        for (shape, places), same in patterns.items():
+            R = stacks[shape]
+            at_slots = np.array([slot[j] for j, _ in same], dtype=np.intp)
+            at = 0
+            for b, (k, where_b) in enumerate(places):
+                block = np.stack([blocks[b] for _, blocks in same])  # (bodies, k, 6 * len(where_b))
+                for q, c in enumerate(where_b):
+                    R[at_slots, at : at + k, 6 * c : 6 * c + 6] = block[:, :, 6 * q : 6 * q + 6]
+                at += k
+        for shape, members in shapes.items():
+            stack = stacks[shape]
             if stack.shape[1]:
                 U, sv, Vt = np.linalg.svd(stack[:, :, :6], full_matrices=True)
                 W = U.transpose(0, 2, 1) @ stack  # the rows rotated by each body's U
@@ -190,7 +208,7 @@ def _eliminate(C: sp.csr_matrix, m: int, rcond: float, s_max: float) -> _Elimina
             V = Vt.transpose(0, 2, 1)
             # the rows that still touch the others
             nonzero: list[list[bool]] = np.asarray(W[:, :, 6:].any(axis=2)).tolist()
-            for g, (j, others, _R) in enumerate(members):
+            for g, (j, others) in enumerate(members):
                 rank = ranks[g]
                 if rank < 6:
                     out.free.append((j, V[g, :, rank:]))
