@@ -254,6 +254,7 @@ def proximal_solve(
         return None
     step = np.zeros(K.shape[0])
     best, best_miss = step, float("inf")
+    sizes: list[float] = []
     for _ in range(41):
         miss = rhs - K @ step
         size = float(np.max(np.abs(miss), initial=0.0))
@@ -263,6 +264,9 @@ def proximal_solve(
             break
         if size < best_miss:
             best, best_miss = step, size
+        sizes.append(size)
+        if len(sizes) > 3 and min(sizes[-3:]) > DEFAULT.kkt_refine_stall * min(sizes[:-3]):
+            break  # stalled: the system is not consistent (to round-off)
         step = step + np.asarray(solve(miss), dtype=float)
         if not np.all(np.isfinite(step)):
             break
