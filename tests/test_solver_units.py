@@ -16,6 +16,7 @@ import scipy.sparse as sp
 
 import jointplay
 from jointplay.numerics import linalg
+from jointplay.settings import DEFAULT
 from jointplay.solver import Workspace, conic, faces, newton, pipeline
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -199,16 +200,17 @@ def test_the_proximal_solve_gives_up_where_its_refinement_stalls(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """``kkt_refine_stall``: the refinement of a system that no step solves
-    (the same row asked for two values) stalls at once; it stops after three
-    solves that gain nothing, not after 41 (on a 10,000-segment chain each
-    round is a solve with large factors: 0.6 s in all). A consistent system
-    whose refinement crawls (a mode it shrinks by 0.97 a round) goes on."""
+    (the same row asked for two values) stalls at once; it stops after a
+    window of solves that gain nothing, not after 41 (on a 10,000-segment
+    chain each round is a solve with large factors: 0.6 s in all). A
+    consistent system whose refinement crawls (a mode it shrinks by 0.97 a
+    round) goes on."""
     K, n = _kkt(duplicate=True)
     rhs = np.zeros(K.shape[0])
     rhs[4], rhs[6] = 1.0, -1.0
     counts = _counted_solves(monkeypatch)
     step = linalg.proximal_solve(K, rhs, n, eps=1e-6, tol=1e-13)
-    assert step is not None and counts == [3]  # three solves that gain nothing
+    assert step is not None and counts == [DEFAULT.kkt_refine_window]
     # H with one stiffness 0.031 eps: the regularized solve shrinks that
     # mode's error by eps / (0.031 eps + eps) = 0.97 a round
     eps = 1e-6

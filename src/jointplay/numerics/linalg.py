@@ -265,7 +265,8 @@ def proximal_solve(
         if size < best_miss:
             best, best_miss = step, size
         sizes.append(size)
-        if len(sizes) > 3 and min(sizes[-3:]) > DEFAULT.kkt_refine_stall * min(sizes[:-3]):
+        w = DEFAULT.kkt_refine_window
+        if len(sizes) > w and min(sizes[-w:]) > (1.0 - DEFAULT.kkt_refine_stall) * min(sizes[:-w]):
             break  # stalled: the system is not consistent (to round-off)
         step = step + np.asarray(solve(miss), dtype=float)
         if not np.all(np.isfinite(step)):
