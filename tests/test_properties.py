@@ -547,6 +547,24 @@ def test_regression_case(path: Path) -> None:
         assert result.certificate.method == "least-norm face"
 
 
+def test_fixed_examples_draw_no_number_from_the_source() -> None:
+    """A derandomized run's examples come from its seed and strategies alone:
+    Hypothesis's local constants (numbers it reads in src/, from 6.131) are
+    off (tests/conftest.py), so an edit in src/ does not change which
+    examples are checked; the long search keeps them. A Hypothesis that
+    renamed the private function would undo that silently: this says so."""
+    from hypothesis.internal.conjecture import providers
+
+    if not hasattr(providers, "_local_constants"):
+        return  # a Hypothesis before local constants: nothing to turn off
+    assert hasattr(providers, "_get_local_constants"), "renamed: see tests/conftest.py"
+    constants = providers._get_local_constants()
+    if settings.default.derandomize:
+        assert not len(constants)
+    else:
+        assert len(constants)
+
+
 def test_declines_are_rare() -> None:
     """Runs after the property tests above (file order): of their draws, at
     most MOST_DECLINED were declined. Alone, it checks the regression cases."""
