@@ -555,8 +555,9 @@ def test_fixed_examples_draw_no_number_from_the_source() -> None:
     renamed the private function would undo that silently: this says so."""
     from hypothesis.internal.conjecture import providers
 
-    if not hasattr(providers, "_local_constants"):
-        return  # a Hypothesis before local constants: nothing to turn off
+    if not hasattr(providers, "_local_constants"):  # a Hypothesis before local constants
+        assert not hasattr(providers, "_get_local_constants")
+        return
     assert hasattr(providers, "_get_local_constants"), "renamed: see tests/conftest.py"
     constants = providers._get_local_constants()
     if settings.default.derandomize:

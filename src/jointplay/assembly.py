@@ -791,13 +791,12 @@ def _contact_blocks(
     k_cone = np.array([r.shape[0] for r in cones], dtype=np.intp)
     k = np.add.reduceat(k_cone, np.cumsum(per_joint) - per_joint)
     first = np.cumsum(k) - k
-    width = np.array([len(G_list[jdx].cols) for jdx in with_cones], dtype=np.intp)
+    same_shape: dict[tuple[int, int], list[int]] = {}  # (rows, columns) -> places in with_cones
+    for i, (jdx, k_j) in enumerate(zip(with_cones, k.tolist(), strict=True)):
+        same_shape.setdefault((k_j, len(G_list[jdx].cols)), []).append(i)
     out: dict[int, FloatArray] = {}
-    shape = k * 13 + width  # widths are 6 or 12
-    for code in np.unique(shape).tolist():
-        which = np.flatnonzero(shape == code)
-        k_j = int(k[which[0]])
-        taken = [with_cones[i] for i in which.tolist()]
+    for (k_j, _), which in same_shape.items():
+        taken = [with_cones[i] for i in which]
         products = rows[first[which][:, None] + np.arange(k_j)] @ np.stack(
             [G_list[jdx].block for jdx in taken]
         )
