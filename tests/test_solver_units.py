@@ -569,3 +569,30 @@ def test_the_no_load_least_norm_polish_keeps_its_plain_steps() -> None:
     result.check()
     assert result.certificate.method == "no load: the least-norm position"
     assert result.certificate.feasibility_mm <= 1e-6
+
+
+def test_segment_sums_skip_cones_with_no_rows() -> None:
+    """``BallStack.segment_sum`` of cones some of which have no rows (one-sided
+    limits): each cone's sum over its rows, 0 for none, for one row of
+    weights or a batch, equal to a plain loop over the cones."""
+    from jointplay.assembly import BallStack
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        k = rng.integers(0, 4, size=int(rng.integers(1, 12)))
+        start = (np.cumsum(k) - k).astype(np.intp)
+        n_rows = int(k.sum())
+        stack = BallStack(
+            np.zeros((n_rows, 6)),
+            start,
+            k.astype(np.intp),
+            np.ones(len(k)),
+            np.zeros(len(k)),
+            np.zeros((len(k), 6)),
+        )
+        w = rng.standard_normal((3, n_rows))
+        expected = np.array(
+            [[row[s : s + n].sum() for s, n in zip(start, k, strict=True)] for row in w]
+        )
+        assert np.allclose(stack.segment_sum(w), expected, rtol=0, atol=1e-14)
+        assert np.allclose(stack.segment_sum(w[0]), expected[0], rtol=0, atol=1e-14)

@@ -288,14 +288,10 @@ class BallStack:
         )
 
     @cached_property
-    def _segments(self) -> FloatArray | None:
-        """(sum k, n) indicator of each row's cone, when some cone has no rows
-        (``reduceat`` cannot sum an empty segment)."""
-        if len(self.k) and np.all(self.k > 0):
-            return None
-        S = np.zeros((int(np.sum(self.k)), len(self.k)))
-        S[np.arange(S.shape[0]), np.repeat(np.arange(len(self.k)), self.k)] = 1.0
-        return S
+    def _with_rows(self) -> NDArray[np.bool_] | None:
+        """The cones that have rows, when some have none (``reduceat`` cannot
+        sum an empty segment: those are summed apart, as 0)."""
+        return None if np.all(self.k > 0) else np.asarray(self.k > 0)
 
     @cached_property
     def cone_size(self) -> FloatArray:
@@ -308,10 +304,15 @@ class BallStack:
         """Per cone, the sum of ``w`` over its rows (last axis)."""
         if not len(self.k):
             return np.zeros((*w.shape[:-1], 0))
-        S = self._segments
-        if S is None:
+        has = self._with_rows
+        if has is None:
             return np.add.reduceat(w, self.start, axis=-1)
-        return w @ S
+        # not a (rows, cones) indicator matrix: that grows with the square
+        # of the size (a 2,000-body model with point contacts: 0.5 GB)
+        out = np.zeros((*w.shape[:-1], len(self.k)))
+        if np.any(has):
+            out[..., has] = np.add.reduceat(w, self.start[has], axis=-1)
+        return out
 
     def centres(self, centre: FloatArray | None = None) -> FloatArray:
         """The centres stacked like the rows of A: ``centre`` if given (a
