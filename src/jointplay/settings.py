@@ -115,9 +115,10 @@ class SolverSettings:
     #: below ``faint`` of the largest force; they change their guess at most
     #: ``refine_rounds`` times. Three: of 13,738 starts that found the optimum
     #: (the whole suite, and a long random search of the property tests),
-    #: 687 needed a second round, 32 a third and none a fourth; a start that
-    #: finds nothing walked all six before, a Newton solve each (a 1,000-shaft
-    #: bearing chain: a third of its solve).
+    #: 687 needed a second round, 32 a third and none a fourth. A start that
+    #: finds nothing walks them all, a Newton solve each; the sets it met are
+    #: not tried again, so a later start may walk on where it stopped (a
+    #: 1,000-shaft bearing chain: 8 solves instead of 9).
     near_limit: float = 1e-3
     faint: float = 1e-4
     refine_rounds: int = 3
