@@ -111,41 +111,57 @@ def test_a_driven_spin_in_a_long_string_is_reported() -> None:
     assert "rotation about the global X axis" in str(err.value)
 
 
-def test_a_part_lifting_off_a_long_string_is_named_alone() -> None:
-    """A part on three point contacts, loaded off them along a leaning axis,
-    next to a 400-segment string: the interior point's ray of unboundedness
-    carries the string's bodies along by round-off (4e-11 of its size); the error names the
-    part alone (``held.needed_only``), and its motion moves no contact
-    toward its limit. Point contacts are cones with no rows: their sums go
-    apart (``BallStack.segment_sum``), not through a (rows, cones) matrix
-    that grows with the square of the size."""
+def test_welded_parts_lifting_off_a_long_string_are_named_alone() -> None:
+    """Two parts welded together, each on three point contacts, loaded off
+    them along a leaning axis, next to a 400-segment string: the interior
+    point's ray of unboundedness moves every body by round-off (the string's
+    by 4e-11 of the parts'). The error names the two parts, which must move
+    together, and no other body; the motion named lifts each off its points.
+    On the way, ``held.needed_only`` tries the most moved part alone (the
+    weld holds it), drops the string's bodies at once, then tries the other
+    part alone (``_rows_by_body``). Point contacts are cones with no rows:
+    their sums (``BallStack.segment_sum``) no longer go through a (rows,
+    cones) matrix that grows with the square of the size."""
     data = tube_string_dict(400)
     axis = [0.3, 0.2, 1.0]
-    data["bodies"].append({"name": "part"})
-    for name, at in (("p1", [0, 0, -500]), ("p2", [10, 0, -500]), ("p3", [0, 10, -500])):
-        data["joints"].append(
-            {"name": name, "type": "point", "between": ["ground", "part"], "at": at, "axis": axis}
-        )
-    for name, at in (("s1", [0, 0, -500]), ("s2", [10, 0, -500])):
-        data["joints"].append(
-            {
-                "name": name,
-                "type": "sphere_in_cylinder",
-                "between": ["ground", "part"],
-                "at": at,
-                "axis": axis,
-                "clearance": 0.1,
-            }
-        )
+    points = ([0, 0, -500], [10, 0, -500], [0, 10, -500])
+    for part in ("part", "part2"):
+        data["bodies"].append({"name": part})
+        for i, at in enumerate(points):
+            data["joints"].append(
+                {
+                    "name": f"p{i}{part}",
+                    "type": "point",
+                    "between": ["ground", part],
+                    "at": at,
+                    "axis": axis,
+                }
+            )
+        for i, at in enumerate(points[:2]):
+            data["joints"].append(
+                {
+                    "name": f"s{i}{part}",
+                    "type": "sphere_in_cylinder",
+                    "between": ["ground", part],
+                    "at": at,
+                    "axis": axis,
+                    "clearance": 0.1,
+                }
+            )
+    data["joints"].append(
+        {"name": "weld", "type": "rigid", "between": ["part", "part2"], "at": [0, 0, -500]}
+    )
     data["loads"].append({"body": "part", "at": [0, 0, -500], "force": [1.5, 1.0, 5.0]})
-    model = model_from_dict(data)
     with pytest.raises(jointplay.UnboundedMechanismError) as err:
-        jointplay.solve(model)
-    assert set(err.value.direction) == {"part"}
-    assert err.value.body == "part"
-    # the named motion lifts the part off (first order): along the axis, away from the points
-    (rotation, translation) = err.value.direction["part"]
+        jointplay.solve(model_from_dict(data))
+    assert set(err.value.direction) == {"part", "part2"}
     n = np.array(axis) / np.linalg.norm(axis)
-    for at in ([0, 0, -500], [10, 0, -500], [0, 10, -500]):
-        moved = np.array(translation) + np.cross(rotation, at)
-        assert float(moved @ n) >= -1e-9 * float(np.linalg.norm(moved))
+    moves = {}
+    for part, (rotation, translation) in err.value.direction.items():
+        moves[part] = (np.array(rotation), np.array(translation))
+        for at in points:  # first order: off every point contact, along the axis
+            moved = np.array(translation) + np.cross(rotation, at)
+            assert float(moved @ n) >= -1e-9 * float(np.linalg.norm(moved))
+    # welded: the same motion
+    np.testing.assert_allclose(moves["part"][0], moves["part2"][0], atol=1e-9)
+    np.testing.assert_allclose(moves["part"][1], moves["part2"][1], atol=1e-9)

@@ -147,7 +147,8 @@ class SolverSettings:
     #: round-off, so that long chains' rigid forces balance to the certificate.
     lsmr_tolerance: float = 1e-15
     #: A body whose motion is below this fraction of the biggest one is not
-    #: named as moving along (words only).
+    #: named as moving along (words), and is left out of the interior point's
+    #: ray of unboundedness first, all such bodies at once (``held.needed_only``).
     mover_share: float = 1e-6
 
     # -- exact rotations (``exact``) ------------------------------------------

@@ -85,11 +85,12 @@ def needed_only(ws: Workspace, g: FloatArray, ray: FloatArray) -> FloatArray:
     """The interior point's ray of unboundedness ``ray`` without the bodies
     it moves needlessly: its round-off can carry a held body along a little
     (a property test's case: a share of 3e-6, pressing on a point contact,
-    and the error named that body with the free one). Bodies are tried
-    from the least moved; one is left out when, without it, the contacts and
-    rigid rows it shares still hold no more than before or than
-    ``feasibility_tolerance`` (the ray at unit size), and the loads still
-    drive the motion."""
+    and the error named that body with the free one). The most moved body
+    alone is tried first, then the ray without every body moved too little
+    to be named; then bodies one at a time, from the least moved: one is
+    left out when, without it, the contacts and rigid rows it shares still
+    hold no more than before or than ``feasibility_tolerance`` (the ray at
+    unit size), and the loads still drive the motion."""
     size = float(np.linalg.norm(ray))
     if size == 0.0:
         return ray
@@ -121,6 +122,13 @@ def needed_only(ws: Workspace, g: FloatArray, ray: FloatArray) -> FloatArray:
     alone[top] = d[top]
     if holds_no_more(alone, None, None):
         return alone * size
+    # then every body too little moved to be named (``mover_share``) at once:
+    # round-off moves them all, and one at a time costs a check each
+    faint = by_share[share[by_share] <= ws.settings.mover_share * share[by_share[-1]]]
+    trial = d.copy()
+    trial[(6 * faint[:, None] + np.arange(6)).ravel()] = 0.0
+    if len(faint) and holds_no_more(trial, None, None):
+        d, by_share = trial, by_share[len(faint) :]
     cone_of_row = np.repeat(np.arange(len(stack.k)), stack.k)
     rows_A, rows_B, rows_E = (_rows_by_body(M, ws.m) for M in (stack.A, stack.B, E))
     for body in by_share[:-1].tolist():
