@@ -58,7 +58,7 @@ def driven_motion(ws: Workspace, g: FloatArray, fallback: FloatArray) -> FloatAr
         rho = np.sqrt(S.T @ stack.A**2)
     e_cols = column_max(abs(ws.E), m)
     tol = ws.settings.feasibility_tolerance  # a unit motion that moves nothing
-    best, best_work = needed_only(ws, g, fallback[:m]), 0.0
+    best, best_work = fallback[:m], 0.0
     for sign in (1.0, -1.0):
         held = column_max(rho + sign * stack.B, m) > tol
         works = sign * g
@@ -70,15 +70,9 @@ def driven_motion(ws: Workspace, g: FloatArray, fallback: FloatArray) -> FloatAr
         for d in [*(np.tile(np.eye(6)[a], n) / np.sqrt(n) for a in range(3))]:
             for sd in (d, -d):
                 work = float(g @ sd)
-                if work <= best_work:
-                    continue
-                _, _, level = stack.homogeneous.levels(sd)
-                if len(level) and float(np.max(level)) > tol:
-                    continue
-                if ws.E.shape[0] and float(np.max(np.abs(ws.E @ sd))) > tol:
-                    continue
-                best, best_work = sd, work
-    return best
+                if work > best_work and holds_no_more(ws, g, np.zeros(m), sd):
+                    best, best_work = sd, work
+    return best if best_work > 0.0 else needed_only(ws, g, best)
 
 
 def needed_only(ws: Workspace, g: FloatArray, ray: FloatArray) -> FloatArray:
@@ -96,48 +90,56 @@ def needed_only(ws: Workspace, g: FloatArray, ray: FloatArray) -> FloatArray:
         return ray
     d = ray / size
     stack = ws.stack.homogeneous
-    tol = ws.settings.feasibility_tolerance
-    E = ws.E
     share = np.linalg.norm(d.reshape(-1, 6), axis=1)
     moving = np.flatnonzero(share > 0)
     by_share = moving[np.argsort(share[moving], kind="stable")]
 
-    def holds_no_more(trial: FloatArray, cones: IntArray | None, rows: IntArray | None) -> bool:
-        """Whether ``trial`` moves the cones and rigid rows (all, if None) no
-        further toward their limits than ``d`` or the tolerance, and is driven."""
-        if float(g @ trial) <= 0.0:
-            return False
-        sub = stack if cones is None else stack.take(cones)
-        if len(sub.k):
-            before, after = sub.levels(d)[2], sub.levels(trial)[2]
-            if np.any(after > np.maximum(before, tol)):
-                return False
-        Er = E if rows is None else E[rows]
-        return not Er.shape[0] or bool(
-            np.all(np.abs(Er @ trial) <= np.maximum(np.abs(Er @ d), tol))
-        )
-
     alone = np.zeros_like(d)  # the most moved body alone: the usual case, checked at once
     top = slice(6 * by_share[-1], 6 * by_share[-1] + 6)
     alone[top] = d[top]
-    if holds_no_more(alone, None, None):
+    if holds_no_more(ws, g, d, alone):
         return alone * size
     # then every body too little moved to be named (``mover_share``) at once:
     # round-off moves them all, and one at a time costs a check each
     faint = by_share[share[by_share] <= ws.settings.mover_share * share[by_share[-1]]]
     trial = d.copy()
     trial[(6 * faint[:, None] + np.arange(6)).ravel()] = 0.0
-    if len(faint) and holds_no_more(trial, None, None):
+    if len(faint) and holds_no_more(ws, g, d, trial):
         d, by_share = trial, by_share[len(faint) :]
     cone_of_row = np.repeat(np.arange(len(stack.k)), stack.k)
-    rows_A, rows_B, rows_E = (_rows_by_body(M, ws.m) for M in (stack.A, stack.B, E))
+    rows_A, rows_B, rows_E = (_rows_by_body(M, ws.m) for M in (stack.A, stack.B, ws.E))
     for body in by_share[:-1].tolist():
         trial = d.copy()
         trial[6 * body : 6 * body + 6] = 0.0
         cones = np.union1d(cone_of_row[rows_A(body)], rows_B(body))
-        if holds_no_more(trial, cones, rows_E(body)):
+        if holds_no_more(ws, g, d, trial, cones, rows_E(body)):
             d = trial
     return d * size
+
+
+def holds_no_more(
+    ws: Workspace,
+    g: FloatArray,
+    d: FloatArray,
+    trial: FloatArray,
+    cones: IntArray | None = None,
+    rows: IntArray | None = None,
+) -> bool:
+    """Whether the loads ``g`` drive the motion ``trial`` and it moves the
+    contacts ``cones`` and rigid rows ``rows`` (all, if None) no further
+    toward their limits (centres at 0: for ever) than the motion ``d`` does,
+    or than ``feasibility_tolerance`` (motions of unit size)."""
+    if float(g @ trial) <= 0.0:
+        return False
+    tol = ws.settings.feasibility_tolerance
+    stack = ws.stack.homogeneous
+    sub = stack if cones is None else stack.take(cones)
+    if len(sub.k):
+        before, after = sub.levels(d)[2], sub.levels(trial)[2]
+        if np.any(after > np.maximum(before, tol)):
+            return False
+    E = ws.E if rows is None else ws.E[rows]
+    return not E.shape[0] or bool(np.all(np.abs(E @ trial) <= np.maximum(np.abs(E @ d), tol)))
 
 
 def _rows_by_body(M: Matrix, m: int) -> Callable[[int], IntArray]:
