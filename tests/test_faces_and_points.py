@@ -390,3 +390,37 @@ def test_the_certificate_refuses_the_table_lifted_off_its_loaded_foot() -> None:
     assert lifted.feasibility_mm <= 1e-9 and lifted.equilibrium_residual <= 1e-8
     assert lifted.complementarity > 1e-8 and not lifted.certified
     assert certificate.certify(ws, g_hat, sigma, right).certified
+
+
+def test_the_certificate_refuses_a_faint_force_on_a_contact_just_clear() -> None:
+    """A contact clear by more than ``clear`` of its play pushes with
+    nothing. Weighed by its slack alone, the low foot's faint force (1e-7 of
+    the largest) with 2 % of its play unused made 2e-9 and passed: that is
+    how a route once printed a contact pushing 7.5e-6 N while 0.000226 mm
+    clear (tests/property_cases/force_on_a_contact_just_clear.yaml)."""
+    from dataclasses import replace
+
+    from jointplay.solver import certificate, pipeline
+
+    ws = Workspace.of(faintly_pushed_table())
+    g = ws.asm.g
+    g_hat = g / np.linalg.norm(g)
+    sigma = np.zeros(len(ws.balls))
+    right = pipeline.optimum(ws, g_hat, sigma)
+    i = ws.asm.body_index["T"]
+    tilt = 0.98 * 0.1 / 7.5  # rocked back about the level feet's line: the low foot 2 % clear
+    omega, v_origin = np.array([0.0, tilt, -0.2]), np.array([0.0, 0.5, -2.5 * tilt])
+    x = right.x.copy()
+    x[6 * i : 6 * i + 3] = (v_origin + np.cross(omega, ws.asm.body_ref[i])) / ws.asm.s
+    x[6 * i + 3 : 6 * i + 6] = omega / ws.asm.turn[i]
+    lifted = replace(right, x=x, certificate=None)
+    joints = ws.asm.model.joints
+    low = next(k for k, b in enumerate(ws.balls) if joints[b.joint_index].name == "low")
+    _, _, level = ws.stack.levels(x)
+    assert 0.019 < 1.0 - level[low] / ws.stack.r[low] < 0.021
+    cert = certificate.certify(ws, g_hat, sigma, lifted)
+    assert cert.feasibility_mm <= 1e-9 and cert.equilibrium_residual <= 1e-8
+    assert cert.complementarity > 1e-8 and not cert.certified
+    weighed = replace(ws.settings, clear=1.0)  # every slack weighs the force: passes
+    ws_weighed = Workspace(ws.asm, weighed)
+    assert certificate.certify(ws_weighed, g_hat, sigma, lifted).certified

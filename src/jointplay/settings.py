@@ -29,6 +29,10 @@ class SolverSettings:
     #: the certificate's feasibility, with room for a play 10x smaller than
     #: the largest.
     touching: float = 1.0 - 1e-8
+    #: A contact this far from its reach (a fraction of its own play) is
+    #: clear, and must push with nothing (to ``equilibrium_tolerance``):
+    #: complementarity weighs a force by its slack only closer than this.
+    clear: float = 1e-6
 
     # -- the interior-point method (Clarabel) ---------------------------------
     #: Gap and feasibility tolerances (relative, scaled problem): the answer

@@ -177,11 +177,14 @@ def check(
         v, rho, level = stack.levels(x, c)
         reach = radii + sigma * np.maximum(lam, 0.0)
         feas = np.max(level - reach, axis=1)
-        gap = np.abs(lam) * np.abs(reach - level) + np.abs(lam * rho - stack.segment_sum(f * v))
         # each contact's over its own reach: a faint force on a small play
-        # left clear is not hidden by a large play elsewhere
+        # left clear is not hidden by a large play elsewhere; and a contact
+        # clear by more than ``clear`` of it pushes with nothing at all
         own = np.where(reach > 0, reach, ws.max_radius)
-        comp = np.max(gap / own, axis=1)
+        slack = np.abs(reach - level) / own
+        slack = np.where(slack > ws.settings.clear, 1.0, slack)
+        turned = np.abs(lam * rho - stack.segment_sum(f * v)) / own
+        comp = np.max(np.abs(lam) * slack + turned, axis=1)
         min_force = np.min(lam, axis=1)
         outside = np.max(np.sqrt(stack.segment_sum(f * f)) - lam, axis=1)
         force_scale = np.maximum(1.0, np.max(np.abs(lam), axis=1))
