@@ -395,3 +395,59 @@ def test_a_face_whose_force_reaches_its_rim_gets_the_exact_split() -> None:
     mult, *_ = np.linalg.lstsq(M, -grad, rcond=None)
     np.testing.assert_allclose(M @ mult + grad, 0.0, atol=1e-12 * np.max(np.abs(grad)))
     assert mult[-2] > 0.0 and mult[-1] > 0.0  # the rim and the corner both bind
+
+
+def welded_beside_a_touching_point(force_y: float) -> dict[str, Any]:
+    """B welded to the ground, and a point contact with no gap at the weld's
+    centre, pushing along +y; an idle body D on a revolute joint with play."""
+    return {
+        "bodies": [{"name": "G", "ground": True}, {"name": "B"}, {"name": "D"}],
+        "joints": [
+            {"name": "w", "type": "rigid", "between": ["G", "B"], "at": [10, 0, 0]},
+            {
+                "name": "p",
+                "type": "point",
+                "between": ["G", "B"],
+                "at": [10, 0, 0],
+                "axis": [0, 1, 0],
+                "gap": 0.0,
+            },
+            {
+                "name": "r",
+                "type": "revolute",
+                "between": ["G", "D"],
+                "at": [-50, 0, 0],
+                "axis": [0, 0, 1],
+                "clearance": 0.01,
+                "length": 5.0,
+                "axial_clearance": 1.0,
+            },
+        ],
+        "loads": [{"body": "B", "at": [10, 0, 0], "force": [0, force_y, 0]}],
+    }
+
+
+def test_a_load_the_weld_holds_alone_leaves_the_contacts_unloaded() -> None:
+    """Pulling B off its point contact: the weld holds the load alone, so
+    the contacts carry nothing, and every position is the no-load one (the
+    idle body at 0, not wherever the interior point's round-off forces put
+    it: tests/property_cases/tie_least_norm_point_moves_with_the_file.yaml)."""
+    r = solved(welded_beside_a_touching_point(4.0))
+    assert r.certificate.method == "no contact load"
+    np.testing.assert_allclose(r.joints["w"].reaction_force, [0, -4, 0], atol=1e-12)
+    # the touching point's split comes from a cone program (it would pull):
+    # its force is 0 to that program's tolerance, the certificate's 1e-8 of 4 N
+    for name in ("p", "r"):
+        np.testing.assert_allclose(r.joints[name].reaction_force, 0.0, atol=4e-8)
+    np.testing.assert_allclose(r.bodies["D"].translation, 0.0, atol=MM)
+    np.testing.assert_allclose(r.bodies["D"].rotation, 0.0, atol=RAD)
+
+
+def test_a_weld_and_a_touching_contact_share_by_the_rule() -> None:
+    """Pushing B onto its point contact: the positions come from the
+    contacts' share of the loads, the forces from the split rule on the
+    whole load, which shares it equally between the weld and the contact
+    (both at one point: least sum of squared forces)."""
+    r = solved(welded_beside_a_touching_point(-4.0))
+    np.testing.assert_allclose(r.joints["w"].reaction_force, [0, 2, 0], atol=1e-9)
+    assert r.joints["p"].contacts[0].force_magnitude == pytest.approx(2.0, abs=1e-9)

@@ -44,7 +44,8 @@ class Certificate:
     largest of them. ``min_force``: the smallest contact multiplier (must not be
     negative). ``method``: ``polished`` (KKT equations solved to machine
     precision), ``least-norm face`` (a tie resolved by a second program),
-    ``interior-point`` (the cone solver's own answer), or ``no load``.
+    ``interior-point`` (the cone solver's own answer), ``no load``, or
+    ``no contact load`` (rigid joints hold the loads alone).
     """
 
     certified: bool

@@ -157,13 +157,7 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
     if not np.any(g_hat):
         point = rest_position(ws)
     else:
-        warmed = warm(ws, g_hat, sigma) if ws.settings.warm_start else None
-        point = warmed if warmed is not None else interior_point(ws, g_hat, sigma)
-        held.check_turns(ws, point.x)  # before polishing, which a nearly free body defeats
-        if warmed is None and ws.settings.polish:
-            point = polish(ws, g_hat, sigma, point)
-        ws.last = point if point.active is not None else None
-        point = split(ws, g_hat, sigma, point)
+        point = split(ws, g_hat, sigma, contacts_optimum(ws, g_hat, sigma))
     # a cone with no play and no offset holds only at its apex: whatever the
     # route, its force is |f| (the interior point's lam may be any above it)
     tight = np.flatnonzero(ws.stack.r == 0).tolist()
@@ -204,14 +198,36 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
     return point
 
 
-def rest_position(ws: Workspace) -> faces.Point:
-    """The answer with no load: every feasible position is optimal, so the
-    least-norm one (the tie rule): 0, unless deviations move the clearances
-    off it; then one cone program on the whole feasible set, polished."""
+def contacts_optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:
+    """The optimal positions, with the route's forces (relative to ``g_hat``,
+    uncertified), found under the contacts' share of the loads
+    (``Workspace.contacts_share``): the same program, since the rigid rows
+    hold every position at ``E x = 0``, but its forces are the contacts' own,
+    not round-off against what a rigid joint carries. With no share the
+    contacts carry nothing, and the rest position is the answer."""
+    share_work = ws.contacts_share(g_hat)
+    share = float(np.linalg.norm(share_work))
+    if share <= ws.settings.round_off:
+        return rest_position(ws, "no contact load")
+    g_c, sigma_c = share_work / share, sigma * share  # the share at unit size
+    warmed = warm(ws, g_c, sigma_c) if ws.settings.warm_start else None
+    point = warmed if warmed is not None else interior_point(ws, g_c, sigma_c)
+    held.check_turns(ws, point.x)  # before polishing, which a nearly free body defeats
+    if warmed is None and ws.settings.polish:
+        point = polish(ws, g_c, sigma_c, point)
+    ws.last = point if point.active is not None else None
+    return replace(point, lam=point.lam * share, f=point.f * share, nu=None, certificate=None)
+
+
+def rest_position(ws: Workspace, method: str = "no load") -> faces.Point:
+    """The answer with no load (or none the contacts carry, ``method``):
+    every feasible position is optimal, so the least-norm one (the tie
+    rule): 0, unless deviations move the clearances off it; then one cone
+    program on the whole feasible set, polished."""
     lam, f = np.zeros(len(ws.balls)), np.zeros(ws.stack.A.shape[0])
     zero = np.zeros(ws.m)
     if np.all(ws.stack.levels(zero)[2] <= ws.stack.r):  # 0 fits: no deviation, or small ones
-        return faces.Point(zero, lam, f, method="no load")
+        return faces.Point(zero, lam, f, method=method)
     e = np.zeros(ws.Eq.shape[0])
     prog = conic.cone_program(ws, ws.asm.metric_matrix, ws.Eq, e, ws.stack)
     sol = conic.run(ws, prog, np.zeros(ws.m))  # no position at all: UnassembledError
@@ -219,7 +235,7 @@ def rest_position(ws: Workspace) -> faces.Point:
     x = ties.polish_least_norm(
         ws, np.asarray(sol.x), z[prog.soc_first], z[prog.f_rows], ws.stack, ws.Eq, e
     )
-    return faces.Point(x, lam, f, method="no load: the least-norm position")
+    return faces.Point(x, lam, f, method=f"{method}: the least-norm position")
 
 
 def interior_point(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:

@@ -84,6 +84,15 @@ class Workspace:
         """The cone program of the hard problem (its loads are set per solve)."""
         return conic.cone_program(self, None, self.Eq, np.zeros(self.Eq.shape[0]), self.stack)
 
+    def contacts_share(self, g: FloatArray) -> FloatArray:
+        """The loads' work ``g`` less what the rigid rows hold alone (least
+        squares): an equal load on every position the rigid joints allow
+        (``E x = 0``), carried by the contacts."""
+        if not self.E.shape[0]:
+            return g
+        nu = self.balance.rigid_multipliers(g[None])[0]
+        return np.asarray(g - linalg.adjoint(self.E, nu))
+
     @cached_property
     def _free_motion_words(self) -> tuple[str, ...]:
         return describe_free_motions(self.asm, self.N)
