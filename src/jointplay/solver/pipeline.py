@@ -205,11 +205,10 @@ def contacts_optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> fac
     hold every position at ``E x = 0``, but its forces are the contacts' own,
     not round-off against what a rigid joint carries. With no share the
     contacts carry nothing, and the rest position is the answer."""
-    share_work = ws.contacts_share(g_hat)
-    share = float(np.linalg.norm(share_work))
+    g_c, share = ws.contacts_share(g_hat)
     if share <= ws.settings.round_off:
         return rest_position(ws, "no contact load")
-    g_c, sigma_c = share_work / share, sigma * share  # the share at unit size
+    sigma_c = sigma * share  # the compliance of loads of the share's size
     warmed = warm(ws, g_c, sigma_c) if ws.settings.warm_start else None
     point = warmed if warmed is not None else interior_point(ws, g_c, sigma_c)
     held.check_turns(ws, point.x)  # before polishing, which a nearly free body defeats

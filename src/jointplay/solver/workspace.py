@@ -84,14 +84,18 @@ class Workspace:
         """The cone program of the hard problem (its loads are set per solve)."""
         return conic.cone_program(self, None, self.Eq, np.zeros(self.Eq.shape[0]), self.stack)
 
-    def contacts_share(self, g: FloatArray) -> FloatArray:
-        """The loads' work ``g`` less what the rigid rows hold alone (least
-        squares): an equal load on every position the rigid joints allow
-        (``E x = 0``), carried by the contacts."""
+    def contacts_share(self, g_hat: FloatArray) -> tuple[FloatArray, float]:
+        """The unit loads' work ``g_hat`` less what the rigid rows hold alone
+        (least squares): an equal load on every position the rigid joints
+        allow (``E x = 0``), carried by the contacts. Returned at unit size,
+        with its size (``g_hat`` itself and 1 with no rigid rows: a
+        degenerate optimum's route can turn on the last bit of the loads)."""
         if not self.E.shape[0]:
-            return g
-        nu = self.balance.rigid_multipliers(g[None])[0]
-        return np.asarray(g - linalg.adjoint(self.E, nu))
+            return g_hat, 1.0
+        nu = self.balance.rigid_multipliers(g_hat[None])[0]
+        share = np.asarray(g_hat - linalg.adjoint(self.E, nu))
+        size = float(np.linalg.norm(share))
+        return (share / size if size > 0 else share), size
 
     @cached_property
     def _free_motion_words(self) -> tuple[str, ...]:
