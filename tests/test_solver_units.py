@@ -133,7 +133,7 @@ def _kkt(duplicate: bool) -> tuple[np.ndarray, int]:
 def test_a_regular_kkt_system_is_solved_exactly(sparse: bool) -> None:
     K, n = _kkt(duplicate=False)
     rhs = np.arange(1.0, K.shape[0] + 1)
-    step = linalg.solve_kkt(sp.csc_matrix(K) if sparse else K, rhs, n)
+    step, _ = linalg.solve_kkt(sp.csc_matrix(K) if sparse else K, rhs, n)
     assert np.allclose(step, np.linalg.solve(K, rhs), rtol=1e-12, atol=1e-12)
 
 
@@ -148,11 +148,11 @@ def test_indeterminate_forces_still_give_the_one_position_step(sparse: bool) -> 
     want = np.r_[1.0, -2.0, 0.5, 3.0, 1.0, 2.0, 0.0]
     rhs = K @ want
     matrix = sp.csc_matrix(K) if sparse else K
-    step = linalg.solve_kkt(matrix, rhs, n)
+    step, _ = linalg.solve_kkt(matrix, rhs, n)
     assert np.max(np.abs(K @ step - rhs)) <= 1e-10 * np.max(np.abs(rhs))
     assert np.allclose(step[:n], want[:n], rtol=0, atol=1e-9)
     assert step[4] + step[6] == pytest.approx(want[4] + want[6], abs=1e-9)
-    nearest = linalg.solve_kkt(matrix, rhs, n, prox=1e-8)
+    nearest, _ = linalg.solve_kkt(matrix, rhs, n, prox=1e-8)
     assert np.allclose(nearest, np.linalg.lstsq(K, rhs, rcond=None)[0], rtol=0, atol=1e-8)
     assert nearest[4] == pytest.approx(nearest[6], abs=1e-8)  # the two copies share
 
@@ -165,8 +165,28 @@ def test_an_inconsistent_singular_system_is_refused() -> None:
     rhs[4], rhs[6] = 1.0, -1.0  # the same row asked for two values
     with pytest.raises(linalg.SingularSystemError):
         linalg.solve_kkt(sp.csc_matrix(K), rhs, n)
-    step = linalg.solve_kkt(K, rhs, n)
+    step, _ = linalg.solve_kkt(K, rhs, n)
     assert np.allclose(step, np.linalg.lstsq(K, rhs, rcond=None)[0], atol=1e-10)
+
+
+def test_the_previous_steps_factors_solve_a_nearby_system() -> None:
+    """Newton's K moves with its steps only: the factors of the previous K,
+    refined against the new one, solve it to the plain tolerance without a
+    factorization of its own (and are handed on); factors of a K far from
+    this one are not used (the step is still exact)."""
+    K, n = _kkt(duplicate=False)
+    rhs = np.arange(1.0, K.shape[0] + 1)
+    _, factors = linalg.solve_kkt(K, rhs, n)
+    nearby = K.copy()
+    nearby[:n, :n] += 1e-9 * np.eye(n)
+    step, kept = linalg.solve_kkt(nearby, rhs, n, factors=factors)
+    assert kept is factors
+    assert np.max(np.abs(nearby @ step - rhs)) <= 1e-8 * np.max(np.abs(rhs))
+    far = K.copy()
+    far[:n, :n] += 10.0 * np.eye(n)
+    step, fresh = linalg.solve_kkt(far, rhs, n, factors=factors)
+    assert fresh is not factors
+    assert np.allclose(step, np.linalg.solve(far, rhs), rtol=1e-12, atol=1e-12)
 
 
 def test_the_proximal_solve_converges_to_the_solution_nearest_zero() -> None:

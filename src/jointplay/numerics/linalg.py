@@ -188,7 +188,8 @@ def solve_kkt(
     prox: float = 0.0,
     floor: float = 0.0,
     plain: bool = True,
-) -> FloatArray:
+    factors: Any = None,
+) -> tuple[FloatArray, Any]:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
     equations). A singular but consistent system (statically indeterminate
     forces) gets a solution: the plain factors' if round-off lets them solve
@@ -212,22 +213,34 @@ def solve_kkt(
     repeat each other, kept as they are in a sparse system): no plain
     factorization, the regularized one at once. SuperLU fills a large
     singular K in before it meets the zero pivot: on a 4,000-shaft bearing
-    chain's tie, 3.8 s and 1.2 GB to fail, against 0.08 s regularized."""
+    chain's tie, 3.8 s and 1.2 GB to fail, against 0.08 s regularized.
+
+    ``factors``: the plain factors of the previous Newton step's K, tried
+    first (refined against this K); returned with the step are the plain
+    factors that solved it (None if none did). Newton's K moves with its
+    steps only, and near the optimum hardly at all: its last steps need no
+    factorization of their own."""
     size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
     scale = max(1.0, float(abs(K).max()))
     if plain and not prox:
         # plain factors, with a few steps of iterative refinement (long chains need them)
-        step = _refined(K, _factored(K), rhs, max(DEFAULT.kkt_plain * size, floor), 4)
+        tol = max(DEFAULT.kkt_plain * size, floor)
+        if factors is not None:
+            step = _refined(K, factors, rhs, tol, 4)
+            if step is not None:
+                return step, factors
+        factors = _factored(K)
+        step = _refined(K, factors, rhs, tol, 4)
         if step is not None:
-            return step
+            return step, factors
     # Quasi-definite regularization, refined against K: on a consistent
     # system, the solution nearest the current point
     tol = max(DEFAULT.kkt_refined * size, floor)
     step = proximal_solve(K, rhs, n_primal, max(prox, DEFAULT.kkt_round_off * scale), tol)
     if step is not None and float(np.max(np.abs(rhs - K @ step))) <= tol:
-        return step
+        return step, None
     if not sp.issparse(K):
-        return np.asarray(np.linalg.lstsq(K, rhs, rcond=DEFAULT.lstsq_rcond)[0])
+        return np.asarray(np.linalg.lstsq(K, rhs, rcond=DEFAULT.lstsq_rcond)[0]), None
     raise SingularSystemError
 
 

@@ -185,6 +185,7 @@ def newton(
     S = stack.segment_matrix if sparse else None
     best: tuple[float, FloatArray, FloatArray, FloatArray, int] | None = None
     history: list[float] = []
+    factors = None  # the last step's plain factors (``linalg.solve_kkt``)
     for it in range(max_iter + 1):
         grad = q + linalg.adjoint(Eq, nu)
         if P is not None:
@@ -255,7 +256,9 @@ def newton(
             # a step solves its system once its residual is below where Newton stops
             floor = settings.round_off * min(force_scale, length_scale)
             plain = not (sparse and repeated_rows)
-            step = linalg.solve_kkt(Kmat, -F, m, 0.0 if sparse else prox, floor, plain)
+            step, factors = linalg.solve_kkt(
+                Kmat, -F, m, 0.0 if sparse else prox, floor, plain, factors
+            )
             if (
                 prox
                 and sparse
@@ -264,7 +267,7 @@ def newton(
                     or float(np.max(np.abs(step[m:]), initial=0.0)) > settings.far * force_scale
                 )
             ):  # round-off's step along a tie or an indeterminate force
-                step = linalg.solve_kkt(Kmat, -F, m, prox, floor)
+                step, factors = linalg.solve_kkt(Kmat, -F, m, prox, floor)
         except linalg.SingularSystemError:
             break
         x = x + step[:m]
