@@ -24,7 +24,7 @@ Everything the solver needs is linear in ``x``:
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -33,7 +33,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from jointplay.geometry import FloatArray, cross, skew
-from jointplay.model.joints import Contact, Joint
+from jointplay.model.joints import Contact
+from jointplay.model.joints.base import cones_of, frames_of
 from jointplay.model.mechanism import Load, Model
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
@@ -166,6 +167,124 @@ def _rows_matrix(blocks: Sequence[tuple[IntArray, FloatArray]], m: int, sparse: 
     return sp.csr_matrix((vals, (rows, cols_all)), shape=(n_rows, m))
 
 
+#: Columns of a joint's map: the 6 unknowns of each of its two bodies (6 for
+#: a joint to the ground). ``JointRows`` pads every joint's to this many.
+JOINT_COLUMNS = 12
+_EACH_COLUMN = np.arange(JOINT_COLUMNS)
+
+
+@dataclass(frozen=True)
+class JointRows:
+    """``Assembly.G`` and ``Assembly.contacts`` as arrays, which ``assemble``
+    makes with them: the matrices are built from these with no Python step
+    per joint or contact (a large mechanism has tens of thousands).
+
+    Joint j's columns are ``cols[j, :width[j]]`` (``G.cols``); its map's
+    rows, and its contacts' rows, have their entries on those columns in
+    that order, padded with 0 to ``JOINT_COLUMNS``. A contact's columns are
+    its joint's.
+    """
+
+    width: IntArray  # (J,) columns of each joint's map: 6 to the ground, else 12
+    cols: IntArray  # (J, 12) ``G.cols``
+    maps: FloatArray  # (J, 6, 12) ``G.block``
+    frames: FloatArray  # (J, 3, 3) each joint's ``R_world_joint``
+    between: IntArray  # (J, 2) moving-body index of a and b, -1 for the ground
+    joint_of: IntArray  # (nc,) each contact's joint
+    k: IntArray  # (nc,) each contact's rows
+    rows: FloatArray  # (sum k, 6) the contacts' ``Contact.rows``, stacked
+    blocks: FloatArray  # (sum k, 12) their ``ContactRows.block``, stacked
+    faces: FloatArray  # (nc, 12) each contact's ``offset_block`` (0 without)
+    has_face: NDArray[np.bool_]  # (nc,) the contact has an ``offset_block``
+    #: (nc,) not ``ContactRows.is_fixed`` (a study's radii leave it: ``with_radii``)
+    is_ball: NDArray[np.bool_]
+
+    @staticmethod
+    def of(asm: Assembly) -> JointRows:
+        """The arrays of an assembly made without them, from its objects."""
+        n_joints = len(asm.G)
+        width = np.array([len(G.cols) for G in asm.G], dtype=np.intp).reshape(n_joints)
+        cols = np.zeros((n_joints, JOINT_COLUMNS), dtype=np.intp)
+        maps = np.zeros((n_joints, 6, JOINT_COLUMNS))
+        for j, G in enumerate(asm.G):
+            cols[j, : len(G.cols)] = G.cols
+            maps[j, :, : len(G.cols)] = G.block
+        contacts = asm.contacts
+        k = np.array([c.k for c in contacts], dtype=np.intp).reshape(len(contacts))
+        blocks = np.zeros((int(k.sum()), JOINT_COLUMNS))
+        faces = np.zeros((len(contacts), JOINT_COLUMNS))
+        at = 0
+        for i, c in enumerate(contacts):
+            blocks[at : at + c.k, : len(c.cols)] = c.block
+            if c.offset_block is not None:
+                faces[i, : len(c.cols)] = c.offset_block
+            at += c.k
+        joints = asm.model.joints
+        return JointRows(
+            width,
+            cols,
+            maps,
+            frames_of(joints),
+            np.array(
+                [[asm.body_index.get(name, -1) for name in j.between] for j in joints],
+                dtype=np.intp,
+            ).reshape(-1, 2),
+            np.array([c.joint_index for c in contacts], dtype=np.intp).reshape(len(contacts)),
+            k,
+            np.concatenate([np.zeros((0, 6)), *(c.contact.rows for c in contacts)]),
+            blocks,
+            faces,
+            np.array([c.offset_block is not None for c in contacts], dtype=bool),
+            np.array([not c.is_fixed for c in contacts], dtype=bool),
+        )
+
+    @cached_property
+    def _ascending(self) -> tuple[IntArray, IntArray, NDArray[np.bool_]]:
+        """Each joint's columns from the smallest, as a sparse matrix keeps its
+        entries: (J, 12) their order and (J, 12) the columns so (padding last),
+        and (J,) where that order is not the joint's own (a joint whose b
+        comes before its a among the unknowns)."""
+        padding = self.width[:, None] <= _EACH_COLUMN
+        key = np.where(padding, np.iinfo(np.intp).max, self.cols)
+        order = np.argsort(key, axis=1, kind="stable").astype(np.intp)
+        reordered = np.any(order != _EACH_COLUMN, axis=1)
+        return order, np.take_along_axis(self.cols, order, axis=1), reordered
+
+    def matrix(
+        self,
+        vals: FloatArray,
+        joint: IntArray,
+        m: int,
+        sparse: bool,
+        has: NDArray[np.bool_] | None = None,
+    ) -> Matrix:
+        """Rows on their joints' columns as one matrix: row i holds ``vals[i]``
+        (padded like ``maps``) on the columns of joint ``joint[i]``, or
+        nothing where ``has`` is False. Dense, or CSR with each row's columns
+        ascending, as SciPy keeps entries given one by one (none repeats)."""
+        if not len(joint) or (has is not None and not has.any()):  # no entries
+            return sp.csr_matrix((len(joint), m)) if sparse else np.zeros((len(joint), m))
+        width = self.width[joint] if has is None else self.width[joint] * has
+        keep = width[:, None] > _EACH_COLUMN
+        if not sparse:
+            out = np.zeros((len(joint), m))
+            out[keep.nonzero()[0], self.cols[joint][keep]] += vals[keep]  # to 0, as entries add
+            return out
+        order, ascending, reordered = self._ascending
+        turned = reordered[joint].nonzero()[0]
+        if len(turned):
+            vals = vals.copy()
+            vals[turned] = np.take_along_axis(vals[turned], order[joint[turned]], axis=1)
+        indptr = np.zeros(len(joint) + 1, dtype=np.intp)
+        width.cumsum(out=indptr[1:])
+        return sp.csr_matrix((vals[keep], ascending[joint][keep], indptr), shape=(len(joint), m))
+
+    @cached_property
+    def row_joint(self) -> IntArray:
+        """(sum k,) the joint of each of the contacts' rows."""
+        return self.joint_of.repeat(self.k)
+
+
 @dataclass(frozen=True)
 class BallStack:
     """The clearance cones ``|A_i x - c_i| + B_i x <= r_i`` stacked for vectorized work.
@@ -190,10 +309,7 @@ class BallStack:
     @staticmethod
     def of(balls: Sequence[ContactRows], m: int, sparse: bool = False) -> BallStack:
         k = np.array([c.k for c in balls], dtype=np.intp)
-        start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
         A = _rows_matrix([(c.cols, c.block) for c in balls], m, sparse)
-        r = np.array([c.radius for c in balls], dtype=float)
-        spring = np.array([c.stiffness for c in balls], dtype=float)
         zero = np.zeros((1, 0))
         B = _rows_matrix(
             [
@@ -205,6 +321,15 @@ class BallStack:
             m,
             sparse,
         )
+        return BallStack.around(balls, k, A, B)
+
+    @staticmethod
+    def around(balls: Sequence[ContactRows], k: IntArray, A: Matrix, B: Matrix) -> BallStack:
+        """The stack of ``balls`` (``k`` rows each) whose rows ``A`` and face
+        rows ``B`` are made: their radii, springs and centres."""
+        start = np.concatenate([[0], np.cumsum(k)[:-1]]).astype(np.intp) if len(k) else k
+        r = np.array([c.radius for c in balls], dtype=float)
+        spring = np.array([c.stiffness for c in balls], dtype=float)
         centre = None
         if any(c.centre is not None for c in balls):
             centre = np.concatenate(
@@ -393,14 +518,17 @@ class ContactTables:
     first_contact: IntArray  # (J + 1,) joint j's contacts: by_joint[first[j] : first[j + 1]]
 
 
-def _wrench_map(contacts: Sequence[ContactRows], sparse: bool) -> Matrix:
-    """Block-diagonal ``-rows.T`` of the contacts (their duals stacked)."""
-    k = np.array([c.k for c in contacts], dtype=np.intp)
-    rows = np.concatenate([c.contact.rows for c in contacts]) if contacts else np.zeros((0, 6))
-    owner = np.repeat(np.arange(len(contacts)), k)
+def _wrench_map(rows: FloatArray, k: IntArray, sparse: bool) -> Matrix:
+    """Block-diagonal ``-rows.T`` of contacts of ``k`` rows each (their rows
+    stacked): their duals stacked -> their wrenches."""
+    n_rows = rows.shape[0]
+    owner = np.repeat(np.arange(len(k)), k)
     i = (6 * owner[:, None] + np.arange(6)).ravel()
-    j = np.repeat(np.arange(rows.shape[0]), 6)
-    return _matrix(-rows.ravel(), i, j, (6 * len(contacts), rows.shape[0]), sparse)
+    shape = (6 * len(k), n_rows)
+    if sparse:  # column by column (a row's 6 entries each), then turned: nothing to sort
+        by_column = sp.csc_matrix((-rows.ravel(), i, np.arange(0, 6 * n_rows + 1, 6)), shape)
+        return by_column.tocsr()
+    return _matrix(-rows.ravel(), i, np.repeat(np.arange(n_rows), 6), shape, sparse)
 
 
 def _matrix(
@@ -427,6 +555,9 @@ class Assembly:
     contacts: tuple[ContactRows, ...]
     g: FloatArray  # (m,) work of the loads per unit scaled x (N*mm)
     turn: FloatArray  # (n,) rad per unit of each body's scaled rotation: s / ell_b
+    #: ``G`` and ``contacts`` as arrays, made with them (``with_radii`` keeps
+    #: them: they hold no radius); None: worked out from them when first needed.
+    joint_rows: JointRows | None = field(default=None, repr=False, compare=False)
 
     @property
     def m(self) -> int:
@@ -438,19 +569,24 @@ class Assembly:
         return self.m > linalg.SPARSE_FROM
 
     @cached_property
+    def _joint_rows(self) -> JointRows:
+        """``joint_rows``, or for an assembly made without them, their like."""
+        return self.joint_rows if self.joint_rows is not None else JointRows.of(self)
+
+    @cached_property
     def is_ball(self) -> NDArray[np.bool_]:
         """(contacts,) whether each contact is a clearance cone (else fixed rows)."""
-        return np.array([not c.is_fixed for c in self.contacts], dtype=bool)
+        return self._joint_rows.is_ball
 
     @cached_property
     def balls(self) -> tuple[ContactRows, ...]:
-        pairs = zip(self.contacts, self.is_ball.tolist(), strict=True)
-        return tuple(c for c, ball in pairs if ball)
+        contacts = self.contacts
+        return tuple([contacts[i] for i in self.is_ball.nonzero()[0].tolist()])
 
     @cached_property
     def fixed(self) -> tuple[ContactRows, ...]:
-        pairs = zip(self.contacts, self.is_ball.tolist(), strict=True)
-        return tuple(c for c, ball in pairs if not ball)
+        contacts = self.contacts
+        return tuple([contacts[i] for i in (~self.is_ball).nonzero()[0].tolist()])
 
     @cached_property
     def metric(self) -> FloatArray:
@@ -473,22 +609,28 @@ class Assembly:
         if not self.sparse:
             return self.metric
         w2 = self._metric_weights**2
-        parts = []
-        for width in sorted({len(G.cols) for G in self.G}):  # joints to ground, between bodies
-            same = [G for G in self.G if len(G.cols) == width]
-            blocks = np.stack([G.block for G in same])  # (J, 6, width)
-            cols = np.stack([G.cols for G in same])  # (J, width)
-            products = blocks.transpose(0, 2, 1) @ (w2[:, None] * blocks)  # (J, width, width)
-            parts.append(
-                (
-                    np.repeat(cols, width, axis=1).ravel(),
-                    np.tile(cols, (1, width)).ravel(),
-                    products.ravel(),
-                )
-            )
-        if not parts:
+        maps = self._joint_rows
+        widths = np.unique(maps.width).tolist()  # joints to ground, between bodies
+        groups = [np.flatnonzero(maps.width == width) for width in widths]
+        total = sum(len(same) * width**2 for width, same in zip(widths, groups, strict=True))
+        if not total:
             return sp.csr_matrix((self.m, self.m))
-        rows, cols, vals = (np.concatenate(p) for p in zip(*parts, strict=True))
+        # each joint's entries, (width, width) of them, in place at once; SciPy's own
+        # index type, so that it takes them as they are
+        small = max(total, self.m) <= np.iinfo(np.int32).max
+        rows = np.empty(total, dtype=np.int32 if small else np.intp)
+        cols = np.empty(total, dtype=rows.dtype)
+        vals = np.empty(total)
+        at = 0
+        for width, same in zip(widths, groups, strict=True):
+            blocks = np.ascontiguousarray(maps.maps[same][:, :, :width])  # (J, 6, width)
+            joint_cols = maps.cols[same][:, :width]  # (J, width)
+            products = blocks.transpose(0, 2, 1) @ (w2[:, None] * blocks)  # (J, width, width)
+            end = at + products.size
+            rows[at:end].reshape(products.shape)[...] = joint_cols[:, :, None]
+            cols[at:end].reshape(products.shape)[...] = joint_cols[:, None, :]
+            vals[at:end] = products.ravel()
+            at = end
         return sp.csr_matrix((vals, (rows, cols)), shape=(self.m, self.m))
 
     @property
@@ -564,55 +706,38 @@ class Assembly:
     @cached_property
     def tables(self) -> ContactTables:
         """Joints and contacts stacked for vectorized results (``ContactTables``)."""
+        rows = self._joint_rows
         joints = self.model.joints
         nj = len(self.G)
-        widths = np.array([len(G.cols) for G in self.G], dtype=np.intp)
-        parts: list[tuple[IntArray, IntArray, FloatArray]] = []
-        for w in np.unique(widths):  # joints to ground (6 columns), between bodies (12)
-            which = np.flatnonzero(widths == w)
-            cols = np.array([self.G[q].cols for q in which]).reshape(-1, 1, w)
-            blocks = np.array([self.G[q].block for q in which]).reshape(-1, 6, w)
-            rows = 6 * which[:, None, None] + np.arange(6)[None, :, None]
-            shape = blocks.shape
-            parts.append(
-                (
-                    np.broadcast_to(rows, shape).ravel(),
-                    np.broadcast_to(cols, shape).ravel(),
-                    blocks.ravel(),
-                )
-            )
-        i = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, dtype=np.intp)
-        j = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, dtype=np.intp)
-        v = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0)
-        tau_map = _matrix(v, i, j, (6 * nj, self.m), self.sparse)
-        offsets = [
-            np.zeros(6) if c.contact.offset is None else c.contact.offset for c in self.balls
-        ]
-        contacts = self.contacts
-        joint_of = np.array([c.joint_index for c in contacts], dtype=np.intp)
+        each_row = np.arange(nj).repeat(6)
+        tau_map = rows.matrix(rows.maps.reshape(-1, JOINT_COLUMNS), each_row, self.m, self.sparse)
+        is_ball = self.is_ball
+        on_ball = is_ball.repeat(rows.k)
+        cones = [c.contact for c in self.contacts]
+        normals = [cones[i].offset for i in is_ball.nonzero()[0].tolist()]
+        offsets = np.zeros((len(normals), 6))  # 0 for a plain ball
+        faced = [i for i, normal in enumerate(normals) if normal is not None]
+        if faced:
+            offsets[faced] = np.array([normals[i] for i in faced])
+        joint_of = rows.joint_of
         by_joint = np.argsort(joint_of, kind="stable").astype(np.intp)
         return ContactTables(
             tau_map,
-            _wrench_map(self.balls, self.sparse),
-            np.array(offsets).reshape(-1, 6),
-            _wrench_map(self.fixed, self.sparse),
-            self.is_ball,
+            _wrench_map(rows.rows[on_ball], rows.k[is_ball], self.sparse),
+            offsets,
+            _wrench_map(rows.rows[~on_ball], rows.k[~is_ball], self.sparse),
+            is_ball,
             joint_of,
-            np.array([c.contact.point for c in contacts], dtype=float).reshape(-1, 3),
-            np.array(
-                [n for n, c in enumerate(contacts) if c.contact.lever is not None], dtype=np.intp
-            ),
-            np.array([jt.centre for jt in joints], dtype=float).reshape(-1, 3),
-            np.array([jt.R_world_joint for jt in joints], dtype=float).reshape(-1, 3, 3),
-            tuple(c.contact.name for c in contacts),
-            np.array([c.contact.turn_lever for c in contacts], dtype=float),  # None: nan
-            tuple(jt.name for jt in joints),
-            tuple(jt.type_name for jt in joints),
-            tuple(jt.between for jt in joints),
-            np.array(
-                [[self.body_index.get(name, -1) for name in jt.between] for jt in joints],
-                dtype=np.intp,
-            ).reshape(-1, 2),
+            np.concatenate([np.zeros(0), *(c.point for c in cones)]).reshape(-1, 3),
+            np.array([n for n, c in enumerate(cones) if c.lever is not None], dtype=np.intp),
+            np.array([jt.at for jt in joints], dtype=float).reshape(-1, 3),
+            rows.frames,
+            tuple([c.name for c in cones]),
+            np.array([c.turn_lever for c in cones], dtype=float),  # None: nan
+            tuple([jt.name for jt in joints]),
+            tuple([jt.type_name for jt in joints]),
+            tuple([jt.between for jt in joints]),
+            rows.between,
             by_joint,
             np.searchsorted(joint_of[by_joint], np.arange(len(joints) + 1)).astype(np.intp),
         )
@@ -620,7 +745,13 @@ class Assembly:
     @cached_property
     def stack(self) -> BallStack:
         """All clearance cones stacked into dense arrays (see ``BallStack``)."""
-        return BallStack.of(self.balls, self.m, self.sparse)
+        rows = self._joint_rows
+        is_ball = self.is_ball
+        on_ball = is_ball.repeat(rows.k)
+        A = rows.matrix(rows.blocks[on_ball], rows.row_joint[on_ball], self.m, self.sparse)
+        faces = rows.faces[is_ball]
+        B = rows.matrix(faces, rows.joint_of[is_ball], self.m, self.sparse, rows.has_face[is_ball])
+        return BallStack.around(self.balls, rows.k[is_ball], A, B)
 
     @cached_property
     def E_length(self) -> FloatArray:
@@ -629,9 +760,9 @@ class Assembly:
         row of a turn alone, ``ell`` over the row's own lever (a weld's turn
         row is the angle: ``ell``; a tight drive's is the angle times its
         lever rho: ``ell / rho``). A turn w opens a weld by about w * ell."""
-        if not self.fixed:
+        if self.is_ball.all():  # no fixed rows
             return np.zeros(0)
-        rows = np.vstack([c.contact.rows for c in self.fixed])
+        rows = self._joint_rows.rows[(~self.is_ball).repeat(self._joint_rows.k)]
         lever = np.linalg.norm(rows[:, 3:], axis=1)
         turn = ~np.any(rows[:, :3] != 0.0, axis=1) & (lever > 0.0)
         return np.where(turn, self.ell / np.where(turn, lever, 1.0), 1.0)
@@ -639,7 +770,11 @@ class Assembly:
     @cached_property
     def E(self) -> Matrix:
         """Equality rows (rigid joints and zero-clearance contacts)."""
-        return _rows_matrix([(c.cols, c.block) for c in self.fixed], self.m, self.sparse)
+        rows = self._joint_rows
+        if self.is_ball.all():  # no fixed rows
+            return rows.matrix(rows.blocks[:0], rows.joint_of[:0], self.m, self.sparse)
+        on_fixed = (~self.is_ball).repeat(rows.k)
+        return rows.matrix(rows.blocks[on_fixed], rows.row_joint[on_fixed], self.m, self.sparse)
 
     def scale_matrix(self) -> FloatArray:
         """Physical (V_c mm, Omega rad) per body from scaled x: ``x_phys = D * x``."""
@@ -675,71 +810,96 @@ def assemble(model: Model) -> Assembly:
     m = 6 * n
     joints = model.joints
     # every joint at once: large mechanisms have thousands
-    centre = np.array([j.centre for j in joints], dtype=float).reshape(-1, 3)
-    side_a = np.array([index.get(j.between[0], -1) for j in joints], dtype=np.intp)
-    side_b = np.array([index.get(j.between[1], -1) for j in joints], dtype=np.intp)
+    centre = np.array([j.at for j in joints], dtype=float).reshape(-1, 3)
+    between = np.array(
+        [[index.get(a, -1), index.get(b, -1)] for a, b in (j.between for j in joints)],
+        dtype=np.intp,
+    ).reshape(-1, 2)
+    cones = cones_of(joints)  # a joint type's together
+    every = [c for joint_cones in cones for c in joint_cones]
+    joint_of = np.arange(len(joints)).repeat([len(c) for c in cones])
 
+    # both sides of every joint: a's, then b's
+    sides, at_sides = between.T.ravel(), np.concatenate([centre, centre])
+    on = sides >= 0
     count = np.zeros(n)
     body_ref = np.zeros((n, 3))
-    for side in (side_a, side_b):
-        on = side >= 0
-        np.add.at(count, side[on], 1.0)
-        np.add.at(body_ref, side[on], centre[on])
+    np.add.at(count, sides[on], 1.0)
+    np.add.at(body_ref, sides[on], at_sides[on])
     body_ref /= np.maximum(count, 1.0)[:, None]
 
     # Rigid joints add nothing to the metric, so they do not set its length scale:
     # splitting a body with a weld anywhere leaves every answer unchanged.
-    has_play = np.array([any(c.kind == "ball" for c in j.cones) for j in joints], dtype=bool)
-    spread_from = centre[has_play] if np.any(has_play) else centre
-    spread = float(np.max(np.linalg.norm(spread_from - spread_from.mean(axis=0), axis=1)))
-    radii = [c.radius for j in joints for c in j.cones if c.kind == "ball"]
-    s = max(radii, default=0.0)
-    size = np.array([j.size if play else 0.0 for j, play in zip(joints, has_play, strict=True)])
+    is_play = np.array([c.kind == "ball" for c in every], dtype=bool)
+    has_play = np.zeros(len(joints), dtype=bool)
+    has_play[joint_of[is_play]] = True
+    spread_from = centre[has_play] if has_play.any() else centre
+    # the norms as np.linalg.norm and the mean as .mean() make them, without their calls' cost
+    off = spread_from - spread_from.sum(axis=0) / len(spread_from)
+    spread = float(np.sqrt((off * off).sum(axis=1)).max())
+    radius = np.array([c.radius for c in every], dtype=float)
+    s = max(radius[is_play].tolist(), default=0.0)
+    size = np.array([j.size if p else 0.0 for j, p in zip(joints, has_play.tolist(), strict=True)])
     sizes = size[has_play].tolist()
     if s == 0.0:  # every joint is tight: any length of the model will do
         s = max([spread, *sizes, 1.0])
     ell = max([spread, *sizes, s])
     # each body's own lever: its farthest joint centre, or its largest joint
     lever = np.full(n, s)
-    for side in (side_a, side_b):
-        on = side >= 0
-        far = np.linalg.norm(centre[on] - body_ref[side[on]], axis=1)
-        np.maximum.at(lever, side[on], np.maximum(far, size[on]))
+    off = at_sides[on] - body_ref[sides[on]]
+    far = np.sqrt((off * off).sum(axis=1))
+    np.maximum.at(lever, sides[on], np.maximum(far, np.concatenate([size, size])[on]))
     turn = s / lever
 
-    G_list = _joint_maps(joints, side_a, side_b, centre, body_ref, s, turn, m)
+    frames = frames_of(joints)
+    width, cols, maps = _joint_maps(frames, between, centre, body_ref, s, turn)
+    G_list = tuple(
+        [  # list(): NumPy makes the views at once
+            JointMap(c, b, m) if w == JOINT_COLUMNS else JointMap(c[:w], b[:, :w], m)
+            for c, b, w in zip(list(cols), list(maps), width.tolist(), strict=True)
+        ]
+    )
     # each deviated joint's torsor at its mean (its own deviation, or its share of a group's)
     deviated: dict[int, FloatArray] = {}
     for source in model.deviation_sources():
         for jdx in source.joints:
             mean = source.torsor_at(jdx, joints[jdx]) @ source.deviation.mean()
             deviated[jdx] = deviated.get(jdx, np.zeros(6)) + mean
-    blocks_of = _contact_blocks(joints, G_list, s)
+    k = np.array([c.rows.shape[0] for c in every], dtype=np.intp).reshape(len(every))
+    rows = np.concatenate([np.zeros((0, 6)), *(c.rows for c in every)])
+    blocks_of, blocks = _contact_blocks(rows / s, k, joint_of, width, maps)
+    faces = np.zeros((len(every), JOINT_COLUMNS))
+    has_face = np.zeros(len(every), dtype=bool)
+    scaled, k_list = (radius / s).tolist(), k.tolist()
     contacts: list[ContactRows] = []
-    for jdx, (joint, G) in enumerate(zip(joints, G_list, strict=True)):
-        cones = joint.cones
-        if not cones:
+    for jdx, joint_cones in enumerate(cones):
+        if not joint_cones:
             continue
-        blocks = blocks_of[jdx]
-        spring = joint.stiffness or 0.0
+        G, joint_blocks = G_list[jdx], blocks_of[jdx]
+        spring = joints[jdx].stiffness or 0.0
         # a deviation moves each play's centre, and a face's limit along its normal
-        delta = deviated.get(jdx, np.zeros(6))
+        delta = deviated.get(jdx)
         at = 0
-        for cdx, contact in enumerate(cones):
-            k = contact.rows.shape[0]
-            offset = None if contact.offset is None else (contact.offset / s) @ G.block
-            moved = jdx in deviated and contact.kind == "ball"
-            radius = contact.radius
-            if moved and contact.offset is not None:
-                radius += float(contact.offset @ delta)
+        for cdx, contact in enumerate(joint_cones):
+            i = len(contacts)
+            offset = None
+            if contact.offset is not None:
+                offset = (contact.offset / s) @ G.block
+                faces[i, : len(G.cols)], has_face[i] = offset, True
+            r, moved = scaled[i], None
+            if delta is not None and contact.kind == "ball":
+                play = contact.radius
+                if contact.offset is not None:
+                    play += float(contact.offset @ delta)
+                r, moved = play / s, (contact.rows @ delta) / s
             contacts.append(
                 ContactRows(
                     jdx,
                     cdx,
                     contact,
                     G.cols,
-                    blocks[at : at + k],
-                    radius / s,
+                    joint_blocks[at : at + k_list[i]],
+                    r,
                     m,
                     0.0
                     if contact.kind == "fixed"
@@ -747,13 +907,29 @@ def assemble(model: Model) -> Assembly:
                     if contact.stiffness is None
                     else contact.stiffness,
                     offset,
-                    centre=(contact.rows @ delta) / s if moved else None,
+                    True,
+                    moved,
                 )
             )
-            at += k
+            at += k_list[i]
 
     g = load_work(model.loads_of(None), index, body_ref, s, turn)
-    return Assembly(model, body_names, body_ref, s, ell, tuple(G_list), tuple(contacts), g, turn)
+    is_ball = np.array([not c.is_fixed for c in contacts], dtype=bool)
+    arrays = JointRows(
+        width,
+        cols,
+        maps,
+        frames,
+        between,
+        joint_of,
+        k,
+        rows,
+        blocks,
+        faces,
+        has_face,
+        is_ball,
+    )
+    return Assembly(model, body_names, body_ref, s, ell, G_list, tuple(contacts), g, turn, arrays)
 
 
 def load_work(
@@ -765,86 +941,94 @@ def load_work(
 ) -> FloatArray:
     """The loads' work per unit of scaled unknowns (N*mm): ``g`` with V = -g @ x."""
     g = np.zeros(6 * len(body_ref))
-    for load in loads:
-        i = index[load.body]
-        force = np.zeros(3) if load.force is None else np.array(load.force)
-        moment = np.zeros(3) if load.torque is None else np.array(load.torque)
-        if load.at is not None:
-            moment += cross(np.array(load.at) - body_ref[i], force)
-        g[6 * i : 6 * i + 3] += s * force
-        g[6 * i + 3 : 6 * i + 6] += turn[i] * moment
+    if not loads:
+        return g
+    # every load at once (a large mechanism has one on each of thousands of bodies)
+    on = np.array([index[load.body] for load in loads], dtype=np.intp)
+    none = (0.0, 0.0, 0.0)
+    wrench = np.array(
+        [(*(ld.force or none), *(ld.torque or none), *(ld.at or none)) for ld in loads],
+        dtype=float,
+    )
+    # a force's moment about its body's reference point (0 for a load with no
+    # point: adding it leaves every entry of g as it was)
+    lever = wrench[:, 6:] - body_ref[on]
+    lever[[ld.at is None for ld in loads]] = 0.0
+    wrench[:, 3:6] += cross(lever, wrench[:, :3])
+    wrench[:, :3] *= s
+    wrench[:, 3:6] *= turn[on, None]
+    np.add.at(g.reshape(-1, 6), on, wrench[:, :6])  # in the loads' order, as one after another
     return g
 
 
 def _contact_blocks(
-    joints: Sequence[Joint], G_list: Sequence[JointMap], s: float
-) -> dict[int, FloatArray]:
+    rows: FloatArray, k: IntArray, joint_of: IntArray, width: IntArray, maps: FloatArray
+) -> tuple[list[FloatArray], FloatArray]:
     """Each joint's contact rows on its bodies' columns, ``(rows / s) @ G.block``
-    (joint index -> (its cones' rows, columns)), for joints of the same shape
-    at once: a large mechanism has thousands (a stack of equal shapes gives
-    each product exactly as one at a time does)."""
-    with_cones = [jdx for jdx, joint in enumerate(joints) if joint.cones]
-    if not with_cones:
-        return {}
-    cones = [c.rows for jdx in with_cones for c in joints[jdx].cones]
-    rows = np.concatenate(cones) / s
-    per_joint = np.array([len(joints[jdx].cones) for jdx in with_cones], dtype=np.intp)
-    k_cone = np.array([r.shape[0] for r in cones], dtype=np.intp)
-    k = np.add.reduceat(k_cone, np.cumsum(per_joint) - per_joint)
-    first = np.cumsum(k) - k
-    same_shape: dict[tuple[int, int], list[int]] = {}  # (rows, columns) -> places in with_cones
-    for i, (jdx, k_j) in enumerate(zip(with_cones, k.tolist(), strict=True)):
-        same_shape.setdefault((k_j, len(G_list[jdx].cols)), []).append(i)
-    out: dict[int, FloatArray] = {}
-    for (k_j, _), which in same_shape.items():
-        taken = [with_cones[i] for i in which]
-        products = rows[first[which][:, None] + np.arange(k_j)] @ np.stack(
-            [G_list[jdx].block for jdx in taken]
-        )
-        out.update(zip(taken, products, strict=True))
-    return out
+    for all its cones (``rows`` scaled, ``k`` each, their joints ``joint_of``;
+    ``width`` and ``maps`` as in ``JointRows``), made for joints of the same
+    shape at once (a stack of equal shapes gives each product exactly as one
+    at a time does): a list by joint (empty for a joint with no cones), and
+    all of them stacked like ``JointRows.blocks``."""
+    n_joints = len(width)
+    per_joint = np.bincount(joint_of, weights=k, minlength=n_joints).astype(np.intp)
+    first = per_joint.cumsum() - per_joint
+    with_cones = np.bincount(joint_of, minlength=n_joints) > 0
+    by_joint: list[FloatArray] = [np.zeros((0, 0))] * n_joints
+    stacked = np.zeros((len(rows), JOINT_COLUMNS))
+    shape = per_joint * (JOINT_COLUMNS + 1) + width  # a joint's rows and columns
+    for code in sorted(set(shape[with_cones].tolist())):
+        which = ((shape == code) & with_cones).nonzero()[0]
+        k_j, w = divmod(code, JOINT_COLUMNS + 1)
+        at = first[which][:, None] + np.arange(k_j)
+        products = rows[at] @ np.ascontiguousarray(maps[which][:, :, :w])
+        stacked[at, :w] = products
+        for jdx, product in zip(which.tolist(), list(products), strict=True):
+            by_joint[jdx] = product
+    return by_joint, stacked
+
+
+#: [l]x = ((0, -l_z, l_y), (l_z, 0, -l_x), (-l_y, l_x, 0)): where its entries
+#: go, row after row, which coordinate of l, and its sign
+_CROSS_PLACE = np.array([1, 2, 3, 5, 6, 7])
+_CROSS_COORDINATE = np.array([2, 1, 2, 0, 1, 0])
+_CROSS_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
 
 
 def _joint_maps(
-    joints: Sequence[Joint],
-    side_a: IntArray,
-    side_b: IntArray,
+    R_world_joint: FloatArray,
+    between: IntArray,
     centre: FloatArray,
     body_ref: FloatArray,
     s: float,
     turn: FloatArray,
-    m: int,
-) -> list[JointMap]:
+) -> tuple[IntArray, IntArray, FloatArray]:
     """Each joint's map from scaled unknowns to the relative torsor of b
-    w.r.t. a at the joint (``side_a``/``side_b``: body indices, -1 ground)."""
-    if not joints:
-        return []
-    R_joint_world = np.array([j.R_world_joint.T for j in joints])  # (J, 3, 3)
-    part: list[FloatArray] = []
-    for sign, side in ((-1.0, side_a), (1.0, side_b)):
-        on = side >= 0
-        i = np.where(on, side, 0)
-        lever = centre - body_ref[i]
-        lever_cross = np.zeros((len(joints), 3, 3))
-        lever_cross[:, 0, 1], lever_cross[:, 0, 2] = -lever[:, 2], lever[:, 1]
-        lever_cross[:, 1, 0], lever_cross[:, 1, 2] = lever[:, 2], -lever[:, 0]
-        lever_cross[:, 2, 0], lever_cross[:, 2, 1] = -lever[:, 1], lever[:, 0]
-        t = turn[i][:, None, None]
-        block = np.zeros((len(joints), 6, 6))
-        block[:, :3, :3] = s * R_joint_world
-        block[:, :3, 3:] = -t * (R_joint_world @ lever_cross)
-        block[:, 3:, 3:] = t * R_joint_world
-        part.append(sign * block)
-    both = np.concatenate(part, axis=2)  # (J, 6, 12): a's columns, then b's
-    cols_a = 6 * side_a[:, None] + np.arange(6)
-    cols_b = 6 * side_b[:, None] + np.arange(6)
-    cols = np.concatenate([cols_a, cols_b], axis=1)
-    out: list[JointMap] = []
-    for jdx in range(len(joints)):
-        if side_a[jdx] < 0:  # ground side: b's columns only
-            out.append(JointMap(cols_b[jdx], both[jdx, :, 6:], m))
-        elif side_b[jdx] < 0:
-            out.append(JointMap(cols_a[jdx], both[jdx, :, :6], m))
-        else:
-            out.append(JointMap(cols[jdx], both[jdx], m))
-    return out
+    w.r.t. a at the joint (``between``: (J, 2) body indices of a and b, -1
+    the ground), as ``JointRows`` keeps them: ``(width, cols, maps)``, b's
+    columns only for a joint whose a side is the ground, a's only for one
+    whose b is."""
+    n_joints = len(between)
+    R_joint_world = np.ascontiguousarray(R_world_joint.transpose(0, 2, 1))  # (J, 3, 3)
+    sides = between.T  # (2, J): a's side, then b's
+    i = np.where(sides >= 0, sides, 0)
+    lever = (centre - body_ref[i]).reshape(-1, 3)
+    lever_cross = np.zeros((2 * n_joints, 9))  # [lever]x, row after row
+    lever_cross[:, _CROSS_PLACE] = lever[:, _CROSS_COORDINATE] * _CROSS_SIGN  # exactly +-l
+    t = turn[i][..., None, None]
+    block = np.zeros((2, n_joints, 6, 6))
+    block[..., :3, :3] = s * R_joint_world
+    block[..., :3, 3:] = -t * (R_joint_world @ lever_cross.reshape(2, n_joints, 3, 3))
+    block[..., 3:, 3:] = t * R_joint_world
+    block *= np.array([-1.0, 1.0])[:, None, None, None]  # a's side moves b back
+    cols = 6 * sides[..., None] + np.arange(6)  # (2, J, 6)
+    # a's columns, then b's; b's alone (first) for a joint whose a is the ground, a's alone
+    # for one whose b is
+    a_ground, ground = sides[0] < 0, np.any(sides < 0, axis=0)
+    first = np.where(a_ground[:, None, None], block[1], block[0])
+    then = np.where(ground[:, None, None], 0.0, block[1])
+    maps = np.concatenate([first, then], axis=2)  # (J, 6, 12)
+    first_cols = np.where(a_ground[:, None], cols[1], cols[0])
+    cols = np.concatenate([first_cols, np.where(ground[:, None], 0, cols[1])], axis=1)
+    width = np.where(ground, 6, JOINT_COLUMNS).astype(np.intp)
+    return width, cols, maps

@@ -16,11 +16,13 @@ a new joint type is one new module in this package.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import cached_property
-from typing import Any, ClassVar, Literal
+from functools import cache, cached_property
+from typing import Any, ClassVar, Literal, Self
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, model_validator
 
 from jointplay.geometry import FloatArray, is_parallel, joint_frame, left_jacobian_inverse, skew
@@ -32,6 +34,8 @@ from jointplay.settings import DEFAULT
 ContactKind = Literal["ball", "fixed"]
 #: A cone's vector part (k,) and scalar part.
 Parts = tuple[FloatArray, float]
+
+IntArray = NDArray[np.intp]
 
 #: Registered joint classes by their ``type`` name, filled by subclassing.
 JOINT_TYPES: dict[str, type[Joint]] = {}
@@ -139,6 +143,40 @@ def point_rows(p: FloatArray, directions: str = "xyz") -> FloatArray:
         "z": (0.0, 0.0, 1.0, py, -px, 0.0),
     }
     return np.array([rows[axis] for axis in directions]).reshape(-1, 6)
+
+
+def point_rows_of(points: FloatArray, directions: str = "xyz") -> FloatArray:
+    """``point_rows`` of many points at once, entry for entry: (N, 3) -> (N,
+    len(directions), 6)."""
+    ones, entries, coordinate, sign = _point_row_entries(directions)
+    p = np.asarray(points, dtype=float)
+    out = np.zeros((len(p), len(directions) * 6))  # the rows one after another
+    out[:, ones] = 1.0
+    out[:, entries] = p[:, coordinate] * sign  # times +-1: exactly p or -p
+    return out.reshape(len(p), len(directions), 6)
+
+
+@cache
+def _point_row_entries(directions: str) -> tuple[IntArray, IntArray, IntArray, FloatArray]:
+    """Where ``point_rows``' entries go in its rows laid one after another:
+    each row's 1, and its two entries of ``-[p]x`` (place, coordinate of p, sign)."""
+    entries = {
+        "x": (0, (4, 2, 1.0), (5, 1, -1.0)),  # (1, 0, 0, 0, pz, -py)
+        "y": (1, (3, 2, -1.0), (5, 0, 1.0)),  # (0, 1, 0, -pz, 0, px)
+        "z": (2, (3, 1, 1.0), (4, 0, -1.0)),  # (0, 0, 1, py, -px, 0)
+    }
+    if any(axis not in entries for axis in directions):
+        raise ValueError(f"point_rows: directions {directions!r} are not all of x, y, z")
+    chosen = [entries[axis] for axis in directions]
+    pairs = [
+        (6 * row + col, c, sign) for row, (_, *two) in enumerate(chosen) for col, c, sign in two
+    ]
+    return (
+        np.array([6 * row + one for row, (one, *_) in enumerate(chosen)], dtype=np.intp),
+        np.array([place for place, _, _ in pairs], dtype=np.intp),
+        np.array([c for _, c, _ in pairs], dtype=np.intp),
+        np.array([sign for _, _, sign in pairs]),
+    )
 
 
 class Joint(BaseModel):
@@ -250,8 +288,14 @@ class Joint(BaseModel):
 
     def frame(self) -> FloatArray:
         """Joint axes x, y, z as columns, in global axes, computed anew (a
-        validator must leave no arrays on the model: see ``takes``)."""
+        validator must leave no arrays on the model: see ``takes``). A type
+        that overrides it overrides ``frame_inputs`` too."""
         return joint_frame(self.axis, self.up)  # tuples: NumPy's scalars cost more here
+
+    def frame_inputs(self) -> tuple[Any, ...]:
+        """What ``frame`` is made of: joints of a type with equal inputs have
+        one frame (``frames_of`` works it out once for them)."""
+        return (self.axis, self.up)
 
     @cached_property
     def centre(self) -> FloatArray:
@@ -259,6 +303,14 @@ class Joint(BaseModel):
 
     def contacts(self) -> tuple[Contact, ...]:
         raise NotImplementedError
+
+    @classmethod
+    def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
+        """``contacts()`` of many joints of this type, one tuple per joint, each
+        contact as ``contacts()`` makes it. A type whose contacts are worth
+        building together (a large mechanism has thousands of joints of one
+        type) overrides this with NumPy over all of them at once."""
+        return [joint.contacts() for joint in joints]
 
     def play_length(self, field: str, play: float) -> float:
         """A play of this joint as a length (mm), to compare with lengths: an
@@ -284,3 +336,34 @@ class Joint(BaseModel):
     def size(self) -> float:
         """A length of the joint itself (mm), used for the model's length scale."""
         return 0.0
+
+
+def cones_of(joints: Sequence[Joint]) -> list[tuple[Contact, ...]]:
+    """``joint.cones`` of every joint: those not made yet are made together,
+    a type at a time (``contacts_of``; a type's only joint by ``contacts``,
+    which costs it less), and kept on their joints as ``cones`` keeps them."""
+    new: dict[type[Joint], list[Joint]] = {}
+    for joint in joints:
+        if "cones" not in joint.__dict__:
+            new.setdefault(type(joint), []).append(joint)
+    for kind, group in new.items():
+        made = kind.contacts_of(group) if len(group) > 1 else [group[0].contacts()]
+        for joint, cones in zip(group, made, strict=True):
+            joint.__dict__["cones"] = cones  # where ``cached_property`` keeps it
+    return [joint.cones for joint in joints]
+
+
+def frames_of(joints: Sequence[Joint]) -> FloatArray:
+    """(J, 3, 3): every joint's ``R_world_joint``, each distinct frame worked
+    out once (the joints of a chain mostly share their axes)."""
+    number: dict[tuple[Any, ...], int] = {}
+    first: list[Joint] = []  # a joint of each frame
+    which = []
+    for joint in joints:
+        key = (type(joint).frame, *joint.frame_inputs())
+        if key not in number:
+            number[key] = len(first)
+            first.append(joint)
+        which.append(number[key])
+    frames = np.array([joint.R_world_joint for joint in first]).reshape(-1, 3, 3)
+    return frames if len(first) == len(joints) else np.asarray(frames[which])

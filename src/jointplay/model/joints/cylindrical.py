@@ -17,13 +17,14 @@ within +-b/2 (``drive.py``): contact ``drive``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Literal, Self
 
 import numpy as np
 from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
-from jointplay.model.joints.base import Contact, point_rows
+from jointplay.model.joints.base import Contact, point_rows, point_rows_of
 from jointplay.model.joints.drive import Driven
 
 #: An engaged length below this fraction of the clearance holds no tilt: its
@@ -58,6 +59,39 @@ def axial_contact(axial_clearance: float | None) -> tuple[Contact, ...]:
     return (Contact("axial", "ball", point_rows(centre, "x"), axial_clearance / 2, centre),)
 
 
+def end_contacts_of(
+    length: Sequence[float], clearance: Sequence[float]
+) -> list[tuple[Contact, Contact]]:
+    """The two end discs of cylindrical engagements of ``length``, a pair per joint."""
+    points = np.zeros((len(length), 2, 3))
+    points[:, :, 0] = np.array([-1.0, 1.0]) * np.asarray(length, dtype=float)[:, None] / 2
+    rows = point_rows_of(points.reshape(-1, 3), "yz").reshape(-1, 2, 2, 6)
+    radius = (np.asarray(clearance, dtype=float) / 2).tolist()
+    minus, plus = list(rows[:, 0]), list(rows[:, 1])  # list(): NumPy makes the views at once
+    at_minus, at_plus = list(points[:, 0]), list(points[:, 1])
+    return [
+        (Contact("end-", "ball", r0, play, p0), Contact("end+", "ball", r1, play, p1))
+        for r0, p0, r1, p1, play in zip(minus, at_minus, plus, at_plus, radius, strict=True)
+    ]
+
+
+def axial_contacts_of(axial_clearance: Sequence[float | None]) -> list[tuple[Contact, ...]]:
+    """Each centre's slide along its axis within +-Ja/2 (none where Ja is None)."""
+    slides = [play / 2 for play in axial_clearance if play is not None]
+    if not slides:
+        return [() for _ in axial_clearance]
+    centres = np.zeros((len(slides), 3))
+    made = iter(
+        [
+            (Contact("axial", "ball", r, play, centre),)
+            for r, play, centre in zip(
+                list(point_rows_of(centres, "x")), slides, list(centres), strict=True
+            )
+        ]
+    )
+    return [() if play is None else next(made) for play in axial_clearance]
+
+
 class Cylindrical(Driven):
     type: Literal["cylindrical"] = "cylindrical"
     length: PositiveLength
@@ -75,6 +109,15 @@ class Cylindrical(Driven):
             *axial_contact(self.axial_clearance),
             *self.drive_contacts(),
         )
+
+    @classmethod
+    def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
+        ends = end_contacts_of([j.length for j in joints], [j.clearance for j in joints])
+        axial = axial_contacts_of([j.axial_clearance for j in joints])
+        return [
+            (*end, *slide, *joint.drive_contacts())
+            for joint, end, slide in zip(joints, ends, axial, strict=True)
+        ]
 
     @property
     def size(self) -> float:

@@ -21,15 +21,16 @@ inside the disc.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, Self
 
 import numpy as np
 from pydantic import model_validator
 
 from jointplay.geometry import FloatArray
 from jointplay.model.fields import PositiveLength
-from jointplay.model.joints.base import Contact, Joint, Parts, point_rows
+from jointplay.model.joints.base import Contact, Joint, Parts, point_rows, point_rows_of
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,28 @@ class RimContact(Contact):
         out[2, 0] = sign  # t_x; a turn about the centre moves t by dtheta x t
         out[2, 3:] = -sign * np.cross(t_rel, np.eye(3))[:, 0]
         return out
+
+
+#: A rectangle's corners, in the order ``_corner_contacts`` makes them (y, then z, from - to +).
+CORNER_NAMES = ("corner y- z-", "corner y- z+", "corner y+ z-", "corner y+ z+")
+
+
+def _corner_contacts(faces: Sequence[Planar]) -> list[tuple[Contact, ...]]:
+    """The four corner contacts of rectangular faces, a tuple per face."""
+    half = np.array([-1.0, 1.0])  # times a half length: -w/2, +w/2
+    size = np.array([[face.width, face.height] for face in faces], dtype=float).reshape(-1, 2)
+    points = np.zeros((len(faces), 4, 3))
+    points[:, :, 1] = np.repeat(half * size[:, :1] / 2, 2, axis=1)
+    points[:, :, 2] = np.tile(half * size[:, 1:] / 2, 2)
+    rows = point_rows_of(points.reshape(-1, 3), "x").reshape(-1, 4, 1, 6)
+    plays = (np.array([face.clearance for face in faces], dtype=float) / 2).tolist()
+    return [
+        tuple(
+            Contact(name, "ball", r, play, p)
+            for name, r, p in zip(CORNER_NAMES, face_rows, face_points, strict=True)
+        )
+        for face_rows, face_points, play in zip(rows, points, plays, strict=True)
+    ]
 
 
 class Planar(Joint):
@@ -92,6 +115,12 @@ class Planar(Joint):
                 name = f"corner y{'+' if y > 0 else '-'} z{'+' if z > 0 else '-'}"
                 out.append(Contact(name, "ball", point_rows(p, "x"), self.clearance / 2, p))
         return tuple(out)
+
+    @classmethod
+    def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
+        rectangles = [j for j in joints if j.diameter is None]
+        corners = iter(_corner_contacts(rectangles))
+        return [next(corners) if j.diameter is None else j._disc(j.diameter / 2) for j in joints]
 
     def _disc(self, R: float) -> tuple[Contact, ...]:
         # rim point p(t) = (0, R cos t, R sin t): delta_x = t_x + a . (cos t, sin t)

@@ -26,18 +26,24 @@ axial backlash Ja): contact ``axial``.
 
 from __future__ import annotations
 
-from typing import Literal
+from collections.abc import Sequence
+from typing import Literal, Self
 
 import numpy as np
 from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
-from jointplay.model.joints.base import Contact, Joint, point_rows
-from jointplay.model.joints.cylindrical import axial_contact
+from jointplay.model.joints.base import Contact, Joint, point_rows, point_rows_of
+from jointplay.model.joints.cylindrical import axial_contact, axial_contacts_of
 
 
 def _sign(v: float) -> str:
     return "+" if v > 0 else "-"
+
+
+#: The contacts' names, in the order ``contacts_of`` makes them (x, then z or y, from - to +).
+Y_NAMES = ("y x- z-", "y x- z+", "y x+ z-", "y x+ z+")
+Z_NAMES = ("z x- y-", "z x- y+", "z x+ y-", "z x+ y+")
 
 
 class Prismatic(Joint):
@@ -85,6 +91,28 @@ class Prismatic(Joint):
                 name = f"z x{_sign(x)} y{_sign(y)}"
                 out.append(Contact(name, "ball", point_rows(p, "z"), jz / 2, p))
         return (*out, *axial_contact(self.axial_clearance))
+
+    @classmethod
+    def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
+        half = np.array([-1.0, 1.0])  # times a half length: -L/2, +L/2
+        size = np.array([[j.length, j.width, j.height] for j in joints], dtype=float)
+        points = np.zeros((len(joints), 8, 3))
+        # y contacts at (x, 0, z), then z contacts at (x, y, 0): x, then z or y, from - to +
+        points[:, :4, 0] = points[:, 4:, 0] = np.repeat(half * size[:, :1] / 2, 2, axis=1)
+        points[:, :4, 2] = np.tile(half * size[:, 2:] / 2, 2)
+        points[:, 4:, 1] = np.tile(half * size[:, 1:2] / 2, 2)
+        rows_y = point_rows_of(points[:, :4].reshape(-1, 3), "y").reshape(-1, 4, 1, 6)
+        rows_z = point_rows_of(points[:, 4:].reshape(-1, 3), "z").reshape(-1, 4, 1, 6)
+        plays = (np.array([j.play for j in joints], dtype=float).reshape(-1, 2) / 2).tolist()
+        axial = axial_contacts_of([j.axial_clearance for j in joints])
+        out = []
+        for ry, rz, py, pz, (jy, jz), slide in zip(
+            rows_y, rows_z, points[:, :4], points[:, 4:], plays, axial, strict=True
+        ):
+            y = (Contact(n, "ball", r, jy, p) for n, r, p in zip(Y_NAMES, ry, py, strict=True))
+            z = (Contact(n, "ball", r, jz, p) for n, r, p in zip(Z_NAMES, rz, pz, strict=True))
+            out.append((*y, *z, *slide))
+        return out
 
     @property
     def size(self) -> float:

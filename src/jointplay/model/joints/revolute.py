@@ -15,13 +15,20 @@ A ``backlash`` b holds the spin by a drive within +-b/2 (``drive.py``).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Literal, Self
 
 from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
 from jointplay.model.joints.base import Contact
-from jointplay.model.joints.cylindrical import axial_contact, check_engagement, end_contacts
+from jointplay.model.joints.cylindrical import (
+    axial_contact,
+    axial_contacts_of,
+    check_engagement,
+    end_contacts,
+    end_contacts_of,
+)
 from jointplay.model.joints.drive import Driven
 
 
@@ -41,6 +48,15 @@ class Revolute(Driven):
             *axial_contact(self.axial_clearance),
             *self.drive_contacts(),
         )
+
+    @classmethod
+    def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
+        ends = end_contacts_of([j.length for j in joints], [j.clearance for j in joints])
+        axial = axial_contacts_of([j.axial_clearance for j in joints])
+        return [
+            (*end, *slide, *joint.drive_contacts())
+            for joint, end, slide in zip(joints, ends, axial, strict=True)
+        ]
 
     @property
     def size(self) -> float:

@@ -20,14 +20,15 @@ is limited by the engagement::
 
 from __future__ import annotations
 
-from typing import Literal, Self
+from collections.abc import Sequence
+from typing import Any, Literal, Self
 
 import numpy as np
 from pydantic import model_validator
 
 from jointplay.geometry import FloatArray, cross, is_parallel, joint_frame
 from jointplay.model.fields import Direction, NonNegativeLength, PositiveLength
-from jointplay.model.joints.base import Contact, Joint, point_rows
+from jointplay.model.joints.base import Contact, Joint, point_rows, point_rows_of
 from jointplay.model.joints.cylindrical import check_engagement
 
 
@@ -54,6 +55,9 @@ class Slot(Joint):
         """x = axis, y = along (across the axis), z = x cross y."""
         return joint_frame(self.axis, cross(np.array(self.axis), np.array(self.along)))
 
+    def frame_inputs(self) -> tuple[Any, ...]:
+        return (self.axis, self.along)
+
     def contacts(self) -> tuple[Contact, ...]:
         out = []
         for end, sign in (("-", -1.0), ("+", 1.0)):
@@ -65,6 +69,26 @@ class Slot(Joint):
                 rows = point_rows(p, "y")
                 out.append(Contact(f"along{end}", "ball", rows, self.slot_length / 2, p))
         return tuple(out)
+
+    @classmethod
+    def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
+        ends = np.zeros((len(joints), 2, 3))  # the pin's axis point at x = -L/2, +L/2
+        ends[:, :, 0] = np.array([-1.0, 1.0]) * np.array([j.length for j in joints])[:, None] / 2
+        across = point_rows_of(ends.reshape(-1, 3), "z").reshape(-1, 2, 1, 6)
+        along = point_rows_of(ends.reshape(-1, 3), "y").reshape(-1, 2, 1, 6)
+        out = []
+        for joint, p, z_rows, y_rows in zip(joints, ends, across, along, strict=True):
+            width = joint.clearance / 2
+            cones = [
+                Contact("across-", "ball", z_rows[0], width, p[0]),
+                Contact("across+", "ball", z_rows[1], width, p[1]),
+            ]
+            if joint.slot_length is not None:
+                reach = joint.slot_length / 2
+                cones.append(Contact("along-", "ball", y_rows[0], reach, p[0]))
+                cones.append(Contact("along+", "ball", y_rows[1], reach, p[1]))
+            out.append(tuple(cones))
+        return out
 
     @property
     def size(self) -> float:

@@ -10,11 +10,12 @@ bore axis; it slides freely along the axis, and all rotations are free::
 
 from __future__ import annotations
 
-from typing import Literal
+from collections.abc import Sequence
+from typing import Literal, Self
 
 import numpy as np
 
-from jointplay.model.joints.base import Contact, Joint, point_rows
+from jointplay.model.joints.base import Contact, Joint, point_rows, point_rows_of
 
 
 class SphereInCylinder(Joint):
@@ -23,3 +24,13 @@ class SphereInCylinder(Joint):
     def contacts(self) -> tuple[Contact, ...]:
         centre = np.zeros(3)
         return (Contact("radial", "ball", point_rows(centre, "yz"), self.clearance / 2, centre),)
+
+    @classmethod
+    def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
+        centres = np.zeros((len(joints), 3))
+        rows = point_rows_of(centres, "yz")
+        radius = (np.array([j.clearance for j in joints], dtype=float) / 2).tolist()
+        return [
+            (Contact("radial", "ball", r, play, centre),)
+            for r, play, centre in zip(list(rows), radius, list(centres), strict=True)
+        ]
