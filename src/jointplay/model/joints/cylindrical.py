@@ -18,7 +18,7 @@ within +-b/2 (``drive.py``): contact ``drive``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal, Self
+from typing import TYPE_CHECKING, Literal, Self
 
 import numpy as np
 from pydantic import model_validator
@@ -26,6 +26,9 @@ from pydantic import model_validator
 from jointplay.model.fields import Play, PositiveLength
 from jointplay.model.joints.base import Contact, point_rows, point_rows_of
 from jointplay.model.joints.drive import Driven
+
+if TYPE_CHECKING:
+    from jointplay.model.joints.revolute import Revolute
 
 #: An engaged length below this fraction of the clearance holds no tilt: its
 #: two end discs are one circle, to round-off (and the cone program's rows
@@ -92,6 +95,17 @@ def axial_contacts_of(axial_clearance: Sequence[float | None]) -> list[tuple[Con
     return [() if play is None else next(made) for play in axial_clearance]
 
 
+def bore_contacts_of(joints: Sequence[Cylindrical | Revolute]) -> list[tuple[Contact, ...]]:
+    """``contacts()`` of many cylindrical or revolute joints at once (the
+    same contacts: end discs, axial play if any, drive)."""
+    ends = end_contacts_of([j.length for j in joints], [j.clearance for j in joints])
+    axial = axial_contacts_of([j.axial_clearance for j in joints])
+    return [
+        (*end, *slide, *joint.drive_contacts())
+        for joint, end, slide in zip(joints, ends, axial, strict=True)
+    ]
+
+
 class Cylindrical(Driven):
     type: Literal["cylindrical"] = "cylindrical"
     length: PositiveLength
@@ -112,12 +126,7 @@ class Cylindrical(Driven):
 
     @classmethod
     def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
-        ends = end_contacts_of([j.length for j in joints], [j.clearance for j in joints])
-        axial = axial_contacts_of([j.axial_clearance for j in joints])
-        return [
-            (*end, *slide, *joint.drive_contacts())
-            for joint, end, slide in zip(joints, ends, axial, strict=True)
-        ]
+        return bore_contacts_of(joints)
 
     @property
     def size(self) -> float:

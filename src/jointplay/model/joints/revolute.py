@@ -24,10 +24,9 @@ from jointplay.model.fields import Play, PositiveLength
 from jointplay.model.joints.base import Contact
 from jointplay.model.joints.cylindrical import (
     axial_contact,
-    axial_contacts_of,
+    bore_contacts_of,
     check_engagement,
     end_contacts,
-    end_contacts_of,
 )
 from jointplay.model.joints.drive import Driven
 
@@ -51,12 +50,7 @@ class Revolute(Driven):
 
     @classmethod
     def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
-        ends = end_contacts_of([j.length for j in joints], [j.clearance for j in joints])
-        axial = axial_contacts_of([j.axial_clearance for j in joints])
-        return [
-            (*end, *slide, *joint.drive_contacts())
-            for joint, end, slide in zip(joints, ends, axial, strict=True)
-        ]
+        return bore_contacts_of(joints)
 
     @property
     def size(self) -> float:
