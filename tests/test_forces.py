@@ -429,9 +429,11 @@ def welded_beside_a_touching_point(force_y: float) -> dict[str, Any]:
 
 def test_a_load_the_weld_holds_alone_leaves_the_contacts_unloaded() -> None:
     """Pulling B off its point contact: the weld holds the load alone, so
-    the contacts carry nothing, and every position is the no-load one (the
-    idle body at 0, not wherever the interior point's round-off forces put
-    it: tests/property_cases/tie_least_norm_point_moves_with_the_file.yaml)."""
+    the contacts carry nothing (the route: no contact load), and every
+    position is the no-load one. The wrong answer this route removed, an
+    idle body's tie resolved where round-off forces put it, is the case
+    tests/property_cases/tie_least_norm_point_moves_with_the_file.yaml;
+    here the old route happened to find 0 too."""
     r = solved(welded_beside_a_touching_point(4.0))
     assert r.certificate.method == "no contact load"
     np.testing.assert_allclose(r.joints["w"].reaction_force, [0, -4, 0], atol=1e-12)
@@ -445,9 +447,42 @@ def test_a_load_the_weld_holds_alone_leaves_the_contacts_unloaded() -> None:
 
 def test_a_weld_and_a_touching_contact_share_by_the_rule() -> None:
     """Pushing B onto its point contact: the positions come from the
-    contacts' share of the loads, the forces from the split rule on the
-    whole load, which shares it equally between the weld and the contact
-    (both at one point: least sum of squared forces)."""
+    contacts' share of the loads (none here), the forces from the split
+    rule on the whole load, which shares it equally between the weld and
+    the contact (both at one point: least sum of squared forces), as before
+    the share was introduced."""
     r = solved(welded_beside_a_touching_point(-4.0))
     np.testing.assert_allclose(r.joints["w"].reaction_force, [0, 2, 0], atol=1e-9)
     assert r.joints["p"].contacts[0].force_magnitude == pytest.approx(2.0, abs=1e-9)
+
+
+def test_a_compliant_contact_pressed_by_a_deviation_pushes_beside_a_weld() -> None:
+    """A deviation presses B's compliant ball 0.04 mm past its play; the
+    load on B is the weld's alone. The ball pushes anyway (its spring), so
+    the contacts' share of the loads is not all they carry: with compliant
+    contacts the routes keep the whole load (solved as "no contact load" it
+    was not assembled at all, a review's find)."""
+    model = jointplay.with_deviations(
+        jointplay.model_from_dict(
+            {
+                "bodies": [{"name": "G", "ground": True}, {"name": "B"}],
+                "joints": [
+                    {
+                        "name": "s",
+                        "type": "spherical",
+                        "between": ["G", "B"],
+                        "at": [0, 0, 0],
+                        "clearance": 0.01,
+                        "stiffness": 1000.0,
+                    },
+                    {"name": "w", "type": "rigid", "between": ["G", "B"], "at": [10, 0, 0]},
+                ],
+                "loads": [{"body": "B", "at": [10, 0, 0], "force": [0, 4.0, 0]}],
+            }
+        ),
+        {"s": {"position": [0, 0.05, 0]}},
+    )
+    r = jointplay.solve(model)
+    # B is welded at 0: the ball is 0.05 - 0.005 mm into its spring
+    assert r.joints["s"].contacts[0].force_magnitude == pytest.approx(45.0, rel=1e-9)
+    np.testing.assert_allclose(r.joints["w"].reaction_force, [0, -49.0, 0], atol=1e-8)

@@ -204,8 +204,11 @@ def contacts_optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> fac
     (``Workspace.contacts_share``): the same program, since the rigid rows
     hold every position at ``E x = 0``, but its forces are the contacts' own,
     not round-off against what a rigid joint carries. With no share the
-    contacts carry nothing, and the rest position is the answer."""
-    g_c, share = ws.contacts_share(g_hat)
+    contacts carry nothing, and the rest position is the answer. Not with
+    compliant contacts: a deviation may press one past its play, and then it
+    pushes whatever the loads (its force does not scale with the share: a
+    weld-held load left it 1e10 times the share, or no program at all)."""
+    g_c, share = ws.contacts_share(g_hat) if not np.any(sigma) else (g_hat, 1.0)
     if share <= ws.settings.round_off:
         return rest_position(ws, "no contact load")
     sigma_c = sigma * share  # the compliance of loads of the share's size
