@@ -365,16 +365,16 @@ def test_a_faint_push_under_a_large_turn_rocks_the_table_onto_its_low_foot() -> 
     np.testing.assert_allclose(r.bodies["idle"].translation, 0.0, atol=MM)
 
 
-def test_the_certificate_refuses_the_table_lifted_off_its_loaded_foot() -> None:
-    """The wrong answer that was once printed: the table of the test above
-    left flat, off its low foot, which keeps its force. It holds every
-    clearance and balances every body; only complementarity tells, and only
-    per contact over its own play: the foot's force is 1e-7 of the largest,
-    its 0.1 mm play all unused (over the largest play, 3.2 mm, that was
-    3e-9 and passed)."""
+def table_moved(
+    omega: np.ndarray, v_origin: np.ndarray
+) -> tuple[Workspace, np.ndarray, np.ndarray, Any, Any]:
+    """The faintly pushed table's workspace, unit loads, softness, its
+    certified optimum, and that optimum with the table T moved to the small
+    displacement (``omega``, the velocity of the origin ``v_origin``), its
+    forces kept, uncertified."""
     from dataclasses import replace
 
-    from jointplay.solver import certificate, pipeline
+    from jointplay.solver import pipeline
 
     ws = Workspace.of(faintly_pushed_table())
     g = ws.asm.g
@@ -382,11 +382,23 @@ def test_the_certificate_refuses_the_table_lifted_off_its_loaded_foot() -> None:
     sigma = np.zeros(len(ws.balls))
     right = pipeline.optimum(ws, g_hat, sigma)
     i = ws.asm.body_index["T"]
-    omega, v_origin = np.array([0.0, 0.0, -0.2]), np.array([0.0, 0.5, 0.0])
     x = right.x.copy()
     x[6 * i : 6 * i + 3] = (v_origin + np.cross(omega, ws.asm.body_ref[i])) / ws.asm.s
     x[6 * i + 3 : 6 * i + 6] = omega / ws.asm.turn[i]
-    lifted = certificate.certify(ws, g_hat, sigma, replace(right, x=x, certificate=None))
+    return ws, g_hat, sigma, right, replace(right, x=x, certificate=None)
+
+
+def test_the_certificate_refuses_the_table_lifted_off_its_loaded_foot() -> None:
+    """The wrong answer that was once printed: the table of the test above
+    left flat, off its low foot, which keeps its force. It holds every
+    clearance and balances every body; only complementarity tells, and only
+    per contact over its own play: the foot's force is 1e-7 of the largest,
+    its 0.1 mm play all unused (over the largest play, 3.2 mm, that was
+    3e-9 and passed)."""
+    from jointplay.solver import certificate
+
+    ws, g_hat, sigma, right, moved = table_moved(np.array([0.0, 0.0, -0.2]), np.array([0, 0.5, 0]))
+    lifted = certificate.certify(ws, g_hat, sigma, moved)
     assert lifted.feasibility_mm <= 1e-9 and lifted.equilibrium_residual <= 1e-8
     assert lifted.complementarity > 1e-8 and not lifted.certified
     assert certificate.certify(ws, g_hat, sigma, right).certified
@@ -400,20 +412,12 @@ def test_the_certificate_refuses_a_faint_force_on_a_contact_just_clear() -> None
     clear (tests/property_cases/force_on_a_contact_just_clear.yaml)."""
     from dataclasses import replace
 
-    from jointplay.solver import certificate, pipeline
+    from jointplay.solver import certificate
 
-    ws = Workspace.of(faintly_pushed_table())
-    g = ws.asm.g
-    g_hat = g / np.linalg.norm(g)
-    sigma = np.zeros(len(ws.balls))
-    right = pipeline.optimum(ws, g_hat, sigma)
-    i = ws.asm.body_index["T"]
     tilt = 0.98 * 0.1 / 7.5  # rocked back about the level feet's line: the low foot 2 % clear
     omega, v_origin = np.array([0.0, tilt, -0.2]), np.array([0.0, 0.5, -2.5 * tilt])
-    x = right.x.copy()
-    x[6 * i : 6 * i + 3] = (v_origin + np.cross(omega, ws.asm.body_ref[i])) / ws.asm.s
-    x[6 * i + 3 : 6 * i + 6] = omega / ws.asm.turn[i]
-    lifted = replace(right, x=x, certificate=None)
+    ws, g_hat, sigma, _, lifted = table_moved(omega, v_origin)
+    x = lifted.x
     joints = ws.asm.model.joints
     low = next(k for k, b in enumerate(ws.balls) if joints[b.joint_index].name == "low")
     _, _, level = ws.stack.levels(x)

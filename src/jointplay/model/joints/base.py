@@ -156,6 +156,21 @@ def point_rows_of(points: FloatArray, directions: str = "xyz") -> FloatArray:
     return out.reshape(len(p), len(directions), 6)
 
 
+def centred_balls_of(
+    name: str, directions: str, clearances: Sequence[float]
+) -> list[tuple[Contact, ...]]:
+    """One ball at each joint's centre (a spherical joint's, a sphere in a
+    cylinder's), radius half its clearance, over ``directions``: the
+    contacts of many joints at once."""
+    centres = np.zeros((len(clearances), 3))
+    rows = point_rows_of(centres, directions)
+    radius = (np.array(clearances, dtype=float) / 2).tolist()
+    return [
+        (Contact(name, "ball", r, play, centre),)
+        for r, play, centre in zip(list(rows), radius, list(centres), strict=True)
+    ]
+
+
 @cache
 def _point_row_entries(directions: str) -> tuple[IntArray, IntArray, IntArray, FloatArray]:
     """Where ``point_rows``' entries go in its rows laid one after another:

@@ -17,7 +17,7 @@ from typing import Literal, Self
 
 import numpy as np
 
-from jointplay.model.joints.base import Contact, Joint, point_rows, point_rows_of
+from jointplay.model.joints.base import Contact, Joint, centred_balls_of, point_rows
 
 
 class Spherical(Joint):
@@ -29,10 +29,4 @@ class Spherical(Joint):
 
     @classmethod
     def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
-        centres = np.zeros((len(joints), 3))
-        rows = point_rows_of(centres, "xyz")
-        radius = (np.array([j.clearance for j in joints], dtype=float) / 2).tolist()
-        return [
-            (Contact("ball", "ball", r, play, centre),)
-            for r, play, centre in zip(list(rows), radius, list(centres), strict=True)
-        ]
+        return centred_balls_of("ball", "xyz", [j.clearance for j in joints])
