@@ -486,3 +486,78 @@ def test_a_compliant_contact_pressed_by_a_deviation_pushes_beside_a_weld() -> No
     # B is welded at 0: the ball is 0.05 - 0.005 mm into its spring
     assert r.joints["s"].contacts[0].force_magnitude == pytest.approx(45.0, rel=1e-9)
     np.testing.assert_allclose(r.joints["w"].reaction_force, [0, -49.0, 0], atol=1e-8)
+
+
+def ball_pressed_between_two_stops(stop_play: float, force_y: float | None) -> jointplay.Model:
+    """B on three balls along X: ``s`` at 0 compliant (1000 N/mm, play
+    0.005 mm in radius) whose bore a deviation moves 0.05 mm up, and two hard
+    ``stops`` at x = ±10 mm (radial play ``stop_play / 2``). Nothing moves B
+    0.05 mm up, so the spring is pressed with no load at all."""
+    joints: list[dict[str, Any]] = [
+        {
+            "name": "s",
+            "type": "spherical",
+            "between": ["G", "B"],
+            "at": [0, 0, 0],
+            "clearance": 0.01,
+            "stiffness": 1000.0,
+        }
+    ]
+    for name, x in (("t", 10), ("u", -10)):
+        joints.append(
+            {
+                "name": name,
+                "type": "spherical",
+                "between": ["G", "B"],
+                "at": [x, 0, 0],
+                "clearance": stop_play,
+            }
+        )
+    loads = [] if force_y is None else [{"body": "B", "at": [10, 0, 0], "force": [0, force_y, 0]}]
+    data = {"bodies": [{"name": "G", "ground": True}, {"name": "B"}], "joints": joints}
+    return jointplay.with_deviations(
+        model_from_dict({**data, "loads": loads}), {"s": {"position": [0, 0.05, 0]}}
+    )
+
+
+@pytest.mark.parametrize("force_y", [None, 0.0, 1e-9, 1e-3], ids=str)
+@pytest.mark.parametrize("exact", [False, True], ids=["linear", "exact"])
+def test_a_spring_a_deviation_presses_pushes_with_no_load_or_a_faint_one(
+    force_y: float | None, exact: bool
+) -> None:
+    """The stops let B rise 0.01 mm: the spring is 0.05 - 0.005 - 0.01 mm in,
+    35 N, the stops 17.5 N each (plus the load on t). Scaled by the load's
+    size alone, these springs were made 1e7 times too stiff or infinitely
+    so, and the parts reported "not assembled" (``pipeline.load_scale``)."""
+    r = jointplay.solve(ball_pressed_between_two_stops(0.02, force_y), exact=exact)
+    r.check()
+    load = force_y or 0.0
+    tol = 1e-8 * 35.0  # the certificate's resolution: 1e-8 of the largest force
+    assert r.joints["s"].contacts[0].force_magnitude == pytest.approx(35.0, abs=tol)
+    assert r.joints["t"].contacts[0].force_magnitude == pytest.approx(17.5 + load, abs=tol)
+    assert r.joints["u"].contacts[0].force_magnitude == pytest.approx(17.5, abs=tol)
+    np.testing.assert_allclose(r.bodies["B"].translation, [0, 0.01, 0], atol=MM)
+    np.testing.assert_allclose(r.bodies["B"].rotation, 0.0, atol=RAD)
+
+
+def test_a_batch_row_with_no_load_keeps_its_spring_pressed() -> None:
+    """A sweep through zero load: the unloaded row, and one whose stops'
+    play is drawn wider (0.03 mm: the spring 30 N), are solved with the
+    springs' preload as their scale, like a single solve."""
+    from jointplay.assembly import assemble
+    from jointplay.solver import Workspace
+
+    asm = assemble(ball_pressed_between_two_stops(0.02, 1.0))
+    ws = Workspace(asm)
+    force = np.array([[0, f, 0, 0, 0, 0] for f in (1.0, 0.0, 0.0, -1.0)])
+    work = force @ asm.wrench_work("B", [10, 0, 0]).T
+    radii = np.tile(ws.stack.r, (4, 1))
+    names = [asm.model.joints[ball.joint_index].name for ball in asm.balls]
+    wider = [i for i, name in enumerate(names) if name in ("t", "u")]
+    radii[2, wider] *= 1.5
+    batch = ws.solve_batch(work, radii=radii)
+    assert np.all(batch.assembled)
+    spring = names.index("s")
+    assert batch.forces is not None
+    np.testing.assert_allclose(batch.forces[:, spring], [35, 35, 30, 35], atol=1e-8 * 35)
+    np.testing.assert_allclose(batch.x[:, 1] * asm.s, [0.01, 0.01, 0.015, 0.01], atol=MM)

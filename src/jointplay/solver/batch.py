@@ -11,6 +11,7 @@ active set is then tried on the others, until none is left.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -122,10 +123,11 @@ def solved_start(
     solver = ws if radii is None and centres is None else ws.with_radii(r, centres)
     kept = solver.last
     solver.last = None  # a start of its own: the same answer in every process
-    g_hat = np.asarray(work, dtype=float) / norm
     try:
         with linalg.one_blas_thread():
-            point = pipeline.optimum(solver, g_hat, ws.softness(norm))
+            scale = pipeline.load_scale(solver, norm)
+            g_hat = np.asarray(work, dtype=float) / scale
+            point = pipeline.optimum(solver, g_hat, ws.softness(scale))
     except (UnassembledError, SolverError):
         return None  # no start: the batch meets this sample's trouble itself, if at all
     finally:
@@ -187,8 +189,6 @@ def _solve_batch(
     if not np.all(np.isfinite(work)):
         raise ValueError("work has non-finite entries")
     _check_driven(ws, work, norms)
-    g_hat = np.divide(work, norms[:, None], out=np.zeros_like(work), where=norms[:, None] > 0)
-    sigma = ws.softness(norms)  # (B, n): compliance makes the answer depend on |g|
     n_balls = len(ws.balls)
     if radii is None:
         r = np.broadcast_to(ws.stack.r, (B, n_balls))
@@ -210,6 +210,13 @@ def _solve_batch(
         if not np.all(np.isfinite(c)):
             raise ValueError("centres must be finite")
         varied = True
+    # each row's loads divided by their size, or by the preload of springs
+    # its deviations press where it has no load (pipeline.load_scale)
+    scales = _preloads(ws, norms, r, c) if varied else norms.copy()
+    if not varied and np.any(norms == 0):
+        scales[norms == 0] = pipeline.load_scale(ws, 0.0)
+    g_hat = np.divide(work, scales[:, None], out=np.zeros_like(work), where=scales[:, None] > 0)
+    sigma = ws.softness(scales)  # (B, n): compliance makes the answer depend on the scale
     # the starts follow the samples as rows solved already (dense mechanisms:
     # a large one's rows are solved one by one)
     _check_starts(ws, starts)
@@ -231,7 +238,7 @@ def _solve_batch(
     assembled = np.ones(rows_all, dtype=bool)
     feas = np.zeros(rows_all)  # each row's certificate, where it was certified
     residual = np.zeros(rows_all)
-    pending = np.flatnonzero(norms > 0)
+    pending = np.flatnonzero(scales > 0)
     solved_by_set: dict[FaceKey, list[IntArray]] = {}  # active set -> solved rows
     for j, known in enumerate(starts):
         x[B + j], lam[B + j], f[B + j] = known.x, known.lam, known.f
@@ -317,6 +324,10 @@ def _solve_batch(
             solver.last = None  # a warm start would retry the set the batch gave up on
         full += 1
         try:
+            if scales[first] == norms[first]:  # a faint load beside a preload: its own scale
+                scales[first] = pipeline.load_scale(solver, norms[first])
+                g_hat[first] = work[first] / scales[first]
+                sigma[first] = ws.softness(scales[first])
             point = pipeline.optimum(solver, g_hat[first], sigma[first])
         except UnassembledError:
             if not varied:
@@ -332,8 +343,8 @@ def _solve_batch(
             solved_by_set.setdefault(found, []).append(np.array([first]))
 
     if centres is not None or ws.stack.centre is not None:
-        # with no load, the rest position: where the centres put it
-        for row in np.flatnonzero(norms == 0):
+        # with no load and no preload, the rest position: where the centres put it
+        for row in np.flatnonzero(scales == 0):
             try:
                 rest = pipeline.rest_position(ws.with_radii(r[row], c[row]))
             except UnassembledError:
@@ -348,7 +359,7 @@ def _solve_batch(
     return BatchSolution(
         asm=ws.asm,
         x=x,
-        forces=lam * norms[:, None] / ws.asm.s if split_forces else None,
+        forces=lam * scales[:, None] / ws.asm.s if split_forces else None,
         potential_energy=-np.einsum("bm,bm->b", work, x),
         feasibility_mm=np.maximum(feas, 0.0) * ws.asm.s,
         equilibrium_residual=residual,
@@ -356,6 +367,18 @@ def _solve_batch(
         full_solves=full,
         assembled=assembled,
     )
+
+
+def _preloads(ws: Workspace, norms: FloatArray, r: FloatArray, c: FloatArray) -> FloatArray:
+    """``norms``, and each unloaded row's ``pipeline.load_scale`` (the
+    preload of springs its plays and centres press, a program each)."""
+    scales = norms.copy()
+    if not np.any(ws.stack.spring > 0):
+        return scales
+    for row in np.flatnonzero(norms == 0):
+        with contextlib.suppress(UnassembledError):  # the rest position says so
+            scales[row] = pipeline.load_scale(ws.with_radii(r[row], c[row]), 0.0)
+    return scales
 
 
 def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:

@@ -48,7 +48,7 @@ from jointplay.result import (
     points_of,
     requirements_of,
 )
-from jointplay.solver import conic
+from jointplay.solver import conic, pipeline
 
 if TYPE_CHECKING:
     from jointplay.solver.workspace import Workspace
@@ -63,11 +63,12 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     x = asm.unknowns_of(linear.bodies)
     iterations = 0
     st = ws.settings
+    preload = pipeline.load_scale(ws, 0.0)  # of springs deviations press (pipeline.load_scale)
     for iterations in range(1, st.exact_max_steps + 1):  # noqa: B007 - reported below
         parts = _contact_parts(asm, x)
         g = _virtual_work(asm, x, loads)
-        g_norm = float(np.linalg.norm(g))
-        step, lam, f, nu = _step(ws, x, parts, g, g_norm)
+        scale = max(float(np.linalg.norm(g)), preload)
+        step, lam, f, nu = _step(ws, x, parts, g, scale)
         x = x + step
         moved = float(np.max(np.abs(step))) * asm.s  # mm (a turn: mm at the length scale)
         if moved <= st.exact_settle_mm:
@@ -80,14 +81,14 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
         )
     parts = _contact_parts(asm, x)
     g = _virtual_work(asm, x, loads)
-    g_norm = float(np.linalg.norm(g))
-    _, lam, f, nu = _step(ws, x, parts, g, g_norm)
-    to_newton = g_norm / asm.s
+    scale = max(float(np.linalg.norm(g)), preload)
+    _, lam, f, nu = _step(ws, x, parts, g, scale)
+    to_newton = scale / asm.s
     result = _build(ws, x, lam * to_newton, f * to_newton, nu * to_newton, loads)
     feas = max(
         [
             float(np.linalg.norm(a) + b) - r
-            for (a, b), r in zip(parts.balls, _reach(ws, ws.softness(g_norm), lam), strict=True)
+            for (a, b), r in zip(parts.balls, _reach(ws, ws.softness(scale), lam), strict=True)
         ]
         + [0.0]
     )
@@ -205,9 +206,10 @@ def _reach(ws: Workspace, sigma: FloatArray, lam: FloatArray) -> FloatArray:
 
 
 def _step(
-    ws: Workspace, x: FloatArray, parts: _Parts, g: FloatArray, g_norm: float
+    ws: Workspace, x: FloatArray, parts: _Parts, g: FloatArray, scale: float
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """One linearized cone program: (step, lam, f, fixed multipliers), scaled.
+    """One linearized cone program: (step, lam, f, fixed multipliers), scaled:
+    the loads' work divided by ``scale`` (``pipeline.load_scale``).
 
     The same program as a small-displacement solve (``conic.cone_program``),
     with each contact's exact parts linearized at ``x``: cone i is
@@ -248,9 +250,9 @@ def _step(
     )
     soft = np.flatnonzero(stack.spring > 0)
     if len(soft):
-        prog = conic.softened(conic.with_penetrations(prog, soft), soft, ws.softness(g_norm))
+        prog = conic.softened(conic.with_penetrations(prog, soft), soft, ws.softness(scale))
     q = np.zeros(prog.A.shape[1])
-    q[:m] = -g / g_norm if g_norm else 0.0
+    q[:m] = -g / scale if scale else 0.0
     sol = conic.run(ws, prog, q)
     z = np.asarray(sol.z)
     return np.asarray(sol.x)[:m], z[prog.soc_first], z[prog.f_rows], z[: len(fixed_rows)]

@@ -89,11 +89,11 @@ def _solve_loads(ws: Workspace, loads: Sequence[Load] | None) -> Result:
         loads = tuple(loads)
         g = ws.asm.work_of(loads)
     held.check_driven(ws, g)
-    g_norm = float(np.linalg.norm(g))
-    g_hat = g / g_norm if g_norm else g
-    point = optimum(ws, g_hat, ws.softness(g_norm))
+    scale = load_scale(ws, float(np.linalg.norm(g)))
+    g_hat = g / scale if scale else g
+    point = optimum(ws, g_hat, ws.softness(scale))
     assert point.certificate is not None
-    to_newton = g_norm / ws.asm.s  # scaled multipliers -> N
+    to_newton = scale / ws.asm.s  # scaled multipliers -> N
     nu = point.nu if point.nu is not None else rigid_multipliers(ws, g_hat, point)
     rigid = nu * to_newton
     elapsed = time.perf_counter() - start
@@ -121,6 +121,24 @@ def _solve_loads(ws: Workspace, loads: Sequence[Load] | None) -> Result:
             + " If not, please report this model."
         )
     return result
+
+
+def load_scale(ws: Workspace, g_norm: float) -> float:
+    """What the scaled problem divides the loads' work by: its size ``|g|``,
+    or the preload of compliant contacts that deviations press past their
+    play, if larger. Such a spring pushes at no load at all; scaled by ``|g|``
+    alone, a faint load made it 1e7 times too stiff and the parts were "not
+    assembled". The preload is the largest force of the no-load compliant
+    program (penetrations within the positions' round-off count as none)."""
+    soft = ws.stack.spring > 0
+    zero = np.zeros(ws.m)
+    if not np.any(soft) or np.all(ws.stack.levels(zero)[2] <= ws.stack.r):
+        return g_norm  # no spring, or 0 fits every play: nothing is pressed at no load
+    rest = interior_point_compliant(ws, zero, ws.softness(1.0))
+    penetration = ws.softness(1.0)[soft] * rest.lam[soft]
+    if np.max(penetration) <= ws.settings.feasibility_tolerance * ws.max_radius:
+        return g_norm
+    return max(g_norm, float(np.max(rest.lam)))
 
 
 def split(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point) -> faces.Point:
@@ -151,10 +169,11 @@ def rigid_multipliers(ws: Workspace, g_hat: FloatArray, point: faces.Point) -> F
 
 
 def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -> faces.Point:
-    """The certified optimum for unit loads ``g_hat`` (or 0 for no load),
-    with contact softness ``sigma`` (default: every contact hard)."""
+    """The certified optimum for loads ``g_hat`` (unit, smaller beside a
+    preload, or 0 for no load: ``load_scale``), with contact softness
+    ``sigma`` (default: every contact hard)."""
     sigma = np.zeros(len(ws.balls)) if sigma is None else sigma
-    if not np.any(g_hat):
+    if not np.any(g_hat) and not np.any(sigma):
         point = rest_position(ws)
     else:
         point = split(ws, g_hat, sigma, contacts_optimum(ws, g_hat, sigma))
@@ -168,7 +187,8 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
             point.certificate = None
     cert = point.certificate or certificate.certify(ws, g_hat, sigma, point, point.nu)
     fine_ipm = ws.settings.fine_ipm_tolerance
-    if not cert.certified and np.any(g_hat) and ws.settings.ipm_tolerance > fine_ipm:
+    loaded = np.any(g_hat) or np.any(sigma)
+    if not cert.certified and loaded and ws.settings.ipm_tolerance > fine_ipm:
         # a nearly degenerate mechanism can leave the interior-point answer
         # (and its polish) 1e-7 mm off at the usual tolerance: once more, finer
         # and on another path (``fine_ipm_regularization``)
