@@ -561,3 +561,35 @@ def test_a_batch_row_with_no_load_keeps_its_spring_pressed() -> None:
     assert batch.forces is not None
     np.testing.assert_allclose(batch.forces[:, spring], [35, 35, 30, 35], atol=1e-8 * 35)
     np.testing.assert_allclose(batch.x[:, 1] * asm.s, [0.01, 0.01, 0.015, 0.01], atol=MM)
+
+
+def test_a_preload_with_no_load_is_still_balanced_by_the_certificate() -> None:
+    """With no load, the springs' preload is all the forces there are: an
+    answer whose stops push three times too hard (70 N unbalanced) is
+    refused. The balance check skipped every row with no load, which was
+    harmless while such rows had no forces (a review's find)."""
+    from dataclasses import replace
+
+    from jointplay.assembly import assemble
+    from jointplay.solver import Workspace, certificate, pipeline
+
+    ws = Workspace(assemble(ball_pressed_between_two_stops(0.02, None)))
+    scale = pipeline.load_scale(ws, 0.0)
+    g_hat, sigma = np.zeros(ws.m), ws.softness(scale)
+    point = pipeline.optimum(ws, g_hat, sigma)
+    assert certificate.certify(ws, g_hat, sigma, point).certified
+    names = [ws.asm.model.joints[ball.joint_index].name for ball in ws.asm.balls]
+    stops = [i for i, name in enumerate(names) if name != "s"]
+    lam, f = point.lam.copy(), point.f.copy()
+    lam[stops] *= 3
+    f[ws.stack.rows_of(stops)] *= 3
+    bad = certificate.certify(ws, g_hat, sigma, replace(point, lam=lam, f=f, nu=None))
+    assert not bad.certified
+    assert bad.equilibrium_residual == pytest.approx(70 / 52.5, rel=1e-9)
+    # and the printed result's own check measures it too
+    r = jointplay.solve(ball_pressed_between_two_stops(0.02, None))
+    reactions = np.array([np.r_[j.reaction_force, j.reaction_moment] for j in r.joints.values()])
+    order = list(r.joints)
+    reactions[[order.index("t"), order.index("u")]] *= 3
+    residual = jointplay.result.equilibrium_residual(ws.asm, reactions, ())
+    assert residual == pytest.approx(70 / 52.5, rel=1e-9)

@@ -532,28 +532,32 @@ def equilibrium_residual(
     ref = asm.body_ref
     if place:
         ref = np.array([place.get(name, IDENTITY)(asm.body_ref[i]) for name, i in index.items()])
-    if not loads:
-        return 0.0
-    on = np.array([index[load.body] for load in loads], dtype=np.intp)
-    force = np.array([(0.0, 0.0, 0.0) if ld.force is None else ld.force for ld in loads], float)
-    moment = np.array([(0.0, 0.0, 0.0) if ld.torque is None else ld.torque for ld in loads], float)
-    at_rows = [q for q, ld in enumerate(loads) if ld.at is not None]
-    if at_rows:
-        at = np.array([loads[q].at for q in at_rows], dtype=float)
-        if place:
-            at = np.array(
-                [place.get(loads[q].body, IDENTITY)(p) for q, p in zip(at_rows, at, strict=True)]
-            )
-        moment[at_rows] += cross(at - ref[on[at_rows]], force[at_rows])
-    np.add.at(F, on, force)
-    np.add.at(M, on, moment)
-    # each load's own norm, as one vector (the rounding of every release before)
-    scale = max(
-        max(float(np.linalg.norm(v)) for v in force),
-        max(float(np.linalg.norm(v)) for v in moment) / asm.ell,
-    )
-    if scale == 0.0:
-        return 0.0
+    if loads:
+        on = np.array([index[load.body] for load in loads], dtype=np.intp)
+        force = np.array([(0.0, 0.0, 0.0) if ld.force is None else ld.force for ld in loads], float)
+        moment = np.array(
+            [(0.0, 0.0, 0.0) if ld.torque is None else ld.torque for ld in loads], float
+        )
+        at_rows = [q for q, ld in enumerate(loads) if ld.at is not None]
+        if at_rows:
+            at = np.array([loads[q].at for q in at_rows], dtype=float)
+            if place:
+                at = np.array(
+                    [
+                        place.get(loads[q].body, IDENTITY)(p)
+                        for q, p in zip(at_rows, at, strict=True)
+                    ]
+                )
+            moment[at_rows] += cross(at - ref[on[at_rows]], force[at_rows])
+        np.add.at(F, on, force)
+        np.add.at(M, on, moment)
+        # each load's own norm, as one vector (the rounding of every release before)
+        scale = max(
+            max(float(np.linalg.norm(v)) for v in force),
+            max(float(np.linalg.norm(v)) for v in moment) / asm.ell,
+        )
+    else:  # no load: springs that deviations press may still push
+        scale = 0.0
     T = asm.tables
     if len(reaction):  # every joint at once: large mechanisms have thousands
         rf, rm = reaction[:, :3], reaction[:, 3:]
@@ -574,6 +578,8 @@ def equilibrium_residual(
         force, moment, centre = (np.concatenate([v, v])[moving] for v in (force, moment, centre))
         np.add.at(F, body, sign * force)
         np.add.at(M, body, sign * (moment + cross(centre - ref[body], force)))
+    if scale == 0.0:
+        return 0.0
     worst = max(_largest_norm(F), _largest_norm(M) / asm.ell)
     return worst / scale
 

@@ -150,8 +150,8 @@ class Balance:
             np.max(applied, axis=(1, 2), initial=0.0), self.largest_reaction(lam, f, nu)
         )
         worst = np.max(body, axis=(1, 2), initial=0.0)
+        # no load and no force: nothing to balance (a preload is balanced too)
         out = np.where(scale > 0, worst / np.where(scale > 0, scale, 1.0), 0.0)
-        out[~np.any(g_hat, axis=1)] = 0.0
         return np.asarray(out), np.asarray(nu)
 
 
