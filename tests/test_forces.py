@@ -456,6 +456,17 @@ def test_a_weld_and_a_touching_contact_share_by_the_rule() -> None:
     assert r.joints["p"].contacts[0].force_magnitude == pytest.approx(2.0, abs=1e-9)
 
 
+#: B's ball ``s`` at the origin, a spring of 1000 N/mm beyond 0.005 mm of radial play
+COMPLIANT_BALL = {
+    "name": "s",
+    "type": "spherical",
+    "between": ["G", "B"],
+    "at": [0, 0, 0],
+    "clearance": 0.01,
+    "stiffness": 1000.0,
+}
+
+
 def test_a_compliant_contact_pressed_by_a_deviation_pushes_beside_a_weld() -> None:
     """A deviation presses B's compliant ball 0.04 mm past its play; the
     load on B is the weld's alone. The ball pushes anyway (its spring), so
@@ -467,14 +478,7 @@ def test_a_compliant_contact_pressed_by_a_deviation_pushes_beside_a_weld() -> No
             {
                 "bodies": [{"name": "G", "ground": True}, {"name": "B"}],
                 "joints": [
-                    {
-                        "name": "s",
-                        "type": "spherical",
-                        "between": ["G", "B"],
-                        "at": [0, 0, 0],
-                        "clearance": 0.01,
-                        "stiffness": 1000.0,
-                    },
+                    COMPLIANT_BALL,
                     {"name": "w", "type": "rigid", "between": ["G", "B"], "at": [10, 0, 0]},
                 ],
                 "loads": [{"body": "B", "at": [10, 0, 0], "force": [0, 4.0, 0]}],
@@ -493,16 +497,7 @@ def ball_pressed_between_two_stops(stop_play: float, force_y: float | None) -> j
     0.005 mm in radius) whose bore a deviation moves 0.05 mm up, and two hard
     ``stops`` at x = ±10 mm (radial play ``stop_play / 2``). Nothing moves B
     0.05 mm up, so the spring is pressed with no load at all."""
-    joints: list[dict[str, Any]] = [
-        {
-            "name": "s",
-            "type": "spherical",
-            "between": ["G", "B"],
-            "at": [0, 0, 0],
-            "clearance": 0.01,
-            "stiffness": 1000.0,
-        }
-    ]
+    joints: list[dict[str, Any]] = [COMPLIANT_BALL]
     for name, x in (("t", 10), ("u", -10)):
         joints.append(
             {
@@ -593,3 +588,21 @@ def test_a_preload_with_no_load_is_still_balanced_by_the_certificate() -> None:
     reactions[[order.index("t"), order.index("u")]] *= 3
     residual = jointplay.result.equilibrium_residual(ws.asm, reactions, ())
     assert residual == pytest.approx(70 / 52.5, rel=1e-9)
+
+
+def test_a_batch_s_faint_loads_beside_a_preload_are_batched() -> None:
+    """With the model's own plays every row is scaled by the larger of its
+    load and the one preload: rows of 1e-9 to 3e-4 N, and none, go through
+    the batched Newton from the first row's full solve (scaled by their
+    own size, each was a full solve: a review's find)."""
+    from jointplay.assembly import assemble
+    from jointplay.solver import Workspace
+
+    asm = assemble(ball_pressed_between_two_stops(0.02, 1.0))
+    loads = [1.0, 1e-4, 2e-4, 1e-9, 0.0, -1e-4, 3e-4]
+    work = np.array([[0, f, 0, 0, 0, 0] for f in loads]) @ asm.wrench_work("B", [10, 0, 0]).T
+    batch = Workspace(asm).solve_batch(work)
+    assert batch.full_solves == 1 and np.all(batch.batched[1:])
+    assert batch.forces is not None
+    expected = np.column_stack([np.full(7, 35.0), 17.5 + np.array(loads), np.full(7, 17.5)])
+    np.testing.assert_allclose(batch.forces, expected, atol=1e-8 * 35)

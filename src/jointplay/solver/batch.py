@@ -211,10 +211,13 @@ def _solve_batch(
             raise ValueError("centres must be finite")
         varied = True
     # each row's loads divided by their size, or by the preload of springs
-    # its deviations press where it has no load (pipeline.load_scale)
-    scales = _preloads(ws, norms, r, c) if varied else norms.copy()
-    if not varied and np.any(norms == 0):
-        scales[norms == 0] = pipeline.load_scale(ws, 0.0)
+    # its deviations press, if larger (pipeline.load_scale): one preload for
+    # the model's own plays; with varied ones, an unloaded row's own now and
+    # a faintly loaded row's own if it goes to a full solve
+    if varied:
+        scales = _preloads(ws, norms, r, c)
+    else:
+        scales = np.maximum(norms, pipeline.load_scale(ws, 0.0))
     g_hat = np.divide(work, scales[:, None], out=np.zeros_like(work), where=scales[:, None] > 0)
     sigma = ws.softness(scales)  # (B, n): compliance makes the answer depend on the scale
     # the starts follow the samples as rows solved already (dense mechanisms:
@@ -324,7 +327,7 @@ def _solve_batch(
             solver.last = None  # a warm start would retry the set the batch gave up on
         full += 1
         try:
-            if scales[first] == norms[first]:  # a faint load beside a preload: its own scale
+            if varied and scales[first] == norms[first]:  # a faint load beside a preload?
                 scales[first] = pipeline.load_scale(solver, norms[first])
                 g_hat[first] = work[first] / scales[first]
                 sigma[first] = ws.softness(scales[first])

@@ -130,15 +130,21 @@ def load_scale(ws: Workspace, g_norm: float) -> float:
     alone, a faint load made it 1e7 times too stiff and the parts were "not
     assembled". The preload is the largest force of the no-load compliant
     program (penetrations within the positions' round-off count as none)."""
+    if ws.preload is None:  # found once per workspace: it depends on the plays alone
+        ws.preload = _preload(ws)
+    return max(g_norm, ws.preload)
+
+
+def _preload(ws: Workspace) -> float:
     soft = ws.stack.spring > 0
     zero = np.zeros(ws.m)
     if not np.any(soft) or np.all(ws.stack.levels(zero)[2] <= ws.stack.r):
-        return g_norm  # no spring, or 0 fits every play: nothing is pressed at no load
+        return 0.0  # no spring, or 0 fits every play: nothing is pressed at no load
     rest = interior_point_compliant(ws, zero, ws.softness(1.0))
     penetration = ws.softness(1.0)[soft] * rest.lam[soft]
     if np.max(penetration) <= ws.settings.feasibility_tolerance * ws.max_radius:
-        return g_norm
-    return max(g_norm, float(np.max(rest.lam)))
+        return 0.0
+    return float(np.max(rest.lam))
 
 
 def split(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point) -> faces.Point:

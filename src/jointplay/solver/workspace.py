@@ -64,6 +64,9 @@ class Workspace:
         self.faces: dict[FaceKey, Face] = {}
         #: the cone program with penetrations, built when first needed
         self.compliant_program: conic.ConeProgram | None = None
+        #: the largest force of springs that deviations press at no load
+        #: (``pipeline.load_scale``), found when first needed
+        self.preload: float | None = None
         #: the warm start: the last solve's optimum and active set (a hint only:
         #: what it leads to is certified like any other answer)
         self.last: Point | None = None
