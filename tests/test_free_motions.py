@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from typing import Any
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -12,7 +15,7 @@ from jointplay.assembly import assemble
 from jointplay.io.generate import bearing_chain, tube_string
 from jointplay.numerics import linalg
 from jointplay.numerics.free_motions import column_rank_deficit, null_basis
-from jointplay.solver import Workspace
+from jointplay.solver import Workspace, pipeline
 
 
 def constraint_rows(model: jointplay.Model) -> tuple[sp.csr_matrix, int]:
@@ -232,3 +235,41 @@ def test_rows_are_grouped_by_the_bodies_they_touch_in_one_documented_order() -> 
         assert [k for k, _ in got] == keys
         for (_, block), (_, want) in zip(got, expected, strict=True):
             assert np.array_equal(block, want)
+
+
+def test_the_retry_shares_the_free_motions_and_answers_as_a_new_workspace(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The finer retry runs on ``Workspace.with_settings``: the free motions
+    depend on the assembly and their threshold alone, so they are kept (a
+    10,000-shaft bearing chain's cost 2.2 s again in its retry), and the
+    answer is the one a workspace made anew with the retry's settings gives,
+    to the bit. The 39-shaft bearing chain takes the retry (see above)."""
+    asm = assemble(bearing_chain(39))
+    ws = Workspace(asm)
+    fine_settings = replace(
+        ws.settings,
+        ipm_tolerance=ws.settings.fine_ipm_tolerance,
+        ipm_regularization=ws.settings.fine_ipm_regularization,
+        warm_start=False,
+    )
+    fine = ws.with_settings(fine_settings)
+    assert fine.N is ws.N and fine.K is ws.K and fine.settings is fine_settings
+    assert ws.settings is not fine_settings and fine.faces is not ws.faces
+    assert fine.solve().to_dict() == Workspace(asm, fine_settings).solve().to_dict()
+    # the solve's retry makes no second workspace, and it is taken
+    made, retried = [], []
+    original_init, original_with = Workspace.__init__, Workspace.with_settings
+
+    def counted_init(self: Workspace, *args: Any, **kwargs: Any) -> None:
+        made.append(1)
+        original_init(self, *args, **kwargs)
+
+    def counted_with(self: Workspace, settings: Any) -> Workspace:
+        retried.append(1)
+        return original_with(self, settings)
+
+    monkeypatch.setattr(Workspace, "__init__", counted_init)
+    monkeypatch.setattr(Workspace, "with_settings", counted_with)
+    pipeline.solve(bearing_chain(39)).check()
+    assert made == [1] and retried == [1]

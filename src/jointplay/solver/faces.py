@@ -10,6 +10,7 @@ plain Newton polish and the least-norm rule for ties (``ties.py``).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -76,10 +77,18 @@ class Face:
     #: Computed when first asked (a null space): most trial faces never are.
     _determine: Callable[[], bool | None] = field(repr=False, compare=False)
     _ties: Callable[[], FloatArray | None] = field(repr=False, compare=False)
+    _eliminate: Callable[[], free_motions.Eliminated] = field(repr=False, compare=False)
 
     @cached_property
     def determined(self) -> bool | None:
         return self._determine()
+
+    @cached_property
+    def eliminated(self) -> free_motions.Eliminated:
+        """A large mechanism's face that does not tilt: the elimination of
+        its rows with the joints' (``pins_position`` counts what they leave
+        free, ``holders`` reads it), done once for both."""
+        return self._eliminate()
 
     @cached_property
     def tie_rows(self) -> FloatArray | None:
@@ -112,9 +121,15 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
         rhs[f_rows] = lin.centres()
         tilting = bool(np.any(sub.has_offset & (sub.k > 0)))
 
+        @functools.cache
+        def eliminated(L: Matrix = L, sub: BallStack = sub) -> free_motions.Eliminated:
+            return _eliminated(ws, linalg.vstack([L, sub.A], ws.m))
+
         def determined(L: Matrix = L, sub: BallStack = sub) -> bool | None:
             if tilting:
                 return None
+            if ws.sparse:
+                return bool(eliminated().deficit <= ws.N.shape[1])
             return pins_position(ws, linalg.vstack([L, sub.A], ws.m))
 
         def ties(L: Matrix = L, sub: BallStack = sub) -> FloatArray | None:
@@ -137,6 +152,7 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
             stack.rows_of(linear),
             determined,
             ties,
+            eliminated,
         )
         ws.faces[key] = face
     return face
@@ -155,15 +171,16 @@ def pins_position(ws: Workspace, rows: Matrix) -> bool:
     scale): at the rows' own, smaller, one a motion N holds weakly could be
     counted as held and hide one the rows leave free (a review)."""
     if ws.sparse:
-        deficit = free_motions.column_rank_deficit(
-            linalg.vstack([ws.E, rows], ws.m),
-            ws.m,
-            ws.settings.free_motion_rcond,
-            ws.limit_scale,
-        )
-        return bool(deficit <= ws.N.shape[1])
+        return bool(_eliminated(ws, rows).deficit <= ws.N.shape[1])
     all_rows = linalg.vstack([ws.Eq, rows], ws.m)
     return linalg.full_column_rank(all_rows, ws.m)
+
+
+def _eliminated(ws: Workspace, rows: Matrix) -> free_motions.Eliminated:
+    """The elimination of ``rows`` with the joints' equalities ``E``, at the
+    free motions' threshold (``pins_position``)."""
+    C = linalg.vstack([ws.E, rows], ws.m)
+    return free_motions.Eliminated(C, ws.m, ws.settings.free_motion_rcond, ws.limit_scale)
 
 
 def is_determined(ws: Workspace, face: Face, x: FloatArray) -> bool:
@@ -204,15 +221,20 @@ def holders(ws: Workspace, face: Face, x: FloatArray) -> list[int]:
     them Newton pins every position, without them the face ties). Every
     cone such a motion moves is named, however far from its limit: the
     start is judged by Newton and the certificate, not by its size."""
-    rows = _held_rows(ws, face, x)
-    if rows is None:
-        return []
-    C = linalg.vstack([ws.E, rows], ws.m)
     rcond = ws.settings.free_motion_rcond
-    if ws.sparse:  # at the free motions' threshold, as ``pins_position`` counts
-        free = free_motions.null_basis(C, ws.m, rcond, orthonormal=False, s_max=ws.limit_scale)
+    if ws.sparse and face.determined is not None:  # the face's own elimination
+        if face.determined:
+            return []
+        free = face.eliminated.basis(orthonormal=False)
     else:
-        free = linalg.null_space(C, ws.m, rcond)
+        rows = _held_rows(ws, face, x)
+        if rows is None:
+            return []
+        C = linalg.vstack([ws.E, rows], ws.m)
+        if ws.sparse:  # at the free motions' threshold, as ``pins_position`` counts
+            free = _eliminated(ws, rows).basis(orthonormal=False)
+        else:
+            free = linalg.null_space(C, ws.m, rcond)
     if free.shape[1] <= ws.N.shape[1]:  # only the free motions: the face pins the position
         return []
     stack = ws.stack

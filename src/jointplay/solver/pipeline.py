@@ -204,7 +204,7 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
             ipm_regularization=ws.settings.fine_ipm_regularization,
             warm_start=False,
         )
-        fine = Workspace(ws.asm, retry)
+        fine = ws.with_settings(retry)
         try:
             point = optimum(fine, g_hat, sigma)
         except SolverError:

@@ -9,6 +9,7 @@ warm-start hint ``last``; the algorithms are functions (``pipeline.py``).
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -74,6 +75,22 @@ class Workspace:
     @classmethod
     def of(cls, model: Model, settings: SolverSettings | None = None) -> Workspace:
         return cls(assemble(model), settings)
+
+    def with_settings(self, settings: SolverSettings) -> Workspace:
+        """The same mechanism under other solver settings (the finer retry):
+        the free motions and the balance's maps, which depend on the
+        assembly and the free motions' threshold alone, are shared (a
+        10,000-shaft chain's free motions cost 2 s); the cone programs, the
+        faces and the warm start are made anew."""
+        if settings.free_motion_rcond != self.settings.free_motion_rcond:
+            return Workspace(self.asm, settings)
+        other = copy.copy(self)
+        other.settings = settings
+        other.faces = {}
+        other.compliant_program = None
+        other.last = None
+        other.__dict__.pop("interior_program", None)  # its Clarabel settings are the old ones
+        return other
 
     @cached_property
     def limit_scale(self) -> float:
