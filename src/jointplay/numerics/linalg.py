@@ -240,7 +240,10 @@ def solve_kkt(
     if step is not None and float(np.max(np.abs(rhs - K @ step))) <= tol:
         return step, None
     if not sp.issparse(K):
-        return np.asarray(np.linalg.lstsq(K, rhs, rcond=DEFAULT.lstsq_rcond)[0]), None
+        try:
+            return np.asarray(np.linalg.lstsq(K, rhs, rcond=DEFAULT.lstsq_rcond)[0]), None
+        except np.linalg.LinAlgError:  # its SVD did not converge (an entry not finite)
+            pass
     raise SingularSystemError
 
 
