@@ -78,15 +78,14 @@ class Workspace:
 
     def with_settings(self, settings: SolverSettings) -> Workspace:
         """The same mechanism under other solver settings (the finer retry):
-        the free motions and the balance's maps, which depend on the
-        assembly and the free motions' threshold alone, are shared (a
-        10,000-shaft chain's free motions cost 2 s); the cone programs, the
-        faces and the warm start are made anew."""
+        what depends on the assembly and the free motions' threshold alone
+        is shared: the free motions (a 10,000-shaft chain's cost 2 s), the
+        balance's maps and the faces (their rows and whether they pin the
+        position); the cone programs and the warm start are made anew."""
         if settings.free_motion_rcond != self.settings.free_motion_rcond:
             return Workspace(self.asm, settings)
         other = copy.copy(self)
         other.settings = settings
-        other.faces = {}
         other.compliant_program = None
         other.last = None
         other.__dict__.pop("interior_program", None)  # its Clarabel settings are the old ones
