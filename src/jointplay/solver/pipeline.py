@@ -28,7 +28,7 @@ program when the face does not pin the position; the finer retry.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -318,10 +318,9 @@ def refine_active(
     ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
 ) -> faces.Point | None:
     """A certified optimum, from the KKT equations of the active set
-    ``key`` read from the interior-point answer, with the cones that hold a
-    motion its face leaves free (``faces.holders``: if there are any, and
-    only to a unique optimum) or, failing that, of ``key`` alone, of every
-    cone near its limit, of ``key`` with every cone the interior point
+    ``key`` read from the interior-point answer or, failing that, of ``key``
+    with the cones that hold a motion its face leaves free (``faces.holders``),
+    of every cone near its limit, of ``key`` with every cone the interior point
     loads strictly, or of ``key`` without its faint cones (each start once,
     a set met before is not tried again); if some force comes out negative
     or a cone is pushed past its limit, take a few steps of an active-set
@@ -349,19 +348,19 @@ def refine_active(
     loaded = set(np.flatnonzero(point.lam > st.positive_force * top).tolist())
     seen: set[frozenset[int]] = set()
     held_now = {*key[0], *key[1]}
-    # with the cones that hold what the face leaves free first (none if it
-    # pins the position), but to a unique optimum only: on a tie a cone the
-    # optimum does not need would bound its face and move its least-norm
-    # point (a part with no load on a compliant hinge: 0.3 mm)
-    holders = set(faces.holders(ws, faces.face_of(ws, key), point.x))
-    if holders:
-        found = active_set_steps(ws, g_hat, sigma, point, held_now | holders, at_apex, seen)
-        if found is not None and found.active is not None:
-            face = faces.face_of(ws, found.active)
-            if faces.is_determined(ws, face, found.x):
-                return found
-    for start in (held_now, near, held_now | loaded, held_now - faint):
-        found = active_set_steps(ws, g_hat, sigma, point, start, at_apex, seen)
+
+    def with_holders() -> set[int]:  # none if the interior point's face pins the position
+        return held_now | set(faces.holders(ws, faces.face_of(ws, key), point.x))
+
+    starts: tuple[Callable[[], set[int]], ...] = (
+        lambda: held_now,
+        with_holders,
+        lambda: near,
+        lambda: held_now | loaded,
+        lambda: held_now - faint,
+    )
+    for start in starts:
+        found = active_set_steps(ws, g_hat, sigma, point, start(), at_apex, seen)
         if found is not None:
             return found
     return None
