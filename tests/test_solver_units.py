@@ -544,6 +544,42 @@ def test_a_contact_that_holds_a_face_s_free_motion_joins_it_before_a_tie_is_decl
     assert pipeline.refine_active(ws, g_hat, sigma, start, (reduced[0], reduced[1])) is None
 
 
+def test_a_large_face_s_elimination_serves_its_two_tests_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A large face that leaves a motion free is eliminated once for whether
+    it pins the position and for which cones hold what it leaves free
+    (``faces.holders``), and the elimination is not kept after (6.7 MB a
+    face at 2,000 segments; a study meets many faces)."""
+    from jointplay.io.generate import tube_string
+
+    ws = Workspace.of(tube_string(50))
+    assert ws.sparse
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    best = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
+    assert best.active is not None
+    held = [*best.active[0], *best.active[1]]
+    c = next(i for i in held if ws.balls[i].contact.name == "end-")
+    reduced = (
+        tuple(i for i in best.active[0] if i != c),
+        tuple(i for i in best.active[1] if i != c),
+    )
+    face = faces.face_of(ws, reduced)
+    calls: list[int] = []
+    eliminated = faces._eliminated
+
+    def counted(*args: Any) -> Any:
+        calls.append(1)
+        return eliminated(*args)
+
+    monkeypatch.setattr(faces, "_eliminated", counted)
+    assert not faces.is_determined(ws, face, best.x)
+    assert c in faces.holders(ws, face, best.x)
+    assert len(calls) == 1
+    assert c in faces.holders(ws, face, best.x)  # asked again: nothing was kept
+    assert len(calls) == 2
+
+
 def test_a_sparse_tie_s_least_norm_polish_never_factors_its_singular_system_plainly(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
