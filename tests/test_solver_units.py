@@ -664,3 +664,21 @@ def test_segment_sums_skip_cones_with_no_rows() -> None:
         )
         assert np.allclose(stack.segment_sum(w), expected, rtol=0, atol=1e-14)
         assert np.allclose(stack.segment_sum(w[0]), expected[0], rtol=0, atol=1e-14)
+
+
+def test_a_declined_answer_names_every_check_with_its_limit() -> None:
+    """The decline's message names each check of the certificate with its
+    value and what is allowed: a 19-shaft bearing chain was declined on
+    complementarity alone while the message listed feasibility, balance and
+    the smallest force, all of them well inside their limits."""
+    from jointplay.errors import SolverError
+    from jointplay.settings import SolverSettings
+
+    model = jointplay.load(ROOT / "examples" / "paper" / "6.1.6.1.yaml")
+    with pytest.raises(SolverError) as caught:
+        jointplay.solve(model, SolverSettings(equilibrium_tolerance=1e-30))
+    words = str(caught.value)
+    for check in ("past a clearance", "equilibrium residual", "complementarity", "smallest"):
+        assert check in words
+    assert "(1e-30 allowed)" in words
+    assert "mm past a clearance (1e-10 allowed)" in words  # 1e-9 of the largest play, 0.1 mm
