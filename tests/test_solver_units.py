@@ -682,3 +682,31 @@ def test_a_declined_answer_names_every_check_with_its_limit() -> None:
         assert check in words
     assert "(1e-30 allowed)" in words
     assert "mm past a clearance (1e-10 allowed)" in words  # 1e-9 of the largest play, 0.1 mm
+
+
+def test_a_route_s_certificate_serves_the_answer_when_the_contacts_carry_the_whole_load(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With no rigid rows the contacts carry the whole load: the route's
+    answer is the answer, and its certificate (the warm Newton's) is kept,
+    not computed again; it equals the one the answer gets afresh."""
+    from jointplay.solver import certificate
+
+    ws = Workspace.of(jointplay.load(ROOT / "examples" / "paper" / "6.1.6.1.yaml"))
+    assert not ws.E.shape[0]
+    ws.solve()
+    calls: list[int] = []
+    certify = certificate.certify
+
+    def counted(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        return certify(*args, **kwargs)
+
+    monkeypatch.setattr(certificate, "certify", counted)
+    again = ws.solve()
+    assert len(calls) == 1 and again.certificate.method == "warm-started Newton"
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    sigma = np.zeros(len(ws.balls))
+    point = pipeline.optimum(ws, g_hat, sigma)
+    fresh = certify(ws, g_hat, sigma, point, point.nu)
+    assert fresh == point.certificate

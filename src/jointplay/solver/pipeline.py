@@ -248,6 +248,8 @@ def contacts_optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> fac
     if warmed is None and ws.settings.polish:
         point = polish(ws, g_c, sigma_c, point)
     ws.last = point if point.active is not None else None
+    if g_c is g_hat:  # the whole load: the route's certificate is the answer's
+        return replace(point, lam=point.lam.copy(), f=point.f.copy(), nu=None)
     return replace(point, lam=point.lam * share, f=point.f * share, nu=None, certificate=None)
 
 
