@@ -710,3 +710,27 @@ def test_a_route_s_certificate_serves_the_answer_when_the_contacts_carry_the_who
     point = pipeline.optimum(ws, g_hat, sigma)
     fresh = certify(ws, g_hat, sigma, point, point.nu)
     assert fresh == point.certificate
+
+
+def test_a_declined_tie_says_the_optimum_is_not_unique() -> None:
+    """A tie's answer that fails its certificate is declined with the tie
+    named (a degenerate chain of bearings is declined so, and its weakest
+    motion alone, held 39 times less firmly than the best, misled); an
+    answer that pins the position is not called a tie."""
+    from jointplay.errors import SolverError
+    from jointplay.settings import SolverSettings
+
+    strict = SolverSettings(equilibrium_tolerance=1e-30)
+    said = {}
+    for name in ("gallery/four_bar.yaml", "paper/6.1.6.1.yaml"):
+        with pytest.raises(SolverError) as caught:
+            jointplay.solve(jointplay.load(ROOT / "examples" / name), strict)
+        said[name] = str(caught.value)
+    assert pipeline.TIE_HINT in said["gallery/four_bar.yaml"]
+    assert pipeline.TIE_HINT not in said["paper/6.1.6.1.yaml"]
+    assert (
+        jointplay.solve(
+            jointplay.load(ROOT / "examples" / "gallery" / "four_bar.yaml")
+        ).certificate.method
+        == "least-norm face"
+    )

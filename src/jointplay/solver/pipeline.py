@@ -123,6 +123,14 @@ def _solve_loads(ws: Workspace, loads: Sequence[Load] | None) -> Result:
     return result
 
 
+#: Why a tie's answer may fail its certificate (``optimum``'s decline).
+TIE_HINT = (
+    "The optimal positions are not unique here (a play that no load takes), and the "
+    "least-norm one was not found to these limits: degenerate mechanisms, where contacts "
+    "touch with no force (shafts each in a bearing and coupled to the next), can do this. "
+)
+
+
 def load_scale(ws: Workspace, g_norm: float) -> float:
     """What the scaled problem divides the loads' work by: its size ``|g|``,
     or the preload of compliant contacts that deviations press past their
@@ -221,8 +229,10 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
             f"relative to the loads ({st.equilibrium_tolerance:g} allowed): equilibrium "
             f"residual {cert.equilibrium_residual:.3g}, force of contacts that do not "
             f"touch (complementarity) {cert.complementarity:.3g}, smallest contact force "
-            f"{cert.min_force:.3g}. " + held.weak_hint(ws) + " If not, please report "
-            "this model."
+            f"{cert.min_force:.3g}. "
+            + (TIE_HINT if point.tie is not None else "")
+            + held.weak_hint(ws)
+            + " If not, please report this model."
         )
     point.certificate = cert
     return point
