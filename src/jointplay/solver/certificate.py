@@ -44,7 +44,9 @@ if TYPE_CHECKING:
 class Checks:
     """The certificate's quantities, one entry per row (see module doc)."""
 
-    feasibility: FloatArray  # scaled length: the worst overshoot of a reach, or |E x|
+    feasibility: FloatArray  # scaled length: the worst of ``overshoot`` and ``opening``, if any
+    overshoot: FloatArray  # scaled length: the worst contact past its reach
+    opening: FloatArray  # scaled length: the widest rigid row apart, |E x| over its lever
     balance: FloatArray  # relative to the largest force in the balance
     min_force: FloatArray  # scaled force: the smallest lam
     outside: FloatArray  # scaled force: the largest |f_i| - lam_i
@@ -191,11 +193,22 @@ def check(
     else:
         feas = comp = min_force = outside = np.zeros(B)
         force_scale = np.ones(B)
+    opening, worst = np.zeros(B), feas  # a contact's overshoot may be negative: inside
     if ws.E.shape[0]:
-        opening = np.abs(linalg.times(ws.E, x)) * ws.asm.E_length
-        feas = np.maximum(feas, np.max(opening, axis=1))
+        opening = np.max(np.abs(linalg.times(ws.E, x)) * ws.asm.E_length, axis=1)
+        worst = np.maximum(feas, opening)
     balance, nu_used = ws.balance.residual(g_hat, lam, f, nu)
-    return Checks(feas, balance, min_force, outside, comp, force_scale, nu_used)
+    return Checks(
+        worst,
+        feas,
+        opening,
+        balance,
+        min_force,
+        outside,
+        comp,
+        force_scale,
+        nu_used,
+    )
 
 
 def certify(
@@ -220,3 +233,39 @@ def certify(
         min_force=float(c.min_force[0]),
         iterations=point.iterations,
     )
+
+
+def refusal(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: Point) -> str:
+    """What the answer ``point`` fails of its certificate, in words: each
+    check it fails, with its value and its limit (for a decline's message)."""
+    nu = None if point.nu is None else point.nu[None]
+    c = check(ws, g_hat[None], point.x[None], point.lam[None], point.f[None], sigma[None], nu=nu)
+    st = ws.settings
+    tol, mm = st.equilibrium_tolerance, ws.asm.s
+    reach = st.feasibility_tolerance * ws.max_radius
+    forces = tol * float(c.force_scale[0])  # relative to the loads, or the largest force
+    said = []
+    if c.overshoot[0] > reach:
+        said.append(
+            f"a contact {c.overshoot[0] * mm:.3g} mm past its clearance ({reach * mm:.3g} allowed)"
+        )
+    if c.opening[0] > reach:
+        said.append(f"a rigid joint open by {c.opening[0] * mm:.3g} mm ({reach * mm:.3g} allowed)")
+    if c.balance[0] > tol:
+        said.append(
+            f"the forces balance the loads on each body only to {c.balance[0]:.3g} of the "
+            f"largest force ({tol:g} asked)"
+        )
+    if c.min_force[0] < -forces:
+        said.append(f"a contact pulls ({-c.min_force[0]:.3g} of the loads, {forces:.3g} allowed)")
+    if c.outside[0] > forces:
+        said.append(
+            f"a contact's force leaves its cone by {c.outside[0]:.3g} of the loads "
+            f"({forces:.3g} allowed)"
+        )
+    if c.complementarity[0] > forces:
+        said.append(
+            f"a contact that does not touch pushes ({c.complementarity[0]:.3g} of the loads, "
+            f"{forces:.3g} allowed)"
+        )
+    return "; ".join(said)

@@ -221,15 +221,10 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
             assert point.certificate is not None
             cert = point.certificate
     if not cert.certified:
-        st = ws.settings
         raise SolverError(
             "the solver's answer could not be certified: "
-            f"{cert.feasibility_mm:.3g} mm past a clearance "
-            f"({st.feasibility_tolerance * ws.max_radius * ws.asm.s:.3g} allowed); "
-            f"relative to the loads ({st.equilibrium_tolerance:g} allowed): equilibrium "
-            f"residual {cert.equilibrium_residual:.3g}, force of contacts that do not "
-            f"touch (complementarity) {cert.complementarity:.3g}, smallest contact force "
-            f"{cert.min_force:.3g}. "
+            + certificate.refusal(ws, g_hat, sigma, point)
+            + ". "
             + (TIE_HINT if point.tie is not None else "")
             + held.weak_hint(ws)
             + " If not, please report this model."
