@@ -116,13 +116,15 @@ class SolverSettings:
     apex: float = 1e-6
     #: The active-set rounds start from the cones within this fraction of their
     #: play from their limit, or from the active cones without those loaded
-    #: below ``faint`` of the largest force; they change their guess at most
-    #: ``refine_rounds`` times. Three: of 13,738 starts that found the optimum
-    #: (the whole suite, and a long random search of the property tests),
-    #: 687 needed a second round, 32 a third and none a fourth. A start that
-    #: finds nothing walks them all, a Newton solve each; the sets it met are
-    #: not tried again, so a later start may walk on where it stopped (a
-    #: 1,000-shaft bearing chain: 8 solves instead of 9).
+    #: below ``faint`` of the largest force; the starts share ``refine_rounds``
+    #: Newton runs each (a round drops one cone; a start that keeps finding
+    #: sets may use the runs of later ones). Three: of 13,738 starts that
+    #: found the optimum (the whole suite, and a long random search of the
+    #: property tests, when a round dropped every weak cone), 687 needed a
+    #: second round, 32 a third and none a fourth; a degenerate bearing chain
+    #: walks one contact a round (20 shafts: 15 rounds from the first start).
+    #: The sets a start met are not tried again, so a later start may walk on
+    #: where it stopped.
     near_limit: float = 1e-3
     faint: float = 1e-4
     refine_rounds: int = 3

@@ -334,10 +334,13 @@ def refine_active(
     of every cone near its limit, of ``key`` with every cone the interior point
     loads strictly, or of ``key`` without its faint cones (each start once,
     a set met before is not tried again); if some force comes out negative
-    or a cone is pushed past its limit, take a few steps of an active-set
-    method: drop those cones, add these. A large mechanism needs them: there an
-    interior-point answer to 1e-10 cannot tell a slightly loaded contact
-    from a nearly touching one. The optimum need not be unique (a tie)."""
+    or a cone is pushed past its limit, take steps of an active-set method:
+    add the cones pushed past, or else drop the one whose force is most
+    negative. A large mechanism needs them: there an interior-point answer
+    to 1e-10 cannot tell a slightly loaded contact from a nearly touching
+    one. The starts share ``refine_rounds`` Newton runs each, so a start
+    that walks on may use what the others would (a degenerate chain's walk
+    is one contact a round). The optimum need not be unique (a tie)."""
     stack = ws.stack
     if not len(stack.k):
         return None
@@ -370,8 +373,11 @@ def refine_active(
         lambda: held_now | loaded,
         lambda: held_now - faint,
     )
+    budget = [st.refine_rounds * len(starts)]  # Newton runs shared by the starts
     for start in starts:
-        found = active_set_steps(ws, g_hat, sigma, point, start(), at_apex, seen)
+        if budget[0] <= 0:
+            break
+        found = active_set_steps(ws, g_hat, sigma, point, start(), at_apex, seen, budget)
         if found is not None:
             return found
     return None
@@ -385,17 +391,20 @@ def active_set_steps(
     active: set[int],
     at_apex: NDArray[np.bool_],
     seen: set[frozenset[int]],
+    budget: list[int],
 ) -> faces.Point | None:
-    """The active-set rounds of ``_refine_active`` from ``active``."""
+    """The active-set rounds of ``refine_active`` from ``active``, each a
+    Newton run taken from ``budget`` (shared by the starts)."""
     stack = ws.stack
     r = np.where(stack.r > 0, stack.r, ws.max_radius)
     lam_scale = float(np.max(np.abs(point.lam)))
     x, lam = point.x, point.lam
     st = ws.settings
-    for _ in range(st.refine_rounds):
+    while budget[0] > 0:
         if frozenset(active) in seen:
             return None
         seen.add(frozenset(active))
+        budget[0] -= 1
         trial_key: faces.FaceKey = (
             tuple(sorted(i for i in active if not at_apex[i])),
             tuple(sorted(i for i in active if at_apex[i])),
@@ -431,6 +440,13 @@ def active_set_steps(
         }
         at_apex = at_apex.copy()
         at_apex[list(tilts)] = False
-        active = (active - (set(weak.tolist()) - tilts)) | set(past.tolist())
+        # one at a time, the most negative: dropped all at once, the contacts
+        # of a degenerate bearing chain that touch with no force left and
+        # rejoined round after round, and chains of 19, 20 and 22 shafts were
+        # declined (the textbook rule, as in a primal active-set method)
+        leaving = set(weak.tolist()) - tilts
+        if leaving and not past.size and not tilts:
+            leaving = {min(leaving, key=lambda i: (trial.lam[i], i))}
+        active = (active - leaving) | set(past.tolist())
         x, lam = trial.x, np.maximum(trial.lam, st.positive_force * lam_scale)
     return None
