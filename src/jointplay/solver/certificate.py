@@ -54,15 +54,34 @@ class Checks:
     force_scale: FloatArray  # max(1, largest |lam|): what the force checks are relative to
     nu: FloatArray  # the rigid rows' multipliers used (given, or least squares)
 
+    def limits(self, settings: SolverSettings, max_radius: float) -> dict[str, FloatArray]:
+        """Each check's limit, per row: lengths in the scaled unknowns,
+        forces relative to ``force_scale`` (``min_force``'s is its floor)."""
+        tol, reach = settings.equilibrium_tolerance, settings.feasibility_tolerance * max_radius
+        forces = tol * self.force_scale
+        return {
+            "overshoot": np.full_like(self.balance, reach),
+            "opening": np.full_like(self.balance, reach),
+            "balance": np.full_like(self.balance, tol),
+            "min_force": -forces,
+            "outside": forces,
+            "complementarity": forces,
+        }
+
+    def failed(self, settings: SolverSettings, max_radius: float) -> dict[str, NDArray[np.bool_]]:
+        """Each check's failures, per row (a NaN fails)."""
+        limit = self.limits(settings, max_radius)
+        return {
+            name: np.asarray(
+                ~(self.min_force >= limit[name])
+                if name == "min_force"
+                else ~(getattr(self, name) <= limit[name])
+            )
+            for name in limit
+        }
+
     def passed(self, settings: SolverSettings, max_radius: float) -> NDArray[np.bool_]:
-        tol = settings.equilibrium_tolerance
-        return np.asarray(
-            (self.feasibility <= settings.feasibility_tolerance * max_radius)
-            & (self.balance <= tol)
-            & (self.min_force >= -tol * self.force_scale)
-            & (self.outside <= tol * self.force_scale)
-            & (self.complementarity <= tol * self.force_scale)
-        )
+        return np.asarray(~np.any(list(self.failed(settings, max_radius).values()), axis=0))
 
 
 class Balance:
@@ -240,32 +259,21 @@ def refusal(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: Point) -
     check it fails, with its value and its limit (for a decline's message)."""
     nu = None if point.nu is None else point.nu[None]
     c = check(ws, g_hat[None], point.x[None], point.lam[None], point.f[None], sigma[None], nu=nu)
-    st = ws.settings
-    tol, mm = st.equilibrium_tolerance, ws.asm.s
-    reach = st.feasibility_tolerance * ws.max_radius
-    forces = tol * float(c.force_scale[0])  # relative to the loads, or the largest force
-    said = []
-    if c.overshoot[0] > reach:
-        said.append(
-            f"a contact {c.overshoot[0] * mm:.3g} mm past its clearance ({reach * mm:.3g} allowed)"
-        )
-    if c.opening[0] > reach:
-        said.append(f"a rigid joint open by {c.opening[0] * mm:.3g} mm ({reach * mm:.3g} allowed)")
-    if c.balance[0] > tol:
-        said.append(
-            f"the forces balance the loads on each body only to {c.balance[0]:.3g} of the "
-            f"largest force ({tol:g} asked)"
-        )
-    if c.min_force[0] < -forces:
-        said.append(f"a contact pulls ({-c.min_force[0]:.3g} of the loads, {forces:.3g} allowed)")
-    if c.outside[0] > forces:
-        said.append(
-            f"a contact's force leaves its cone by {c.outside[0]:.3g} of the loads "
-            f"({forces:.3g} allowed)"
-        )
-    if c.complementarity[0] > forces:
-        said.append(
-            f"a contact that does not touch pushes ({c.complementarity[0]:.3g} of the loads, "
-            f"{forces:.3g} allowed)"
-        )
-    return "; ".join(said)
+    failed = c.failed(ws.settings, ws.max_radius)
+    limit = {name: float(v[0]) for name, v in c.limits(ws.settings, ws.max_radius).items()}
+    mm = ws.asm.s
+    words = {
+        "overshoot": f"a contact {c.overshoot[0] * mm:.3g} mm past its clearance "
+        f"({limit['overshoot'] * mm:.3g} allowed)",
+        "opening": f"a rigid joint open by {c.opening[0] * mm:.3g} mm "
+        f"({limit['opening'] * mm:.3g} allowed)",
+        "balance": f"the forces balance the loads on each body only to {c.balance[0]:.3g} of "
+        f"the largest force ({limit['balance']:g} asked)",
+        "min_force": f"a contact pulls ({-c.min_force[0]:.3g} of the loads, "
+        f"{-limit['min_force']:.3g} allowed)",
+        "outside": f"a contact's force leaves its cone by {c.outside[0]:.3g} of the loads "
+        f"({limit['outside']:.3g} allowed)",
+        "complementarity": "a contact that does not touch pushes "
+        f"({c.complementarity[0]:.3g} of the loads, {limit['complementarity']:.3g} allowed)",
+    }
+    return "; ".join(words[name] for name in words if failed[name][0])
