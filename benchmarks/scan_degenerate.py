@@ -12,11 +12,14 @@ families are the ones docs/solver-routes.md counts (the retry's other path,
 * ``others``: bearing chains of 61..97 shafts (every third), 110, 130, 170,
   250 and 400; chains of 10, 20, 30, 36, 40, 50 and 80 shafts under forces
   (0.3, 1, 1), (0, 1, 0), (0, 0.2, 1) and (0.1, -1, 0.5) N; tube strings of
-  20, 50, 200 and 1,000 segments, open and closed, seeds 0 to 2 (70 models).
+  20, 50, 200 and 1,000 segments, open and closed, seeds 0 to 2 (70 models);
+* ``long``: bearing chains of 350 to 1,000 shafts, every 50 (14 models, about
+  20 s; not run unless asked: ``--families long``).
 
 Its answer depends on the installed Clarabel, NumPy and SciPy: run it in
 each environment you compare. Run from the repository root:
-``python benchmarks/scan_degenerate.py`` (``--families bearing``).
+``python benchmarks/scan_degenerate.py`` (``--families bearing``;
+``--families long`` for the long chains).
 """
 
 from __future__ import annotations
@@ -52,12 +55,19 @@ def others() -> Iterator[Case]:
                 yield name, lambda n=n, c=closed, s=seed: tube_string(n, closed=c, seed=s)
 
 
-FAMILIES = {"bearing": bearing, "others": others}
+def long() -> Iterator[Case]:
+    for n in range(350, 1001, 50):
+        yield f"bearing {n}", lambda n=n: bearing_chain(n)
+
+
+FAMILIES = {"bearing": bearing, "others": others, "long": long}
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--families", nargs="+", default=list(FAMILIES), choices=list(FAMILIES))
+    parser.add_argument(
+        "--families", nargs="+", default=["bearing", "others"], choices=list(FAMILIES)
+    )
     args = parser.parse_args(argv)
     import clarabel
     import numpy
