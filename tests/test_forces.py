@@ -370,7 +370,7 @@ def test_a_face_whose_force_reaches_its_rim_gets_the_exact_split() -> None:
     point = pipeline.optimum(ws, g / np.linalg.norm(g))
     x, lam, f = point.x, point.lam, point.f
     st = ws.settings
-    surface, apex, u = forces._classes(ws.stack, x, ws.stack.r, st.feasibility_tolerance, st)
+    surface, apex, _, u = forces._classes(ws.stack, x, ws.stack.r, st.feasibility_tolerance, st)
     Z, owner = forces._unknowns(ws.stack, surface, apex, u, ws.asm.E.shape[0], False)
     P, G = forces._wrenches(ws.asm, Z), forces._work(ws.asm, Z)
     y = np.linalg.lstsq(Z, np.concatenate([f, lam]), rcond=None)[0]
@@ -606,3 +606,52 @@ def test_a_batch_s_faint_loads_beside_a_preload_are_batched() -> None:
     assert batch.forces is not None
     expected = np.column_stack([np.full(7, 35.0), 17.5 + np.array(loads), np.full(7, 17.5)])
     np.testing.assert_allclose(batch.forces, expected, atol=1e-8 * 35)
+
+
+def test_a_compliant_face_pressed_flat_has_its_centre_of_pressure_split_by_the_rule() -> None:
+    """A compliant face pressed flat pushes with the force its penetration
+    makes, but where that force acts on the face (its force vector) is not
+    fixed by the positions. The split chooses it by the same rule as every
+    other force; it kept the route's before, and the route's depends on the
+    file's order (tests/property_cases/order_compliant_face_pressed_flat.yaml:
+    4e-4 N on the guide's corners). Here: two routes' forces that both
+    balance the loads, with the face's centre of pressure elsewhere, give the
+    same split, and the face keeps its force."""
+    from jointplay.solver import Workspace, forces, pipeline
+
+    path = Path(__file__).parent / "property_cases" / "order_compliant_face_pressed_flat.yaml"
+    ws = Workspace.of(jointplay.load(path))
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    point = pipeline.optimum(ws, g_hat, ws.softness(1.0))
+    st = ws.settings
+    apex = st.feasibility_tolerance * ws.max_radius
+    face = next(i for i, b in enumerate(ws.balls) if b.contact.name == "face x+")
+    _, rho, _ = ws.stack.levels(point.x)
+    assert ws.stack.spring[face] > 0 and point.lam[face] > 0 and rho[face] <= apex
+    # another route: the face's force vector moved inside its cone, and the
+    # touching contacts' forces changed to balance the loads again (along the
+    # balance's null space, found here with numpy)
+    n_rows = ws.stack.A.shape[0]
+    balance = np.hstack([np.asarray(ws.stack.A).T, np.asarray(ws.stack.B).T])
+    rows = np.arange(ws.stack.start[face], ws.stack.start[face] + ws.stack.k[face])
+    touching = [i for i in range(len(ws.balls)) if point.lam[i] > 0]
+    cols = [*np.concatenate([ws.stack.rows_of(np.array([i])) for i in touching])]
+    cols += [n_rows + i for i in touching]
+    null = np.linalg.svd(balance[:, cols])[2][np.linalg.matrix_rank(balance[:, cols]) :]
+    move = (
+        null.T @ np.linalg.lstsq(null.T[[cols.index(r) for r in rows]], [0.1, -0.1], rcond=None)[0]
+    )
+    y = np.concatenate([point.f, point.lam])
+    y[cols] += 0.05 * point.lam[face] * move / np.max(np.abs(move[[cols.index(r) for r in rows]]))
+    other_f, other_lam = y[:n_rows], y[n_rows:]
+    np.testing.assert_allclose(
+        balance @ y, balance @ np.concatenate([point.f, point.lam]), atol=1e-13
+    )
+    assert not np.allclose(other_f[rows], point.f[rows])
+    nu = pipeline.rigid_multipliers(ws, g_hat, point)
+    first = forces.least_squares_split(ws.asm, point.x, point.lam, point.f, nu, g_hat, apex, st)
+    then = forces.least_squares_split(ws.asm, point.x, other_lam, other_f, nu, g_hat, apex, st)
+    assert first is not None and then is not None
+    np.testing.assert_allclose(then.f, first.f, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(then.lam, first.lam, rtol=0, atol=1e-12)
+    assert first.lam[face] == pytest.approx(point.lam[face], rel=1e-12)  # its penetration's

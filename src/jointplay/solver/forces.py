@@ -14,7 +14,10 @@ where ``(F_c, M_c)`` is the contact's wrench at its joint centre (N, N*mm)
 and ``ell`` the mechanism's length (``Assembly.ell``, which weighs rotations
 in the least-norm metric of positions too). Rigid joints take part with the
 wrench of their multipliers; a compliant contact's force is fixed by its
-penetration and stays as it is.
+penetration and stays as it is. A compliant face pressed flat (at its cone's
+apex) keeps that force, but where it acts on the face (its force vector, the
+centre of pressure) is not fixed by the positions: it is split by the same
+rule, inside the face's cone.
 
 The least-squares split comes from one linear (KKT) solve. Only when it
 would make a contact pull, or push outside its cone, the same objective is
@@ -72,13 +75,13 @@ def least_squares_split(
     cone by round-off), the rank cutoff, the KKT regularization and the
     interior-point tolerance."""
     stack = asm.stack
-    surface, apex, u = _classes(stack, x, stack.r, apex_level, settings)
-    keep_lam, keep_f = _compliant(stack, lam, f)
+    surface, apex, pressed, u = _classes(stack, x, stack.r, apex_level, settings, lam=lam)
+    keep_lam, keep_f = _compliant(stack, lam, f, pressed)
     b = g_hat - stack.adjoint(keep_f, keep_lam)
     Z, owner = _unknowns(stack, surface, apex, u, asm.E.shape[0], asm.sparse)
     if Z.shape[1] == 0:
         return None
-    G = _work(asm, Z)
+    G, b = _pressing(_work(asm, Z), b, owner, pressed, lam)
     if not asm.sparse and _determined_rows(G[None], settings.free_motion_rcond)[0]:
         return None  # one split balances the loads: the solver's own
     P = _wrenches(asm, Z)
@@ -156,8 +159,8 @@ def least_squares_rows(
     ``(lam, f, nu)`` (the rule's where the mask holds)."""
     stack = asm.stack
     B, n_e = x.shape[0], asm.E.shape[0]
-    surface, apex, u = _classes(stack, x, radii, apex_level, settings, centres)
-    keep_lam, keep_f = _compliant(stack, lam, f)
+    surface, apex, pressed, u = _classes(stack, x, radii, apex_level, settings, centres, lam)
+    keep_lam, keep_f = _compliant(stack, lam, f, pressed)
     b = g_hat - stack.adjoint(keep_f, keep_lam)
     ok = np.zeros(B, dtype=bool)
     lam, f, nu = lam.copy(), f.copy(), np.zeros((B, n_e))
@@ -172,16 +175,20 @@ def least_squares_rows(
     rim = pushing & on_rim & faces
     start = np.concatenate([f_n - keep_f, lam_n - keep_lam, np.zeros((B, n_e))], axis=1)
     # rows whose contacts touch alike share the shape of their unknowns
-    first_kind, kind = linalg.distinct_rows(np.hstack([surface, apex, unloaded, rim]))
+    first_kind, kind = linalg.distinct_rows(np.hstack([surface, apex, pressed, unloaded, rim]))
     for rows in (np.flatnonzero(kind == g) for g in range(len(first_kind))):
         s, a, d, e = surface[rows[0]], apex[rows[0]], unloaded[rows[0]], rim[rows[0]]
         # rows that pose the same problem (a study whose plays vary and whose
         # loads do not, on contacts whose directions do not move) are solved once
-        first, same = linalg.distinct_rows(np.hstack([b[rows], u[rows], start[rows]]))
+        first, same = linalg.distinct_rows(
+            np.hstack([b[rows], u[rows], start[rows], lam[rows][:, pressed[rows[0]]]])
+        )
         Z, owner = _unknowns(stack, s, a, u[rows[first]], n_e, False)
         if Z.shape[-1] == 0:
             continue
-        G = _work(asm, Z)
+        G, b_rows = _pressing(
+            _work(asm, Z), b[rows[first]], owner, pressed[rows[0]], lam[rows[first]]
+        )
         # a split that one balance determines is the row's own (as in
         # ``least_squares_split``): its touching contacts are not redundant
         determinate = _determined_rows(G, settings.free_motion_rcond)[same]
@@ -194,7 +201,7 @@ def least_squares_rows(
         # a face's columns: its lam first, then its force vector
         rims = [np.flatnonzero(owner == i) for i in np.flatnonzero(e)]
         y0 = np.einsum("brj,br->bj", Z, start[rows[first]]) / np.sum(Z * Z, axis=1)
-        y, optimal = _split_newton(P, G, b[rows[first]], keep, rims, settings, y0)
+        y, optimal = _split_newton(P, G, b_rows, keep, rims, settings, y0)
         z = (Z @ y[:, :, None])[same, :, 0]
         out = _split_of(stack, z, keep_lam[rows], keep_f[rows], a & ~stack.has_offset)
         split = rows[~determinate]
@@ -294,22 +301,54 @@ def _classes(
     apex_level: float,
     settings: SolverSettings,
     centres: FloatArray | None = None,
-) -> tuple[NDArray[np.bool_], NDArray[np.bool_], FloatArray]:
+    lam: FloatArray | None = None,
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_], FloatArray]:
     """Which hard contacts touch on their cone's surface, and which rest at
     its apex (a one-sided limit, a face flat, a ball centred: ``|A_i x|`` at
-    or below ``apex_level``); and each cone's direction of contact ``u``.
-    One answer (m,) or rows (B, m) with their ``radii`` (and ``centres``)."""
+    or below ``apex_level``); which compliant faces are pressed flat (with
+    force ``lam``: counted with the apex ones, see ``_pressing``); and each
+    cone's direction of contact ``u``. One answer (m,) or rows (B, m) with
+    their ``radii`` (and ``centres``)."""
     v, rho, level = stack.levels(x, centres)
+    flat = (stack.k == 0) | (rho <= apex_level)
     touching = (stack.spring == 0) & (stack.gap_used(level, radii) >= settings.touching)
-    apex = touching & ((stack.k == 0) | (rho <= apex_level))
+    apex = touching & flat
+    pressed = np.zeros_like(apex)
+    if lam is not None:
+        pressed = (stack.spring > 0) & stack.has_offset & (stack.k > 0) & flat & (lam > 0)
     safe = np.where(rho > 0, rho, 1.0)
-    return touching & ~apex, apex, v / np.repeat(safe, stack.k, axis=-1)
+    return touching & ~apex, apex | pressed, pressed, v / np.repeat(safe, stack.k, axis=-1)
 
 
-def _compliant(stack: BallStack, lam: FloatArray, f: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The forces the split keeps: the compliant contacts' (0 on the others)."""
-    hard = stack.spring == 0
-    return np.where(hard, 0.0, lam), np.where(np.repeat(hard, stack.k), 0.0, f)
+def _compliant(
+    stack: BallStack, lam: FloatArray, f: FloatArray, pressed: NDArray[np.bool_]
+) -> tuple[FloatArray, FloatArray]:
+    """The forces the split keeps: the compliant contacts' (0 on the
+    others), but for a face ``pressed`` flat, whose force vector is split."""
+    hard = (stack.spring == 0) | pressed
+    return np.where(hard, 0.0, lam), np.where(np.repeat(hard, stack.k, axis=-1), 0.0, f)
+
+
+def _pressing(
+    G: Any, b: FloatArray, owner: IntArray, pressed: NDArray[np.bool_], lam: FloatArray
+) -> tuple[Any, FloatArray]:
+    """The balance ``G y = b`` with a row per compliant face pressed flat
+    (``pressed``, one mask for all rows): its force is ``lam_i``, the one its
+    penetration makes; its force vector (its columns after ``lam_i``) is an
+    unknown of the split. ``G``, ``b`` and ``lam``: one answer or rows."""
+    cones = np.flatnonzero(pressed)
+    if not len(cones):
+        return G, b
+    first = np.array([np.flatnonzero(owner == i)[0] for i in cones.tolist()], dtype=np.intp)
+    rows = np.zeros((len(cones), G.shape[-1]))
+    rows[np.arange(len(cones)), first] = 1.0
+    fixed = lam[..., cones]
+    if linalg.is_sparse(G):
+        return sp.vstack([G, sp.csr_matrix(rows)], format="csr"), np.concatenate([b, fixed])
+    if G.ndim == 3:
+        rows_b = np.broadcast_to(rows, (G.shape[0], *rows.shape))
+        return np.concatenate([G, rows_b], axis=1), np.concatenate([b, fixed], axis=1)
+    return np.vstack([G, rows]), np.concatenate([b, fixed])
 
 
 def _split_of(
