@@ -66,7 +66,8 @@ def least_squares_split(
 ) -> Split | None:
     """The least-squares split (module docstring) at positions ``x`` under
     unit loads ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split;
-    its compliant contacts keep theirs. ``apex_level``: a cone with
+    its compliant contacts keep theirs (a face pressed flat, its force but
+    not its force vector: ``_pressing``). ``apex_level``: a cone with
     ``|A_i x|`` at or below it rests at its apex, its force vector free
     inside the cone (the position's round-off). None when no split with
     these contacts is found, or when only one balances the loads (the
