@@ -549,40 +549,47 @@ def test_regression_case(path: Path) -> None:
         check_file_order(data, result)
 
 
-def check_file_order(data: dict[str, Any], result: jointplay.Result) -> None:
-    """The model's bodies, joints and loads in two other orders: the same
-    joint translations, rotations and contact forces, each to 1e-10 of the
-    largest of its kind (the issue's promise; a component that is 0 in one
-    order may be round-off in another, so not relative to itself), or to
-    1e-15 (mm, rad, N) where a whole kind is round-off."""
+def in_another_order(data: dict[str, Any], seed: int) -> dict[str, Any]:
+    """``data`` with its bodies, joints and loads shuffled by ``random.Random(seed)``."""
     import random
 
-    def answers(res: jointplay.Result) -> dict[str, dict[str, Any]]:
-        kinds: dict[str, dict[str, Any]] = {"translation": {}, "rotation": {}, "force": {}}
-        for name, jr in res.joints.items():
-            kinds["translation"][name], kinds["rotation"][name] = jr.translation, jr.rotation
-            for c in jr.contacts:
-                kinds["force"][f"{name}.{c.name}"] = c.force
-        return kinds
+    other = {key: list(value) if isinstance(value, list) else value for key, value in data.items()}
+    rng = random.Random(seed)
+    for key in ("bodies", "joints", "loads"):
+        rng.shuffle(other[key])
+    return other
 
-    base = answers(result)
+
+def order_answers(result: jointplay.Result) -> dict[str, dict[str, Any]]:
+    """What must not depend on the file's order, by kind: joint translations,
+    rotations, contact forces."""
+    kinds: dict[str, dict[str, Any]] = {"translation": {}, "rotation": {}, "force": {}}
+    for name, jr in result.joints.items():
+        kinds["translation"][name], kinds["rotation"][name] = jr.translation, jr.rotation
+        for c in jr.contacts:
+            kinds["force"][f"{name}.{c.name}"] = c.force
+    return kinds
+
+
+def order_limit(values: dict[str, Any]) -> float:
+    """How far one kind of ``order_answers`` may move with the file's order:
+    1e-10 of its largest (the issue's promise; a component that is 0 in one
+    order may be round-off in another, so not relative to itself), and 1e-15
+    (mm, rad, N) where the whole kind is round-off."""
+    return 1e-10 * max([float(np.max(np.abs(v))) for v in values.values()] + [0.0]) + 1e-15
+
+
+def check_file_order(data: dict[str, Any], result: jointplay.Result) -> None:
+    """The model in two other orders (``in_another_order``): the same
+    ``order_answers``, each kind to its ``order_limit``."""
+    base = order_answers(result)
     for seed in (1, 2):
-        other = {
-            key: list(value) if isinstance(value, list) else value for key, value in data.items()
-        }
-        rng = random.Random(seed)
-        for key in ("bodies", "joints", "loads"):
-            rng.shuffle(other[key])
-        shuffled = answers(solve(other))
+        shuffled = order_answers(solve(in_another_order(data, seed)))
         for kind, values in base.items():
-            largest = max([float(np.max(np.abs(v))) for v in values.values()] + [1e-300])
+            limit = order_limit(values)
             for key, value in values.items():
                 np.testing.assert_allclose(
-                    shuffled[kind][key],
-                    value,
-                    rtol=0,
-                    atol=1e-10 * largest + 1e-15,
-                    err_msg=f"{kind} {key}",
+                    shuffled[kind][key], value, rtol=0, atol=limit, err_msg=f"{kind} {key}"
                 )
 
 

@@ -271,12 +271,7 @@ def _split_newton(
             K[:, nk + m + j, :nk] = row
             K[:, :nk, nk + m + j] = row
         F = np.concatenate([grad, (Gk @ yk[:, :, None])[:, :, 0] - b, c], axis=1)
-        # relative to the terms that balance, whose round-off grows with them:
-        # a split whose forces are twelve times the load balanced it to 3.4e-12
-        # in one file order and to 6.1e-12 in another, against 5.7e-12 asked
-        # of the load alone; the other order's split was then the cone program's
-        terms = np.max(np.abs(Gk) @ np.abs(yk)[:, :, None], axis=(1, 2), initial=0.0)
-        ok = np.max(np.abs(F), axis=1) <= settings.newton_accept * np.maximum(scale, terms)
+        ok = np.max(np.abs(F), axis=1) <= settings.newton_accept * scale
         if np.all(ok):
             if polished:
                 break
