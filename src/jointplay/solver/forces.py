@@ -552,3 +552,47 @@ def _cone_program(
     if not conic.has_answer(sol):
         return None
     return np.asarray(given + np.asarray(sol.x))
+
+
+def pushing(
+    stack: BallStack,
+    Eq: FloatArray,
+    x: FloatArray,
+    g_hat: FloatArray,
+    key: tuple[tuple[int, ...], tuple[int, ...]],
+    settings: SolverSettings,
+) -> FloatArray | None:
+    """Forces ``lam >= 0`` of the contacts ``key`` (surface cones, then
+    one-sided limits) at ``x``, each along its contact's direction there,
+    that balance ``g_hat`` with any forces of the rigid rows ``Eq``
+    (dense): non-negative least squares on the loads left once the rigid
+    rows take their part. None when none balance to ``newton_accept`` of
+    the terms (the set's positions are then not optimal)."""
+    import scipy.optimize as so  # on this route only: 0.1 s to import
+
+    surface, linear = key
+    sub = stack.take(surface)
+    v, rho = sub.norms(x)
+    u = v / np.repeat(rho, sub.k)
+    J = np.vstack(
+        [
+            np.add.reduceat(sub.A * u[:, None], sub.start, axis=0) + sub.B
+            if surface
+            else np.zeros((0, len(x))),
+            linalg.dense(stack.B[list(linear)]),
+        ]
+    )
+    if Eq.shape[0]:  # what the rigid rows cannot take: the part orthogonal to their range
+        U, sv, _ = np.linalg.svd(Eq.T, full_matrices=False)
+        U = U[:, sv > settings.free_motion_rcond * sv[0]]
+        M, b = J.T - U @ (U.T @ J.T), g_hat - U @ (U.T @ g_hat)
+    else:
+        M, b = J.T, g_hat
+    try:
+        lam, _ = so.nnls(M, b)
+    except RuntimeError:  # its iteration limit (3 per unknown)
+        return None
+    scale = max(1.0, float(np.max(np.abs(b))), float(np.max(lam, initial=0.0)))
+    if float(np.max(np.abs(b - M @ lam))) > settings.newton_accept * scale:
+        return None
+    return np.asarray(lam, dtype=np.float64)

@@ -430,6 +430,12 @@ def active_set_steps(
                 return trial
             if not weak.size:
                 return None
+            # Newton's forces on a degenerate set (more contacts touch than
+            # the positions need) are one split of many: one may pull where
+            # another pushes only, and then these positions are optimal
+            pushing = pushing_optimum(ws, g_hat, sigma, trial, trial_key)
+            if pushing is not None:
+                return pushing
         # a face at its apex whose force reaches its cone's edge tilts
         # onto its surface; the other weak cones leave the set
         lam_top = float(np.max(trial.lam, initial=0.0))
@@ -450,3 +456,37 @@ def active_set_steps(
         active = (active - leaving) | set(past.tolist())
         x, lam = trial.x, np.maximum(trial.lam, st.positive_force * lam_scale)
     return None
+
+
+def pushing_optimum(
+    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, trial: faces.Point, key: faces.FaceKey
+) -> faces.Point | None:
+    """``trial`` (a round's positions, every contact of ``key`` touching,
+    none past) with forces that push and balance the loads there, if some
+    do and certify: then its positions are optimal whatever Newton's forces.
+    Hard, dense models whose ``key`` has no face at its apex only (each
+    force along the one direction its contact gives it: ``forces.pushing``)."""
+    surface, linear = key
+    stack = ws.stack
+    if ws.asm.sparse or np.any(sigma) or np.any(stack.k[list(linear)]):
+        return None
+    lam_key = forces.pushing(stack, linalg.dense(ws.Eq), trial.x, g_hat, key, ws.settings)
+    if lam_key is None:
+        return None
+    lam = np.zeros(len(ws.balls))
+    lam[[*surface, *linear]] = lam_key
+    f = np.zeros(stack.A.shape[0])
+    rows = stack.rows_of(surface)
+    v, rho = stack.norms(trial.x)
+    f[rows] = stack.take(surface).surface_forces(v[rows], rho[list(surface)], lam[list(surface)])
+    point = replace(trial, lam=lam, f=f, certificate=None)
+    point.certificate = certificate.certify(ws, g_hat, sigma, point)
+    if not point.certificate.certified:
+        return None
+    # a contact with no force (to round-off) does not bound the tie
+    loaded = lam > ws.settings.positive_force * float(np.max(lam))
+    point.active = (
+        tuple(i for i in surface if loaded[i]),
+        tuple(i for i in linear if loaded[i]),
+    )
+    return point
