@@ -474,6 +474,14 @@ class BallStack:
         """``sum_i A_i^T f_i + lam_i B_i``: the work of the contact forces (rows batched)."""
         return linalg.adjoint(self.A, f) + linalg.adjoint(self.B, lam)
 
+    def surface_work(self, u: FloatArray) -> Matrix:
+        """(n, m): ``A_i^T u_i + B_i``, the work of a unit force of each cone
+        on its surface along ``u_i`` (stacked like the rows of A; every cone
+        has rows): the rows of its contact law's Jacobian."""
+        if linalg.is_sparse(self.A):
+            return sp.csr_matrix(self.segment_matrix.T @ sp.diags(u) @ self.A + self.B)
+        return np.add.reduceat(self.A * u[:, None], self.start, axis=0) + self.B
+
     def surface_forces(self, v: FloatArray, rho: FloatArray, lam: FloatArray) -> FloatArray:
         """``f_i = lam_i A_i x / |A_i x|`` (0 where ``A_i x = 0``): the force vectors
         of contacts on their cone's surface."""

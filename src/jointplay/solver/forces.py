@@ -576,9 +576,7 @@ def pushing(
     u = v / np.repeat(rho, sub.k)
     J = np.vstack(
         [
-            np.add.reduceat(sub.A * u[:, None], sub.start, axis=0) + sub.B
-            if surface
-            else np.zeros((0, len(x))),
+            sub.surface_work(u) if surface else np.zeros((0, len(x))),
             linalg.dense(stack.B[list(linear)]),
         ]
     )

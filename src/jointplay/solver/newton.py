@@ -196,10 +196,8 @@ def newton(
             if float(np.min(rho)) == 0.0:
                 return None
             u = v / np.repeat(rho, k)
-            if S is None:
-                J = np.add.reduceat(A * u[:, None], start, axis=0) + Bo
-            else:
-                J = sp.csr_matrix(S.T @ sp.diags(u) @ A + Bo)
+            # sparse: A may be dense beside a sparse Eq, and J is kept sparse
+            J = stack.surface_work(u) if S is None else sp.csr_matrix(S.T @ sp.diags(u) @ A + Bo)
             grad = grad + linalg.adjoint(J, lam)
             F = np.concatenate(
                 [grad, rho + linalg.times(Bo, x) - r - soft_na * lam, Eq @ x - e - soft_eq * nu]
