@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -251,12 +250,7 @@ def test_the_retry_shares_the_free_motions_and_answers_as_a_new_workspace(
     asm = assemble(bearing_chain(15))
     ws = Workspace(asm)
     ws.solve()  # its faces met, and a warm start, which the retry must not take
-    fine_settings = replace(
-        ws.settings,
-        ipm_tolerance=ws.settings.fine_ipm_tolerance,
-        ipm_regularization=ws.settings.fine_ipm_regularization,
-        warm_start=False,
-    )
+    fine_settings = ws.settings.retry()
     fine = ws.with_settings(fine_settings)
     assert fine.N is ws.N and fine.K is ws.K and fine.faces is ws.faces
     assert fine.settings is fine_settings and ws.settings is not fine_settings

@@ -70,6 +70,7 @@ def cone_program(
     *,
     tolerance: float | None = None,
     max_iter: int | None = None,
+    refine: bool = True,
 ) -> ConeProgram:
     """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, c_i - A_i x)``
     per contact (a one-sided limit, with no rows, is a non-negative slack),
@@ -97,15 +98,19 @@ def cone_program(
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in stack.k
     ]
-    settings = options(ws.settings, tolerance, max_iter)
+    settings = options(ws.settings, tolerance, max_iter, refine)
     return ConeProgram(_upper(P, ws.m), A, b, cones, settings, soc_first, ball_rows)
 
 
 def options(
-    settings: SolverSettings, tolerance: float | None = None, max_iter: int | None = None
+    settings: SolverSettings,
+    tolerance: float | None = None,
+    max_iter: int | None = None,
+    refine: bool = True,
 ) -> Any:
     """Clarabel's settings for every cone program we run: quiet, our
-    tolerance (default ``ipm_tolerance``) and iteration limit."""
+    tolerance (default ``ipm_tolerance``) and iteration limit, and
+    ``refine``: iterative refinement to ``ipm_refinement`` (or none)."""
     out = clarabel.DefaultSettings()
     out.verbose = False
     tol = settings.ipm_tolerance if tolerance is None else tolerance
@@ -114,8 +119,9 @@ def options(
     # refine each step's linear solve further than the default: with
     # stiff springs pressed far past their play, or a deviation zone's tilt
     # against a long lever, the default leaves some programs "AlmostSolved"
-    refine = settings.ipm_refinement
-    out.iterative_refinement_reltol = out.iterative_refinement_abstol = refine
+    out.iterative_refinement_enable = refine
+    out.iterative_refinement_reltol = settings.ipm_refinement
+    out.iterative_refinement_abstol = settings.ipm_refinement
     out.static_regularization_constant = settings.ipm_regularization
     # the KKT factorization every answer here was checked with (0.10's
     # default): 0.11's "auto" picks another, whose end points declined 157 of

@@ -187,7 +187,40 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
     preload, or 0 for no load: ``load_scale``), with contact softness
     ``sigma`` (default: every contact hard)."""
     sigma = np.zeros(len(ws.balls)) if sigma is None else sigma
-    if not np.any(g_hat) and not np.any(sigma):
+    loaded = bool(np.any(g_hat) or np.any(sigma))
+    failed: SolverError | None = None
+    try:
+        point = answer(ws, g_hat, sigma, loaded)
+        certified = point.certificate is not None and point.certificate.certified
+    except SolverError as exc:  # a step of the route could not be done
+        failed, certified = exc, False
+    finer = ws.settings.ipm_tolerance > ws.settings.fine_ipm_tolerance  # not yet retried
+    if not certified and loaded and finer:
+        # a nearly degenerate mechanism can leave the interior-point answer
+        # (and its polish) 1e-7 mm off at the usual tolerance, or a step of
+        # its route undone: once more, finer and on another path
+        # (``SolverSettings.retry``)
+        try:
+            return optimum(ws.with_settings(ws.settings.retry()), g_hat, sigma)
+        except SolverError:
+            pass
+    if failed is not None:
+        raise failed
+    if not certified:
+        raise SolverError(
+            "the solver's answer could not be certified: "
+            + certificate.refusal(ws, g_hat, sigma, point)
+            + ". "
+            + (TIE_HINT if point.tie is not None else "")
+            + held.weak_hint(ws)
+            + " If not, please report this model."
+        )
+    return point
+
+
+def answer(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, loaded: bool) -> faces.Point:
+    """The route's answer, with its certificate (which may refuse it)."""
+    if not loaded:
         point = rest_position(ws)
     else:
         point = split(ws, g_hat, sigma, contacts_optimum(ws, g_hat, sigma))
@@ -199,37 +232,8 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
         faces.rimless_forces(ws.stack, tight, point.lam, point.f)
         if not np.array_equal(before, point.lam[tight]):
             point.certificate = None
-    cert = point.certificate or certificate.certify(ws, g_hat, sigma, point, point.nu)
-    fine_ipm = ws.settings.fine_ipm_tolerance
-    loaded = np.any(g_hat) or np.any(sigma)
-    if not cert.certified and loaded and ws.settings.ipm_tolerance > fine_ipm:
-        # a nearly degenerate mechanism can leave the interior-point answer
-        # (and its polish) 1e-7 mm off at the usual tolerance: once more, finer
-        # and on another path (``fine_ipm_regularization``)
-        retry = replace(
-            ws.settings,
-            ipm_tolerance=fine_ipm,
-            ipm_regularization=ws.settings.fine_ipm_regularization,
-            warm_start=False,
-        )
-        fine = ws.with_settings(retry)
-        try:
-            point = optimum(fine, g_hat, sigma)
-        except SolverError:
-            pass
-        else:
-            assert point.certificate is not None
-            cert = point.certificate
-    if not cert.certified:
-        raise SolverError(
-            "the solver's answer could not be certified: "
-            + certificate.refusal(ws, g_hat, sigma, point)
-            + ". "
-            + (TIE_HINT if point.tie is not None else "")
-            + held.weak_hint(ws)
-            + " If not, please report this model."
-        )
-    point.certificate = cert
+    if point.certificate is None:
+        point.certificate = certificate.certify(ws, g_hat, sigma, point, point.nu)
     return point
 
 

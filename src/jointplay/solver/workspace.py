@@ -101,7 +101,9 @@ class Workspace:
     @cached_property
     def interior_program(self) -> conic.ConeProgram:
         """The cone program of the hard problem (its loads are set per solve)."""
-        return conic.cone_program(self, None, self.Eq, np.zeros(self.Eq.shape[0]), self.stack)
+        e = np.zeros(self.Eq.shape[0])
+        refine = self.settings.sparse_interior_refinement or not self.asm.sparse
+        return conic.cone_program(self, None, self.Eq, e, self.stack, refine=refine)
 
     def contacts_share(self, g_hat: FloatArray) -> tuple[FloatArray, float]:
         """The unit loads' work ``g_hat`` less what the rigid rows hold alone
