@@ -944,3 +944,47 @@ def test_a_route_that_fails_a_step_takes_the_one_retry(monkeypatch: pytest.Monke
     monkeypatch.setattr(pipeline, "contacts_optimum", both_fail)
     with pytest.raises(SolverError, match="step at 1e-10"):
         jointplay.solve(model)
+
+
+def test_a_large_model_s_verdict_comes_from_a_refined_solve(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A large model's interior point goes unrefined (Newton's start), but
+    "not held" (exit 3) and "cannot be assembled" (exit 2) are verdicts:
+    the status that gives one is read again from a refined solve (a review:
+    none differed in 332 large models, but a verdict should not rest on
+    the cheaper solve). A 45-shaft bearing chain beside a plate on three
+    feet pushed down outside them (it tips)."""
+    from jointplay.io.generate import bearing_chain_dict
+    from jointplay.io.modelfile import model_from_dict
+
+    data = bearing_chain_dict(45)
+    data["bodies"].append({"name": "plate"})
+    feet = [(-5.0, 0.0), (2.5, 4.330127018922193), (2.5, -4.330127018922193)]
+    for i, (x, y) in enumerate(feet):
+        data["joints"].append(
+            {"name": f"foot{i}", "type": "point", "between": ["ground", "plate"],
+             "at": [x, y, -50.0], "axis": [0, 0, 1]}
+        )  # fmt: skip
+    data["joints"].append(
+        {"name": "pin", "type": "sphere_in_cylinder", "between": ["ground", "plate"],
+         "at": [0, 0, -50.0], "axis": [0, 0, 1], "clearance": 1.0}
+    )  # fmt: skip
+    data["loads"].append({"body": "plate", "at": [4.0, 0.0, -50.0], "force": [0.2, 0.0, -1.0]})
+    solves: list[tuple[bool, str]] = []
+    made = conic.clarabel.DefaultSolver
+
+    class Counted:
+        def __init__(self, *args: Any) -> None:
+            self.refined = bool(args[-1].iterative_refinement_enable)
+            self.solver = made(*args)
+
+        def solve(self) -> Any:
+            sol = self.solver.solve()
+            solves.append((self.refined, conic.status_name(sol)))
+            return sol
+
+    monkeypatch.setattr(conic.clarabel, "DefaultSolver", Counted)
+    with pytest.raises(jointplay.UnboundedMechanismError, match="plate"):
+        jointplay.solve(model_from_dict(data))
+    assert solves[0] == (False, "DualInfeasible") and solves[-1] == (True, "DualInfeasible")

@@ -60,7 +60,8 @@ class SolverSettings:
     #: Clarabel's time (10,000-segment chain: 2.0 s and 16 iterations against
     #: 0.86 s and 11). A small model's costs little, and degenerate ones need
     #: it (bearing chains of 17 to 21 shafts declined without it). An answer
-    #: that does not certify is retried with it (``retry``).
+    #: that does not certify is retried with it (``retry``), and a verdict
+    #: (not held, not assembled) is read from a refined solve (``conic.run``).
     sparse_interior_refinement: bool = False
 
     # -- rank and free motions -------------------------------------------------
@@ -191,8 +192,9 @@ class SolverSettings:
     batch_guess_rows: int = 32
 
     def retry(self) -> SolverSettings:
-        """The one retry's settings (an answer that does not certify): finer,
-        on another path, the interior point refined, no warm start."""
+        """The one retry's settings (an answer that does not certify, or a
+        step of its route that cannot be done): finer, on another path, the
+        interior point refined, no warm start."""
         return replace(
             self,
             ipm_tolerance=self.fine_ipm_tolerance,

@@ -174,6 +174,12 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
     # does to the interior-point tolerance only (3.5e-12 apart on the
     # paper's shaft), so a workspace's answers would depend on its history
     sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
+    verdict = outcome(sol) in ("unbounded", "infeasible")
+    if verdict and not prog.settings.iterative_refinement_enable:
+        # a verdict is read from a refined solve (an unrefined one, a large
+        # model's interior point, is Newton's start: ``sparse_interior_refinement``)
+        refined = options(ws.settings)
+        sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, refined).solve()
     if outcome(sol) == "unbounded":  # a one-sided motion (_check_driven took the rest)
         motion = held.driven_motion(ws, -q[: ws.m], np.asarray(sol.x))
         raise held.unbounded(ws.asm, motion, one_way=True)
@@ -197,8 +203,9 @@ def infeasibility(ws: Workspace) -> FloatArray | None:
     if ws.stack.centre is None:
         return None
     prog = ws.interior_program
+    refined = options(ws.settings)  # a verdict's solve (``run``)
     sol = clarabel.DefaultSolver(
-        prog.P, np.zeros(prog.A.shape[1]), prog.A, prog.b, prog.cones, prog.settings
+        prog.P, np.zeros(prog.A.shape[1]), prog.A, prog.b, prog.cones, refined
     ).solve()
     return np.asarray(sol.z) if outcome(sol) == "infeasible" else None
 
