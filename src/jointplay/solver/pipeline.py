@@ -148,7 +148,13 @@ def _preload(ws: Workspace) -> float:
     zero = np.zeros(ws.m)
     if not np.any(soft) or np.all(ws.stack.levels(zero)[2] <= ws.stack.r):
         return 0.0  # no spring, or 0 fits every play: nothing is pressed at no load
-    rest = interior_point_compliant(ws, zero, ws.softness(1.0))
+    try:
+        rest = interior_point_compliant(ws, zero, ws.softness(1.0))
+    except SolverError:  # as an answer's route: the one retry (``optimum``)
+        fine = retry_of(ws)
+        if fine is None:
+            raise
+        rest = interior_point_compliant(fine, zero, ws.softness(1.0))
     penetration = ws.softness(1.0)[soft] * rest.lam[soft]
     if np.max(penetration) <= ws.settings.feasibility_tolerance * ws.max_radius:
         return 0.0
@@ -194,14 +200,13 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
         certified = point.certificate is not None and point.certificate.certified
     except SolverError as exc:  # a step of the route could not be done
         failed, certified = exc, False
-    finer = ws.settings.ipm_tolerance > ws.settings.fine_ipm_tolerance  # not yet retried
-    if not certified and loaded and finer:
+    fine = retry_of(ws) if not certified and loaded else None
+    if fine is not None:
         # a nearly degenerate mechanism can leave the interior-point answer
         # (and its polish) 1e-7 mm off at the usual tolerance, or a step of
         # its route undone: once more, finer and on another path
-        # (``SolverSettings.retry``)
         try:
-            return optimum(ws.with_settings(ws.settings.retry()), g_hat, sigma)
+            return optimum(fine, g_hat, sigma)
         except SolverError:
             pass
     if failed is not None:
@@ -216,6 +221,14 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
             + " If not, please report this model."
         )
     return point
+
+
+def retry_of(ws: Workspace) -> Workspace | None:
+    """The one retry's workspace (``SolverSettings.retry``), or None if
+    ``ws`` is the retry's."""
+    if ws.settings.ipm_tolerance <= ws.settings.fine_ipm_tolerance:
+        return None
+    return ws.with_settings(ws.settings.retry())
 
 
 def answer(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, loaded: bool) -> faces.Point:
