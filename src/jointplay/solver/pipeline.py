@@ -347,9 +347,11 @@ def refine_active(
 ) -> faces.Point | None:
     """A certified optimum, from the KKT equations of the active set
     ``key`` read from the interior-point answer or, failing that, of ``key``
-    with the cones that hold a motion its face leaves free (``faces.holders``),
-    of every cone near its limit, of ``key`` with every cone the interior point
-    loads strictly, or of ``key`` without its faint cones (each start once,
+    with every cone the interior point loads strictly, with the cones that
+    hold a motion its face leaves free (``faces.holders``, an elimination:
+    after the cheap start, which the 10,000-segment chain's 389 faint
+    contacts take, 0.74 s sooner), of every cone near its limit, or of
+    ``key`` without its faint cones (each start once,
     a set met before is not tried again); if some force comes out negative
     or a cone is pushed past its limit, take steps of an active-set method:
     add the cones pushed past, or else drop the one whose force is most
@@ -385,9 +387,9 @@ def refine_active(
 
     starts: tuple[Callable[[], set[int]], ...] = (
         lambda: held_now,
+        lambda: held_now | loaded,
         with_holders,
         lambda: near,
-        lambda: held_now | loaded,
         lambda: held_now - faint,
     )
     budget = [st.refine_rounds * len(starts)]  # Newton runs shared by the starts
