@@ -565,14 +565,7 @@ def test_a_large_face_s_elimination_serves_its_two_tests_once(
         tuple(i for i in best.active[1] if i != c),
     )
     face = faces.face_of(ws, reduced)
-    calls: list[int] = []
-    eliminated = faces._eliminated
-
-    def counted(*args: Any) -> Any:
-        calls.append(1)
-        return eliminated(*args)
-
-    monkeypatch.setattr(faces, "_eliminated", counted)
+    calls = calls_to(monkeypatch, faces, "_eliminated")
     assert not faces.is_determined(ws, face, best.x)
     assert c in faces.holders(ws, face, best.x)
     assert len(calls) == 1
@@ -1027,14 +1020,20 @@ def test_a_long_string_s_faint_contacts_join_from_the_interior_point_s_loads(
     to 3.7 s) comes after it and is not needed."""
     from jointplay.io.generate import tube_string
 
-    called: list[int] = []
-    holders = faces.holders
-
-    def counted(*args: Any) -> Any:
-        called.append(1)
-        return holders(*args)
-
-    monkeypatch.setattr(faces, "holders", counted)
+    called = calls_to(monkeypatch, faces, "holders")
     result = jointplay.solve(tube_string(2000))
     result.check()
     assert result.certificate.method == "polished" and not called
+
+
+def calls_to(monkeypatch: pytest.MonkeyPatch, owner: Any, name: str) -> list[int]:
+    """A list that grows by one at each call of ``owner.name`` (patched)."""
+    calls: list[int] = []
+    function = getattr(owner, name)
+
+    def counted(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        return function(*args, **kwargs)
+
+    monkeypatch.setattr(owner, name, counted)
+    return calls
