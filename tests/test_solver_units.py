@@ -775,8 +775,9 @@ def test_a_degenerate_chain_s_rounds_drop_one_contact_at_a_time(
 def test_the_starts_share_their_newton_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     """However long a start walks, one polish runs Newton at most
     ``refine_rounds`` times per start, as when each start had its own
-    rounds: on a 50-shaft bearing chain the first start walks them all and
-    finds nothing, and the interior point's face is the tie's, as before."""
+    rounds: on a 50-shaft bearing chain whose rounds are not stopped by
+    forces that push (the test below), the first start walks them all and
+    finds nothing, and the interior point's face is the tie's."""
     from jointplay.io.generate import bearing_chain
 
     kkt = newton.kkt_point
@@ -793,9 +794,43 @@ def test_the_starts_share_their_newton_runs(monkeypatch: pytest.MonkeyPatch) -> 
     refine_active = pipeline.refine_active
     monkeypatch.setattr(pipeline, "refine_active", refine)
     monkeypatch.setattr(newton, "kkt_point", counted)
+    monkeypatch.setattr(pipeline, "pushing_optimum", lambda *args: None)
     result = jointplay.solve(bearing_chain(50))
     assert result.certificate.method == "least-norm face"
     assert polishes and max(polishes) == DEFAULT.refine_rounds * 5
+
+
+def test_a_large_chain_s_first_round_stops_at_forces_that_push(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A large (sparse) model's rounds stop where forces that push hold
+    the positions, as a small one's do (``forces.pushing``, one linear
+    program there: non-negative least squares would take minutes on
+    thousands of contacts). The 50-shaft bearing chain's first round is
+    such a place: one Newton run, where it walked 15 and fell back on the
+    interior point's face (1,000 shafts: 2.5 s to 1.5 s). The program's
+    forces push and balance the loads to ``newton_accept``."""
+    from jointplay.assembly import assemble
+    from jointplay.io.generate import bearing_chain
+    from jointplay.solver import forces
+
+    runs = calls_to(monkeypatch, newton, "kkt_point")
+    found: list[Any] = []
+    program = forces._pushing_program
+
+    def kept(*args: Any) -> Any:
+        found.append(program(*args))
+        return found[-1]
+
+    monkeypatch.setattr(forces, "_pushing_program", kept)
+    ws = Workspace(assemble(bearing_chain(50)))
+    assert ws.asm.sparse
+    result = ws.solve()
+    result.check()
+    assert result.certificate.certified and result.certificate.method == "least-norm face"
+    assert len(runs) == 1 and len(found) == 1
+    lam = found[0]
+    assert lam is not None and np.all(lam >= 0) and np.max(lam) > 0
 
 
 def test_forces_that_push_are_found_where_the_least_squares_split_pulls() -> None:

@@ -483,13 +483,13 @@ def pushing_optimum(
     """``trial`` (a round's positions, every contact of ``key`` touching,
     none past) with forces that push and balance the loads there, if some
     do and certify: then its positions are optimal whatever Newton's forces.
-    Hard, dense models whose ``key`` has no face at its apex only (each
-    force along the one direction its contact gives it: ``forces.pushing``)."""
+    Hard models whose ``key`` has no face at its apex only (each force
+    along the one direction its contact gives it: ``forces.pushing``)."""
     surface, linear = key
     stack = ws.stack
-    if ws.asm.sparse or np.any(sigma) or np.any(stack.k[list(linear)]):
+    if np.any(sigma) or np.any(stack.k[list(linear)]):
         return None
-    lam_key = forces.pushing(stack, linalg.dense(ws.Eq), trial.x, g_hat, key, ws.settings)
+    lam_key = forces.pushing(stack, ws.Eq, trial.x, g_hat, key, ws.settings)
     if lam_key is None:
         return None
     lam = np.zeros(len(ws.balls))
