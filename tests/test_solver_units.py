@@ -833,6 +833,28 @@ def test_a_large_chain_s_first_round_stops_at_forces_that_push(
     assert lam is not None and np.all(lam >= 0) and np.max(lam) > 0
 
 
+def test_the_pushing_program_balances_with_the_rigid_rows_or_finds_nothing() -> None:
+    """``forces._pushing_program`` (sparse): forces >= 0 of the contacts'
+    rows J and multipliers of the rigid rows Eq that balance the loads, to
+    ``newton_accept``. Two one-sided supports below a beam (sink y, turn
+    t, at a = 1 and 2) and a rigid row holding the sink: a turn is held
+    only with Eq's help, a pull up is held by nothing (None)."""
+    from jointplay.solver import forces
+
+    J = sp.csr_matrix(np.array([[-1.0, -1.0], [-1.0, -2.0]]))  # each support's work
+    Eq = sp.csr_matrix(np.array([[1.0, 0.0]]))
+    g_hat = np.array([0.0, -3.0])  # a turn alone: the supports push up, Eq takes the sink
+    lam = forces._pushing_program(J, Eq, g_hat, DEFAULT)
+    assert lam is not None and np.all(lam >= 0)
+    nu = g_hat[0] - (J.T @ lam)[0]  # what the rigid row carries
+    np.testing.assert_allclose(J.T @ lam + Eq.T @ [nu], g_hat, rtol=0, atol=1e-11)
+    np.testing.assert_allclose((J.T @ lam)[1], -3.0, rtol=0, atol=1e-11)
+    # without the rigid row the turn alone is held only if the sink balances too
+    assert forces._pushing_program(J, sp.csr_matrix((0, 2)), g_hat, DEFAULT) is None
+    # a pull up: no pushing forces hold it, whatever the rigid row takes of the sink
+    assert forces._pushing_program(J, Eq, np.array([0.0, 3.0]), DEFAULT) is None
+
+
 def test_forces_that_push_are_found_where_the_least_squares_split_pulls() -> None:
     """A beam (sink y, turn t) on three one-sided supports at a = 0, 1, 2
     (``-(y + a t) <= 0.1``), a load W = 2 down at a = 1.9. The least-norm

@@ -570,8 +570,6 @@ def pushing(
     rows take their part. Sparse: one linear program (``_pushing_program``).
     None when none balance to ``newton_accept`` of the terms (the set's
     positions are then not optimal)."""
-    import scipy.optimize as so  # on this route only: 0.1 s to import
-
     surface, linear = key
     sub = stack.take(surface)
     v, rho = sub.norms(x)
@@ -581,6 +579,8 @@ def pushing(
             [sp.csr_matrix(sub.surface_work(u)), sp.csr_matrix(stack.B[list(linear)])], "csr"
         )
         return _pushing_program(Js, Eq, g_hat, settings)
+    import scipy.optimize as so  # on this route only: 0.1 s to import
+
     Eq = linalg.dense(Eq)
     J = np.vstack(
         [
