@@ -573,41 +573,27 @@ def test_a_large_face_s_elimination_serves_its_two_tests_once(
     assert len(calls) == 2
 
 
-def test_a_sparse_tie_s_least_norm_program_is_posed_in_the_face_s_own_coordinates(
+def test_a_sparse_tie_s_least_norm_polish_never_factors_its_singular_system_plainly(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """A large face that does not tilt is not kept as its rows, which repeat
-    each other (a joint's cones share them): the least-norm program runs in
-    the face's coordinates ``x = x0 + F t`` (``ties._least_norm_along``),
-    whose only equalities are the free motions' rows ``K F``, independent.
-    Kept as rows, the polish's KKT system was singular by construction (a
-    plain SuperLU factorization of it, on a 4,000-shaft bearing chain, took
-    3.8 s and 1.2 GB to fail). Here a 50-shaft chain (sparse above 40
-    bodies): every equality system Newton meets in that polish has full
-    row rank, its polish converges, and the answer certifies."""
+    """A sparse face keeps its rows as they are (``ties.independent_rows``),
+    and a face's rows repeat each other: the least-norm polish's KKT system
+    is then singular by construction, and its Newton steps are regularized
+    from the start (``newton(..., repeated_rows=True)``). A plain SuperLU
+    factorization of it only fails, after filling in: on a 4,000-shaft
+    bearing chain 3.8 s and 1.2 GB of the solve. Here, a 50-shaft chain
+    (sparse above 40 bodies): every factorization inside that polish must
+    succeed, and the answer still certifies."""
     from jointplay.io.generate import bearing_chain
-
-    calls = newton_in_least_norm_polish(monkeypatch)
-    result = jointplay.solve(bearing_chain(50))
-    result.check()
-    assert result.certificate.method == "least-norm face"  # the polish ran
-    equalities = [linalg.dense(args[2]) for args, _ in calls]
-    assert calls and all(np.linalg.matrix_rank(Eq) == Eq.shape[0] for Eq in equalities)
-    assert calls[-1][1] is not None
-
-
-def newton_in_least_norm_polish(monkeypatch: pytest.MonkeyPatch) -> list[tuple[Any, Any]]:
-    """A list that grows by ``(args, answer)`` at each ``newton.newton``
-    call made inside ``ties.polish_least_norm`` (both patched)."""
     from jointplay.solver import ties
 
-    inside, calls = [False], []
-    polish, plain_newton = ties.polish_least_norm, newton.newton
+    inside, singular = [False], []
+    factored, polish = linalg._factored, ties.polish_least_norm
 
-    def watched_newton(*args: Any, **kwargs: Any) -> Any:
-        out = plain_newton(*args, **kwargs)
-        if inside[0]:
-            calls.append((args, out))
+    def watched_factored(K: Any) -> Any:
+        out = factored(K)
+        if inside[0] and out is None:
+            singular.append(K.shape)
         return out
 
     def watched_polish(*args: Any, **kwargs: Any) -> Any:
@@ -617,40 +603,12 @@ def newton_in_least_norm_polish(monkeypatch: pytest.MonkeyPatch) -> list[tuple[A
         finally:
             inside[0] = False
 
-    monkeypatch.setattr(newton, "newton", watched_newton)
+    monkeypatch.setattr(linalg, "_factored", watched_factored)
     monkeypatch.setattr(ties, "polish_least_norm", watched_polish)
-    return calls
-
-
-def test_a_long_chain_s_tie_is_polished_to_the_least_norm_point(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """On a 1,000-shaft bearing chain the least-norm program on the face's
-    rows stopped at Clarabel's tolerance and its Newton polish solved no
-    step: the answer lay 4.9e-6 mm from the least-norm point (10,000
-    shafts: 1.6e-5 mm past a clearance, and a retry). In the face's own
-    coordinates Newton converges: its equations hold to round-off with
-    every force of the contacts the program presses pushing, and the
-    answer stays orthogonal to the free motions (the shafts' spins)."""
-    from jointplay.io.generate import bearing_chain
-    from jointplay.solver import ties
-
-    ws = Workspace.of(bearing_chain(1000))
-    tied = calls_to(monkeypatch, ties, "least_norm")
-    found: list[faces.Point] = []
-    least_norm = ties.least_norm
-    monkeypatch.setattr(ties, "least_norm", lambda *a: found.append(least_norm(*a)) or found[-1])
-    calls = newton_in_least_norm_polish(monkeypatch)
-    result = ws.solve()
+    result = jointplay.solve(bearing_chain(50))
     result.check()
-    assert result.certificate.method == "least-norm face"
-    assert len(tied) == 1  # no retry
-    assert calls and calls[-1][1] is not None  # Newton's equations hold (newton_accept)
-    _, lam, _, _ = calls[-1][1]
-    assert np.all(lam > 0)  # every contact it presses pushes: the program's optimum
-    x, K = found[0].x, ws.K
-    size = float(abs(K).max()) * float(np.max(np.abs(x)))
-    assert float(np.max(np.abs(K @ x))) <= 1e-10 * size  # round-off of K's scale
+    assert result.certificate.method == "least-norm face"  # the polish ran
+    assert singular == []
 
 
 def test_the_no_load_least_norm_polish_keeps_its_plain_steps() -> None:
@@ -659,7 +617,7 @@ def test_the_no_load_least_norm_polish_keeps_its_plain_steps() -> None:
     and its Newton steps stay plain. Regularized from the start (as for a
     face), they fell 1.6e-11 short of their tolerance on this 700-shaft
     chain with bearings moved off their axes by a deviation, and the
-    position was declined (a review of ``newton``'s ``regularized``)."""
+    position was declined (a review of ``repeated_rows``)."""
     from jointplay.io.generate import bearing_chain_dict
     from jointplay.io.modelfile import model_from_dict
 

@@ -389,19 +389,6 @@ class BallStack:
             self.centre,
         )
 
-    def along(self, F: Matrix, x0: FloatArray) -> BallStack:
-        """The same cones in the unknowns ``t`` of ``x = x0 + F t`` (a face's
-        own coordinates): ``|A F t - (c - A x0)| + B F t <= r - B x0``."""
-        return BallStack(
-            self.A @ F,
-            self.start,
-            self.k,
-            self.r - linalg.times(self.B, x0),
-            self.spring,
-            self.B @ F,
-            self.centres() - linalg.times(self.A, x0),
-        )
-
     @cached_property
     def has_offset(self) -> NDArray[np.bool_]:
         """(n,): the cone has a face row ``B_i`` (a one-sided limit or a tilting face)."""

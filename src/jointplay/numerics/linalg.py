@@ -209,11 +209,11 @@ def solve_kkt(
     bearing chain's step stopped at 2.9e-16 against 7.5e-17 asked, and every
     polish of it failed).
 
-    ``plain=False``: K is singular by construction, or often (a tie's
-    least-norm program): no plain factorization, the regularized one at
-    once. SuperLU fills a large singular K in before it meets the zero
-    pivot (a 4,000-shaft bearing chain's face rows: 3.8 s and 1.2 GB to
-    fail, against 0.08 s regularized), and has corrupted memory doing so.
+    ``plain=False``: K is singular by construction (equality rows that
+    repeat each other, kept as they are in a sparse system): no plain
+    factorization, the regularized one at once. SuperLU fills a large
+    singular K in before it meets the zero pivot: on a 4,000-shaft bearing
+    chain's tie, 3.8 s and 1.2 GB to fail, against 0.08 s regularized.
 
     ``factors``: the plain factors of the previous Newton step's K, tried
     first (refined against this K); returned with the step are the plain

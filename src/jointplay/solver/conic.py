@@ -88,19 +88,18 @@ def cone_program(
     order[:n_eq] = np.arange(n_eq)
     order[ball_rows] = n_eq + np.arange(n_rows)
     order[soc_first] = n_eq + n_rows + np.arange(n_cones)
-    m = stack.m  # the workspace's unknowns, or a face's own (``ties.least_norm``)
-    stacked = linalg.vstack([Eq, stack.A, stack.B], m)
+    stacked = linalg.vstack([Eq, stack.A, stack.B], ws.m)
     if linalg.is_sparse(stacked):
         A = sp.csc_matrix(sp.csr_matrix(stacked)[order])
     else:
-        A = csc(np.asarray(stacked)[order]) if n_all else csc(np.zeros((0, m)))
+        A = csc(np.asarray(stacked)[order]) if n_all else csc(np.zeros((0, ws.m)))
     cones: list[Any] = [clarabel.ZeroConeT(n_eq)] if n_eq else []
     cones += [
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in stack.k
     ]
     settings = options(ws.settings, tolerance, max_iter, refine)
-    return ConeProgram(_upper(P, m), A, b, cones, settings, soc_first, ball_rows)
+    return ConeProgram(_upper(P, ws.m), A, b, cones, settings, soc_first, ball_rows)
 
 
 def options(

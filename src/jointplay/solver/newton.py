@@ -148,7 +148,7 @@ def newton(
     settings: SolverSettings = DEFAULT,
     prox: float = 0.0,
     accept: float = DEFAULT.newton_accept,
-    regularized: bool = False,
+    repeated_rows: bool = False,
 ) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
     """Newton's method on the KKT equations of an active set.
 
@@ -162,13 +162,10 @@ def newton(
     nearest ``x0``, with the forces nearest ``lam0``. Returns None when its
     equations do not hold to ``accept`` (relative: stationarity to the size
     of the forces that balance, the other rows to the size of x).
-    ``regularized``: a sparse system the caller knows to be singular, or
-    often so (a tie's least-norm program, ``ties.polish_least_norm``): its
-    steps are regularized from the start (``linalg.solve_kkt``'s
-    ``plain``). SuperLU, failing on an exactly singular system, first fills
-    it in (a 4,000-shaft chain's face rows: 3.8 s and 1.2 GB), and on the
-    program of a 1,000-shaft chain's tie it corrupted memory (2 runs in 6
-    ended in a segmentation fault).
+    ``repeated_rows``: a sparse ``Eq`` may hold rows that repeat each other
+    (a tied face's, ``ties.polish_least_norm``): the system is then
+    singular by construction, and its steps are regularized from the start
+    (``linalg.solve_kkt``'s ``plain``).
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
@@ -256,7 +253,7 @@ def newton(
             # is absurd (they converge slowly on a long chain's weak modes)
             # a step solves its system once its residual is below where Newton stops
             floor = settings.round_off * min(force_scale, length_scale)
-            plain = not (sparse and regularized)
+            plain = not (sparse and repeated_rows)
             step, factors = linalg.solve_kkt(
                 Kmat, -F, m, 0.0 if sparse else prox, floor, plain, factors
             )

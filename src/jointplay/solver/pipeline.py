@@ -285,13 +285,11 @@ def rest_position(ws: Workspace, method: str = "no load") -> faces.Point:
     if np.all(ws.stack.levels(zero)[2] <= ws.stack.r):  # 0 fits: no deviation, or small ones
         return faces.Point(zero, lam, f, method=method)
     e = np.zeros(ws.Eq.shape[0])
-    metric = ws.asm.metric_matrix
-    prog = conic.cone_program(ws, metric, ws.Eq, e, ws.stack)
-    sol = conic.run(ws, prog, zero)  # no position at all: UnassembledError
+    prog = conic.cone_program(ws, ws.asm.metric_matrix, ws.Eq, e, ws.stack)
+    sol = conic.run(ws, prog, np.zeros(ws.m))  # no position at all: UnassembledError
     z = np.asarray(sol.z)
-    lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
     x = ties.polish_least_norm(
-        ws, metric, zero, np.asarray(sol.x), lam_rest, f_rest, ws.stack, ws.Eq, e
+        ws, np.asarray(sol.x), z[prog.soc_first], z[prog.f_rows], ws.stack, ws.Eq, e
     )
     return faces.Point(x, lam, f, method=f"{method}: the least-norm position")
 

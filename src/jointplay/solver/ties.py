@@ -10,7 +10,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 
 from jointplay.assembly import BallStack
 from jointplay.errors import SolverError
@@ -25,7 +24,7 @@ if TYPE_CHECKING:
 
 
 def face_equalities(
-    stack: BallStack, which: faces.FaceKey, x: FloatArray, reach: FloatArray
+    ws: Workspace, stack: BallStack, which: faces.FaceKey, x: FloatArray, reach: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Linear rows that keep the cones ``which`` where they are at ``x``:
     a surface cone keeps its direction ``u`` (``A_i x - c_i`` along ``u`` and
@@ -64,76 +63,18 @@ def face_equalities(
     first[grouped] = np.cumsum(size[grouped]) - size[grouped]
     at_end = np.cumsum(size) - size  # each cone's first row in ``which`` order
     order = np.repeat(first - at_end, size) + np.arange(int(np.sum(size)))
-    return linalg.vstack(rows, len(x))[order], np.concatenate(rhs)[order]
+    return linalg.vstack(rows, ws.m)[order], np.concatenate(rhs)[order]
 
 
 def least_norm(
     ws: Workspace, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
 ) -> faces.Point:
     """Least-norm point of the optimal face (a tie between positions)."""
-    face = faces.face_of(ws, key)
-    if ws.sparse and face.determined is False:
-        x = _least_norm_along(ws, face, _on_face(ws, sigma, point, key))
-    else:
-        x = _least_norm_on_rows(ws, sigma, point, key)
-    # any optimal forces are complementary to every optimal position:
-    # those of ``point`` hold at x, which keeps its active cones as they were
-    return faces.Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
-
-
-def _on_face(
-    ws: Workspace, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
-) -> FloatArray:
-    """The point of the face's affine hull nearest ``point.x``: every cone
-    of ``key`` at its limit (its reach, with a compliant one's penetration)
-    along its direction there, the rigid rows held. An interior point's
-    face (when the rounds find no optimum) holds its cones only to its
-    tolerance (a 50-shaft chain's: 7.5e-10 mm past), which the face's
-    own coordinates would keep. Least squares (LSMR): the face's rows
-    repeat each other."""
-    surface, linear = key
-    both = [*surface, *linear]
-    reach = ws.stack.r[both] + sigma[both] * point.lam[both]
-    L, l_rhs = face_equalities(ws.stack, key, point.x, reach)
-    C = linalg.vstack([ws.E, L], ws.m)
-    miss = np.concatenate([-linalg.times(ws.E, point.x), l_rhs - linalg.times(L, point.x)])
-    return np.asarray(point.x + linalg.lstsq(C, miss))
-
-
-def _least_norm_along(ws: Workspace, face: faces.Face, x0: FloatArray) -> FloatArray:
-    """A large face that does not tilt: the least-norm program in the face's
-    own coordinates, ``x = x0 + F t`` with F the motions it leaves free (its
-    elimination's basis, sparse), columns scaled to unit metric. Its rows
-    then repeat nothing, and Newton polishes it to round-off. Kept on the
-    face's rows instead (repeating each other, 1e10 apart in scale: the
-    metric weighs rotations by the mechanism's length), the program stopped
-    4e-6 mm from the least-norm point of a 1,000-shaft bearing chain, and
-    at 10,000 shafts 1.6e-5 mm past a clearance after 66 steps, and no
-    Newton step solved its system. F holds the free motions too: the rows
-    ``K`` keep the answer's orthogonal to them, as everywhere."""
-    F = face.free_left().basis(orthonormal=False)
-    metric = ws.asm.metric_matrix
-    weight = np.asarray((F.T @ metric @ F).diagonal())
-    F = sp.csc_matrix(F @ sp.diags(1.0 / np.sqrt(np.where(weight > 0, weight, 1.0))))
-    P = sp.csr_matrix(F.T @ metric @ F)
-    q = np.asarray(F.T @ (metric @ x0))
-    Eq = sp.csr_matrix(ws.K @ F)
-    e = -linalg.times(ws.K, x0)
-    inside = {*face.key[0], *face.key[1]}
-    rest = ws.stack.take([i for i in range(len(ws.balls)) if i not in inside]).along(F, x0)
-    return np.asarray(x0 + F @ _least_norm(ws, P, q, Eq, e, rest, np.zeros(F.shape[1])))
-
-
-def _least_norm_on_rows(
-    ws: Workspace, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
-) -> FloatArray:
-    """The least-norm program on the face's rows (independent, by an SVD)
-    and the cones outside it: a small face, or one that tilts."""
     surface, linear = key
     both = [*surface, *linear]
     # a compliant contact keeps its penetration; the others stay on its face
     reach = ws.stack.r[both] + sigma[both] * point.lam[both]
-    L, L_rhs = face_equalities(ws.stack, key, point.x, reach)
+    L, L_rhs = face_equalities(ws, ws.stack, key, point.x, reach)
     Eq, e = independent_rows(
         ws, linalg.vstack([ws.Eq, L], ws.m), np.concatenate([np.zeros(ws.Eq.shape[0]), L_rhs])
     )
@@ -150,59 +91,53 @@ def _least_norm_on_rows(
         centres = stack.centres()
         bound = [-(v[k] / rho[i]) @ centres[k] for i, k in zip(leaning, rows, strict=True)]
         rest = rest.with_limits(np.array(lean), np.array(bound))
-    return _least_norm(ws, ws.asm.metric_matrix, np.zeros(ws.m), Eq, e, rest, point.x)
-
-
-def _least_norm(
-    ws: Workspace,
-    P: Matrix,
-    q: FloatArray,
-    Eq: Matrix,
-    e: FloatArray,
-    rest: BallStack,
-    x0: FloatArray,
-) -> FloatArray:
-    """``min x P x / 2 + q x`` on ``Eq x = e`` inside the cones ``rest``:
-    one cone program, polished by Newton (regularized: see
-    ``polish_least_norm``); ``x0`` (an optimum, feasible) is where a badly
-    scaled program's Newton starts instead."""
-    prog = conic.cone_program(ws, P, Eq, e, rest)
+    metric = ws.asm.metric_matrix
+    prog = conic.cone_program(ws, metric, Eq, e, rest)
     try:
-        sol = conic.run(ws, prog, q)
+        sol = conic.run(ws, prog, np.zeros(ws.m))
     except SolverError:
         # badly scaled (levers of 100 m on plays of 0.1 mm): the active-set
         # Newton alone, from the optimum, with no other contact active
-        lam, f = np.zeros(len(rest.k)), np.zeros(rest.A.shape[0])
-        return polish_least_norm(ws, P, q, x0, lam, f, rest, Eq, e, True, strict=True)
-    z = np.asarray(sol.z)
-    lam, f = z[prog.soc_first], z[prog.f_rows]
-    return polish_least_norm(ws, P, q, np.asarray(sol.x), lam, f, rest, Eq, e, True)
+        x = polish_least_norm(
+            ws,
+            point.x,
+            np.zeros(len(rest.k)),
+            np.zeros(rest.A.shape[0]),
+            rest,
+            Eq,
+            e,
+            strict=True,
+            face=True,
+        )
+    else:
+        z = np.asarray(sol.z)
+        lam_rest, f_rest = z[prog.soc_first], z[prog.f_rows]
+        x = polish_least_norm(ws, np.asarray(sol.x), lam_rest, f_rest, rest, Eq, e, face=True)
+    # any optimal forces are complementary to every optimal position:
+    # those of ``point`` hold at x, which keeps its active cones as they were
+    return faces.Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
 
 
 def polish_least_norm(
     ws: Workspace,
-    P: Matrix,
-    q: FloatArray,
     x: FloatArray,
     lam: FloatArray,
     f: FloatArray,
     rest: BallStack,
     Eq: Matrix,
     e: FloatArray,
-    regularized: bool = False,
     strict: bool = False,
+    face: bool = False,
 ) -> FloatArray:
-    """Newton on the KKT equations of the least-norm program ``min x P x / 2
-    + q x`` from its interior point ``x``, with a few active-set rounds
-    (cones pushed past their limit join); ``x`` itself if that does not end
-    feasible (or, ``strict``, SolverError). ``regularized``: a tie's (large)
-    system is singular by construction or nearly (a tilting face's rows
-    repeat each other; in a face's coordinates the contacts the program
-    presses are often more than the motions they hold), so its steps are
-    regularized from the start (``newton``'s); the no-load route's
-    equalities (the workspace's own) are independent and keep plain steps."""
-    m = len(x)
-    surface, linear = faces.active_set(ws, x, lam, f, rest, float(np.max(np.abs(P @ x + q))))
+    """Newton on the KKT equations of the least-norm program from its
+    interior point ``x``, with a few active-set rounds (cones pushed past
+    their limit join); ``x`` itself if that does not end feasible (or,
+    ``strict``, SolverError). ``face``: ``Eq`` holds a tied face's rows,
+    which repeat each other (kept as they are in a sparse system), so its
+    steps are regularized from the start (``newton``'s ``repeated_rows``);
+    the workspace's own equalities alone (no load) are independent."""
+    metric = ws.asm.metric_matrix
+    surface, linear = faces.active_set(ws, x, lam, f, rest, float(np.max(np.abs(metric @ x))))
     active = {*surface, *linear}
     apex = set(linear)
     r = np.where(rest.r > 0, rest.r, ws.max_radius)
@@ -210,17 +145,17 @@ def polish_least_norm(
     for _ in range(st.refine_rounds):
         on_surface = sorted(i for i in active if i not in apex)
         at_apex = sorted(i for i in active if i in apex)
-        L2, l2 = face_equalities(rest, ((), tuple(at_apex)), x, rest.r[at_apex])
+        L2, l2 = face_equalities(ws, rest, ((), tuple(at_apex)), x, rest.r[at_apex])
         polished = newton.newton(
-            P,
-            q,
-            linalg.vstack([Eq, L2], m),
+            metric,
+            np.zeros(ws.m),
+            linalg.vstack([Eq, L2], ws.m),
             np.concatenate([e, l2]),
             rest.take(on_surface),
             x,
             np.maximum(lam[on_surface], 0.0),
             settings=st,
-            regularized=regularized,
+            repeated_rows=face,
         )
         if polished is None:
             break
