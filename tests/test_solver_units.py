@@ -181,6 +181,36 @@ def test_a_dense_system_whose_least_squares_fails_is_refused() -> None:
         linalg.solve_kkt(K, np.ones(K.shape[0]), n)
 
 
+def test_a_sparse_system_with_an_empty_row_or_column_never_reaches_superlu(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """SuperLU, given a sparse system singular by its pattern, fails after
+    filling it in and has corrupted memory doing so (a segmentation fault
+    in 2 solves of 6 of one such KKT system); a bearing chain's polish meets
+    systems with an empty row and column per free spin. ``linalg._factored``
+    says None for them without calling it (a stored 0 counts as empty); a
+    regular system, and one singular by its values only (which SuperLU
+    refuses cleanly), still go to SuperLU."""
+    import scipy.sparse.linalg as spla
+
+    calls = calls_to(monkeypatch, spla, "splu")
+    empty_column = sp.csc_matrix(np.array([[2.0, 1.0, 0.0], [1.0, 3.0, 0.0], [4.0, 0.0, 0.0]]))
+    assert linalg._factored(empty_column) is None
+    assert linalg._factored(sp.csr_matrix(empty_column.T)) is None  # an empty row
+    stored_zero = sp.csc_matrix(
+        (np.array([1.0, 0.0, 1.0]), (np.array([0, 1, 2]), np.array([0, 1, 2]))), shape=(3, 3)
+    )
+    assert linalg._factored(stored_zero) is None
+    assert not calls
+    regular = sp.csc_matrix(np.array([[2.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 4.0]]))
+    solve = linalg._factored(regular)
+    assert solve is not None and len(calls) == 1
+    b = np.array([1.0, 2.0, 3.0])
+    assert np.allclose(regular @ solve(b), b, rtol=0, atol=1e-14)
+    by_values = sp.csc_matrix(np.array([[1.0, 2.0], [2.0, 4.0]]))
+    assert linalg._factored(by_values) is None and len(calls) == 2
+
+
 def test_the_previous_steps_factors_solve_a_nearby_system() -> None:
     """Newton's K moves with its steps only: the factors of the previous K,
     refined against the new one, solve it to the plain tolerance without a

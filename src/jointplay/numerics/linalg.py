@@ -292,13 +292,20 @@ def proximal_solve(
 
 def _factored(K: Matrix) -> Any:
     """A solver ``b -> K^-1 b`` from one LU factorization, or None when K is
-    exactly singular."""
+    exactly singular. A sparse K with an empty row or column (a bearing
+    chain's polish: one per free spin) never reaches SuperLU: it would fail
+    anyway, and on systems singular by their pattern it has corrupted
+    memory (a segmentation fault, scipy 1.11 and 1.17; SuperLU's own issue
+    33 names empty rows and columns)."""
     try:
         if sp.issparse(K):
             import scipy.sparse.linalg as spla  # large mechanisms only: 0.05 s to import
 
+            K = sp.csc_matrix(K)
+            if _has_empty_line(K):
+                return None
             with _silenced():  # SuperLU on an exactly singular K fails inside BLAS, which prints
-                return spla.splu(sp.csc_matrix(K)).solve
+                return spla.splu(K).solve
         # LAPACK directly: scipy's wrappers cost more than a small system's solve
         lu, piv, info = lapack.dgetrf(K)
     except (RuntimeError, ValueError, np.linalg.LinAlgError):
@@ -310,6 +317,17 @@ def _factored(K: Matrix) -> Any:
         return np.asarray(lapack.dgetrs(lu, piv, b)[0])
 
     return solve
+
+
+def _has_empty_line(K: sp.csc_matrix) -> bool:
+    """Whether the square sparse K has a row or a column with no non-zero
+    entry (a stored 0 is none)."""
+    n = K.shape[0]
+    held = K.data != 0
+    columns = np.repeat(np.arange(n), np.diff(K.indptr))[held]
+    return bool(np.any(np.bincount(columns, minlength=n) == 0)) or bool(
+        np.any(np.bincount(K.indices[held], minlength=n) == 0)
+    )
 
 
 @contextmanager
