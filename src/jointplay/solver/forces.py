@@ -598,10 +598,7 @@ def pushing(
         lam, _ = so.nnls(M, b)
     except RuntimeError:  # its iteration limit (3 per unknown)
         return None
-    scale = max(1.0, float(np.max(np.abs(b))), float(np.max(lam, initial=0.0)))
-    if float(np.max(np.abs(b - M @ lam))) > settings.newton_accept * scale:
-        return None
-    return np.asarray(lam, dtype=np.float64)
+    return _balancing(lam, b - M @ lam, b, settings)
 
 
 def _pushing_program(
@@ -635,7 +632,15 @@ def _pushing_program(
     y = np.asarray(sol.x)
     lam = np.maximum(y[:na], 0.0)
     miss = g_hat - linalg.adjoint(J, lam) - linalg.adjoint(Eq, y[na:])
-    scale = max(1.0, float(np.max(np.abs(g_hat))), float(np.max(lam, initial=0.0)))
+    return _balancing(lam, miss, g_hat, settings)
+
+
+def _balancing(
+    lam: FloatArray, miss: FloatArray, b: FloatArray, settings: SolverSettings
+) -> FloatArray | None:
+    """``lam`` if the balance it leaves of the loads ``b`` misses by at
+    most ``newton_accept`` of the terms (``pushing``'s acceptance), else None."""
+    scale = max(1.0, float(np.max(np.abs(b))), float(np.max(lam, initial=0.0)))
     if float(np.max(np.abs(miss))) > settings.newton_accept * scale:
         return None
     return np.asarray(lam, dtype=np.float64)
