@@ -212,23 +212,39 @@ def test_a_sparse_system_with_an_empty_row_or_column_never_reaches_superlu(
 
 
 def test_the_previous_steps_factors_solve_a_nearby_system() -> None:
-    """Newton's K moves with its steps only: the factors of the previous K,
-    refined against the new one, solve it to the plain tolerance without a
-    factorization of its own (and are handed on); factors of a K far from
-    this one are not used (the step is still exact)."""
+    """Newton's K moves with its steps only: the factors of the previous
+    sparse K, refined against the new one, solve it to the plain tolerance
+    without a factorization of their own (and are handed on); factors of a
+    K far from this one are not used (the step is still exact)."""
+    K, n = _kkt(duplicate=False)
+    rhs = np.arange(1.0, K.shape[0] + 1)
+    _, factors = linalg.solve_kkt(sp.csc_matrix(K), rhs, n)
+    nearby = K.copy()
+    nearby[:n, :n] += 1e-9 * np.eye(n)
+    step, kept = linalg.solve_kkt(sp.csc_matrix(nearby), rhs, n, factors=factors)
+    assert kept is factors
+    assert np.max(np.abs(nearby @ step - rhs)) <= 1e-8 * np.max(np.abs(rhs))
+    far = K.copy()
+    far[:n, :n] += 10.0 * np.eye(n)
+    step, fresh = linalg.solve_kkt(sp.csc_matrix(far), rhs, n, factors=factors)
+    assert fresh is not factors
+    assert np.allclose(step, np.linalg.solve(far, rhs), rtol=1e-12, atol=1e-12)
+
+
+def test_a_small_dense_system_is_factored_afresh() -> None:
+    """A dense K's LU costs less than a round of refinement with the
+    previous factors (6.1.6.1's warm re-solve: half such reuses failed after
+    five rounds), so a dense system never reuses them: its step is its own
+    factors' (to the bit) even when the previous ones would do."""
     K, n = _kkt(duplicate=False)
     rhs = np.arange(1.0, K.shape[0] + 1)
     _, factors = linalg.solve_kkt(K, rhs, n)
     nearby = K.copy()
     nearby[:n, :n] += 1e-9 * np.eye(n)
-    step, kept = linalg.solve_kkt(nearby, rhs, n, factors=factors)
-    assert kept is factors
-    assert np.max(np.abs(nearby @ step - rhs)) <= 1e-8 * np.max(np.abs(rhs))
-    far = K.copy()
-    far[:n, :n] += 10.0 * np.eye(n)
-    step, fresh = linalg.solve_kkt(far, rhs, n, factors=factors)
+    step, fresh = linalg.solve_kkt(nearby, rhs, n, factors=factors)
     assert fresh is not factors
-    assert np.allclose(step, np.linalg.solve(far, rhs), rtol=1e-12, atol=1e-12)
+    own, _ = linalg.solve_kkt(nearby, rhs, n)
+    assert np.array_equal(step, own)
 
 
 def test_the_proximal_solve_converges_to_the_solution_nearest_zero() -> None:

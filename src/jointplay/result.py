@@ -8,6 +8,7 @@ joint centre in the joint frame, and the state of each contact; and the
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -384,9 +385,8 @@ def _clean(v: FloatArray, scale: float) -> FloatArray:
 
 def _clean_rows(v: FloatArray, scale: float | FloatArray) -> FloatArray:
     """``_clean`` on each row of ``v`` (n, 3), with one scale or one per row."""
-    out = np.array(v, dtype=float)
-    out[np.abs(out) < DEFAULT.round_off * np.reshape(scale, (-1, 1))] = 0.0
-    return out
+    v = np.asarray(v, dtype=float)
+    return np.where(np.abs(v) < DEFAULT.round_off * np.reshape(scale, (-1, 1)), 0.0, v)
 
 
 def _list(v: FloatArray) -> list[float]:
@@ -454,10 +454,10 @@ def build_result(
         local[c] = asm.contacts[c].contact.acting_point(f, float(ball_forces[i]))
     point = T.centre[T.joint_of] + np.einsum("cab,cb->ca", T.R_world_joint[T.joint_of], local)
     force = wrench[:, :3]
-    force = _clean_rows(force, np.maximum(TINY, np.max(np.abs(force), axis=1, initial=0.0)))
+    force = _clean_rows(force, np.maximum(TINY, np.abs(force).max(axis=1, initial=0.0)))
     # what the contact adds besides its force at its point: a drive's torque
     torque = wrench[:, 3:] - cross(local, wrench[:, :3])
-    torque = _clean_rows(torque, np.maximum(TINY, np.max(np.abs(wrench[:, 3:]), axis=1)))
+    torque = _clean_rows(torque, np.maximum(TINY, np.abs(wrench[:, 3:]).max(axis=1)))
     reaction = np.zeros((len(model.joints), 6))
     np.add.at(reaction, T.joint_of, wrench)
     contacts = ContactTable(
@@ -586,7 +586,8 @@ def equilibrium_residual(
 
 def _largest_norm(rows: FloatArray) -> float:
     """The largest Euclidean norm of the rows of ``rows`` (n, 3); 0 for none."""
-    return float(np.max(np.linalg.norm(rows, axis=1), initial=0.0))
+    # the root of the largest square: sqrt is monotone and correctly rounded
+    return math.sqrt(float((rows * rows).sum(axis=1).max(initial=0.0)))
 
 
 def points_of(model: Model, bodies: Mapping[str, BodyResult]) -> dict[str, PointResult]:

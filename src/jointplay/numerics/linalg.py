@@ -51,6 +51,12 @@ def is_sparse(a: Matrix) -> bool:
     return bool(sp.issparse(a))
 
 
+def largest(a: FloatArray) -> float:
+    """The largest ``|a_i|`` (0 for none): the size a stop or a tolerance
+    is relative to. Small arrays, often: ndarray.max costs half of np.max."""
+    return float(np.abs(a).max(initial=0.0))
+
+
 def times(A: Matrix, x: FloatArray) -> FloatArray:
     """``x @ A.T`` for one x (m,) or a batch of rows (B, m)."""
     if sp.issparse(A):
@@ -219,13 +225,15 @@ def solve_kkt(
     first (refined against this K); returned with the step are the plain
     factors that solved it (None if none did). Newton's K moves with its
     steps only, and near the optimum hardly at all: its last steps need no
-    factorization of their own."""
-    size = float(np.max(np.abs(rhs))) if rhs.size else 0.0
+    factorization of their own. A sparse K's only: a small dense LU costs
+    less than one round of refinement (6.1.6.1's warm re-solve: half its
+    reuses failed after five rounds)."""
+    size = largest(rhs)
     scale = max(1.0, float(abs(K).max()))
     if plain and not prox:
         # plain factors, with a few steps of iterative refinement (long chains need them)
         tol = max(DEFAULT.kkt_plain * size, floor)
-        if factors is not None:
+        if factors is not None and sp.issparse(K):
             step = _refined(K, factors, rhs, tol, 4)
             if step is not None:
                 return step, factors
@@ -310,7 +318,7 @@ def _factored(K: Matrix) -> Any:
         lu, piv, info = lapack.dgetrf(K)
     except (RuntimeError, ValueError, np.linalg.LinAlgError):
         return None
-    if info != 0 or not np.all(np.diag(lu)):  # a zero pivot
+    if info != 0 or not lu.diagonal().all():  # a zero pivot
         return None
 
     def solve(b: FloatArray) -> FloatArray:
@@ -359,13 +367,14 @@ def _refined(K: Matrix, solve: Any, rhs: FloatArray, tol: float, rounds: int) ->
     if solve is None:
         return None
     step = np.zeros(K.shape[0])
+    miss = rhs  # the miss of step 0
     for _ in range(rounds + 1):
-        miss = rhs - K @ step
-        if float(np.max(np.abs(miss))) <= tol:
+        if largest(miss) <= tol:
             return np.asarray(step, dtype=np.float64)
         step = step + np.asarray(solve(miss), dtype=float)
-        if not np.all(np.isfinite(step)):
+        if not np.isfinite(step).all():
             return None
+        miss = rhs - K @ step
     return None
 
 

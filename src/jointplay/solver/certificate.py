@@ -59,10 +59,11 @@ class Checks:
         forces relative to ``force_scale`` (``min_force``'s is its floor)."""
         tol, reach = settings.equilibrium_tolerance, settings.feasibility_tolerance * max_radius
         forces = tol * self.force_scale
+        each = np.ones_like(self.balance)
         return {
-            "overshoot": np.full_like(self.balance, reach),
-            "opening": np.full_like(self.balance, reach),
-            "balance": np.full_like(self.balance, tol),
+            "overshoot": reach * each,
+            "opening": reach * each,
+            "balance": tol * each,
             "min_force": -forces,
             "outside": forces,
             "complementarity": forces,
@@ -72,16 +73,17 @@ class Checks:
         """Each check's failures, per row (a NaN fails)."""
         limit = self.limits(settings, max_radius)
         return {
-            name: np.asarray(
-                ~(self.min_force >= limit[name])
-                if name == "min_force"
-                else ~(getattr(self, name) <= limit[name])
-            )
+            name: ~(self.min_force >= limit[name])
+            if name == "min_force"
+            else ~(getattr(self, name) <= limit[name])
             for name in limit
         }
 
     def passed(self, settings: SolverSettings, max_radius: float) -> NDArray[np.bool_]:
-        return np.asarray(~np.any(list(self.failed(settings, max_radius).values()), axis=0))
+        ok = np.ones(len(self.balance), dtype=bool)
+        for bad in self.failed(settings, max_radius).values():
+            ok &= ~bad
+        return ok
 
 
 class Balance:
@@ -150,8 +152,8 @@ class Balance:
         joints = linalg.times(of_f, f) + linalg.times(of_lam, lam)
         if nu.shape[1]:
             joints = joints + linalg.times(of_nu, nu)
-        sizes = np.linalg.norm(joints.reshape(B, -1, 3), axis=-1)
-        return np.asarray(np.max(sizes, axis=1, initial=0.0))
+        joints = joints.reshape(B, -1, 3)
+        return np.asarray(np.sqrt((joints * joints).sum(axis=-1).max(axis=1, initial=0.0)))
 
     def residual(
         self, g_hat: FloatArray, lam: FloatArray, f: FloatArray, nu: FloatArray | None
@@ -165,12 +167,15 @@ class Balance:
         if nu.shape[1]:
             rest = rest - linalg.adjoint(self.E, nu)
         B = g_hat.shape[0]
-        body = np.linalg.norm((rest * self.weight).reshape(B, -1, 2, 3), axis=-1)
-        applied = np.linalg.norm((g_hat * self.weight).reshape(B, -1, 2, 3), axis=-1)
+        # the largest norms as roots of the largest squares (sqrt is monotone
+        # and correctly rounded: the same numbers, fewer roots)
+        body = (rest * self.weight).reshape(B, -1, 2, 3)
+        applied = (g_hat * self.weight).reshape(B, -1, 2, 3)
         scale = np.maximum(
-            np.max(applied, axis=(1, 2), initial=0.0), self.largest_reaction(lam, f, nu)
+            np.sqrt((applied * applied).sum(axis=-1).max(axis=(1, 2), initial=0.0)),
+            self.largest_reaction(lam, f, nu),
         )
-        worst = np.max(body, axis=(1, 2), initial=0.0)
+        worst = np.sqrt((body * body).sum(axis=-1).max(axis=(1, 2), initial=0.0))
         # no load and no force: nothing to balance (a preload is balanced too)
         out = np.where(scale > 0, worst / np.where(scale > 0, scale, 1.0), 0.0)
         return np.asarray(out), np.asarray(nu)
@@ -193,11 +198,11 @@ def check(
     and cone centres ``c``."""
     stack = ws.stack
     B = x.shape[0]
-    radii = np.broadcast_to(stack.r if r is None else r, lam.shape)
+    radii = stack.r if r is None else r  # broadcast against the rows below
     if len(stack.k):
         v, rho, level = stack.levels(x, c)
         reach = radii + sigma * np.maximum(lam, 0.0)
-        feas = np.max(level - reach, axis=1)
+        feas = (level - reach).max(axis=1)
         # each contact's over its own reach: a faint force on a small play
         # left clear is not hidden by a large play elsewhere; and a contact
         # clear by more than ``clear`` of it pushes with nothing at all
@@ -205,16 +210,16 @@ def check(
         slack = np.abs(reach - level) / own
         slack = np.where(slack > ws.settings.clear, 1.0, slack)
         turned = np.abs(lam * rho - stack.segment_sum(f * v)) / own
-        comp = np.max(np.abs(lam) * slack + turned, axis=1)
-        min_force = np.min(lam, axis=1)
-        outside = np.max(np.sqrt(stack.segment_sum(f * f)) - lam, axis=1)
-        force_scale = np.maximum(1.0, np.max(np.abs(lam), axis=1))
+        comp = (np.abs(lam) * slack + turned).max(axis=1)
+        min_force = lam.min(axis=1)
+        outside = (np.sqrt(stack.segment_sum(f * f)) - lam).max(axis=1)
+        force_scale = np.maximum(1.0, np.abs(lam).max(axis=1))
     else:
         feas = comp = min_force = outside = np.zeros(B)
         force_scale = np.ones(B)
     opening, worst = np.zeros(B), feas  # a contact's overshoot may be negative: inside
     if ws.E.shape[0]:
-        opening = np.max(np.abs(linalg.times(ws.E, x)) * ws.asm.E_length, axis=1)
+        opening = (np.abs(linalg.times(ws.E, x)) * ws.asm.E_length).max(axis=1)
         worst = np.maximum(feas, opening)
     balance, nu_used = ws.balance.residual(g_hat, lam, f, nu)
     return Checks(

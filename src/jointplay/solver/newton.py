@@ -193,9 +193,9 @@ def newton(
         if na:
             v = linalg.times(A, x) - centre
             rho = np.sqrt(np.add.reduceat(v * v, start))
-            if float(np.min(rho)) == 0.0:
+            if rho.min() == 0.0:
                 return None
-            u = v / np.repeat(rho, k)
+            u = v / rho.repeat(k)
             # sparse: A may be dense beside a sparse Eq, and J is kept sparse
             J = stack.surface_work(u) if S is None else sp.csr_matrix(S.T @ sp.diags(u) @ A + Bo)
             grad = grad + linalg.adjoint(J, lam)
@@ -209,12 +209,9 @@ def newton(
         # equality rows to the size of the position
         force_scale = term_scale(q, lam, nu)
         if P is not None:
-            force_scale = max(force_scale, float(np.max(np.abs(P @ x), initial=0.0)))
-        length_scale = max(1.0, float(np.max(np.abs(x), initial=0.0)))
-        err = max(
-            float(np.max(np.abs(F[:m]), initial=0.0)) / force_scale,
-            float(np.max(np.abs(F[m:]), initial=0.0)) / length_scale,
-        )
+            force_scale = max(force_scale, linalg.largest(P @ x))
+        length_scale = max(1.0, linalg.largest(x))
+        err = max(linalg.largest(F[:m]) / force_scale, linalg.largest(F[m:]) / length_scale)
         if best is None or err < best[0]:
             best = (err, x, lam, nu, it)
         history.append(err)
@@ -227,7 +224,7 @@ def newton(
         if not sparse:
             H = np.zeros((m, m)) if P is None else np.array(P, dtype=float)
             if na:
-                H += (A.T * np.repeat(c, k)) @ A - (Ju.T * c) @ Ju
+                H += (A.T * c.repeat(k)) @ A - (Ju.T * c) @ Ju
                 K[:m, m : m + na] = J.T
                 K[m : m + na, :m] = J
             K[:m, :m] = H
@@ -261,8 +258,8 @@ def newton(
                 prox
                 and sparse
                 and (
-                    float(np.max(np.abs(step[:m]))) > settings.far * length_scale
-                    or float(np.max(np.abs(step[m:]), initial=0.0)) > settings.far * force_scale
+                    linalg.largest(step[:m]) > settings.far * length_scale
+                    or linalg.largest(step[m:]) > settings.far * force_scale
                 )
             ):  # round-off's step along a tie or an indeterminate force
                 step, factors = linalg.solve_kkt(Kmat, -F, m, prox, floor)
@@ -280,9 +277,4 @@ def newton(
 
 def term_scale(q: FloatArray, lam: FloatArray, nu: FloatArray) -> float:
     """The size of the terms that balance in the KKT equations."""
-    return max(
-        1.0,
-        float(np.linalg.norm(q)),
-        float(np.max(np.abs(lam), initial=0.0)),
-        float(np.max(np.abs(nu), initial=0.0)),
-    )
+    return max(1.0, float(np.linalg.norm(q)), linalg.largest(lam), linalg.largest(nu))
