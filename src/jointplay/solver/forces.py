@@ -386,7 +386,7 @@ def _unknowns(
     and vector (``lam_i >= |f_i|``); a ball at its centre (no face row, no
     play), its vector (its force is ``|f_i|``, see ``_split``); a rigid row."""
     k = stack.k
-    n_rows, n = int(np.sum(k)), len(k)
+    n_rows, n = int(k.sum()), len(k)
     s_idx = np.flatnonzero(surface)
     a_idx = np.flatnonzero(apex & stack.has_offset)
     c_idx = np.flatnonzero(apex & ~stack.has_offset)
@@ -399,16 +399,16 @@ def _unknowns(
     vals = [u[..., s_rows], np.ones((*lead, ns))]
     # faces at their apex: lam_i, then f_i
     first = (ns + np.cumsum(1 + ka) - (1 + ka)).astype(np.intp)
-    within = np.arange(int(np.sum(ka))) - np.repeat(np.cumsum(ka) - ka, ka)
+    within = np.arange(int(ka.sum())) - np.repeat(np.cumsum(ka) - ka, ka)
     rows += [n_rows + a_idx, stack.rows_of(a_idx)]
     cols += [first, np.repeat(first + 1, ka) + within]
-    vals += [np.ones((*lead, len(a_idx))), np.ones((*lead, int(np.sum(ka))))]
+    vals += [np.ones((*lead, len(a_idx))), np.ones((*lead, int(ka.sum())))]
     # balls at their centre: f_i
-    col = ns + int(np.sum(1 + ka))
+    col = ns + int((1 + ka).sum())
     rows.append(stack.rows_of(c_idx))
-    cols.append(col + np.arange(int(np.sum(kc))))
-    vals.append(np.ones((*lead, int(np.sum(kc)))))
-    col += int(np.sum(kc))
+    cols.append(col + np.arange(int(kc.sum())))
+    vals.append(np.ones((*lead, int(kc.sum()))))
+    col += int(kc.sum())
     # rigid rows
     rows.append(n_rows + n + np.arange(n_e))
     cols.append(col + np.arange(n_e))

@@ -183,6 +183,7 @@ def newton(
         K[:m, m + na :] = Eq.T
         K[m + na :, :m] = Eq
     S = stack.segment_matrix if sparse else None
+    load_size = max(1.0, float(np.linalg.norm(q)))  # the loads' share of the terms' size
     best: tuple[float, FloatArray, FloatArray, FloatArray, int] | None = None
     history: list[float] = []
     factors = None  # the last step's plain factors (``linalg.solve_kkt``)
@@ -207,7 +208,7 @@ def newton(
         # relative errors: stationarity to the forces that balance (round-off
         # grows with them: long chains carry large ones), the contact and
         # equality rows to the size of the position
-        force_scale = term_scale(q, lam, nu)
+        force_scale = max(load_size, linalg.largest(lam), linalg.largest(nu))
         if P is not None:
             force_scale = max(force_scale, linalg.largest(P @ x))
         length_scale = max(1.0, linalg.largest(x))
@@ -273,8 +274,3 @@ def newton(
     if err > accept:  # the certificate has the last word
         return None
     return x, lam, nu, its
-
-
-def term_scale(q: FloatArray, lam: FloatArray, nu: FloatArray) -> float:
-    """The size of the terms that balance in the KKT equations."""
-    return max(1.0, float(np.linalg.norm(q)), linalg.largest(lam), linalg.largest(nu))
