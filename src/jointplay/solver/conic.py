@@ -71,6 +71,7 @@ def cone_program(
     tolerance: float | None = None,
     max_iter: int | None = None,
     refine: bool = True,
+    regularization: float | None = None,
 ) -> ConeProgram:
     """Clarabel's data: the equalities, then one cone ``(r_i - B_i x, c_i - A_i x)``
     per contact (a one-sided limit, with no rows, is a non-negative slack),
@@ -98,7 +99,7 @@ def cone_program(
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in stack.k
     ]
-    settings = options(ws.settings, tolerance, max_iter, refine)
+    settings = options(ws.settings, tolerance, max_iter, refine, regularization)
     return ConeProgram(_upper(P, ws.m), A, b, cones, settings, soc_first, ball_rows)
 
 
@@ -107,10 +108,12 @@ def options(
     tolerance: float | None = None,
     max_iter: int | None = None,
     refine: bool = True,
+    regularization: float | None = None,
 ) -> Any:
     """Clarabel's settings for every cone program we run: quiet, our
-    tolerance (default ``ipm_tolerance``) and iteration limit, and
-    ``refine``: iterative refinement to ``ipm_refinement`` (or none)."""
+    tolerance (default ``ipm_tolerance``) and iteration limit, ``refine``:
+    iterative refinement to ``ipm_refinement`` (or none), and the static
+    regularization (default ``ipm_regularization``)."""
     out = clarabel.DefaultSettings()
     out.verbose = False
     tol = settings.ipm_tolerance if tolerance is None else tolerance
@@ -122,7 +125,9 @@ def options(
     out.iterative_refinement_enable = refine
     out.iterative_refinement_reltol = settings.ipm_refinement
     out.iterative_refinement_abstol = settings.ipm_refinement
-    out.static_regularization_constant = settings.ipm_regularization
+    out.static_regularization_constant = (
+        settings.ipm_regularization if regularization is None else regularization
+    )
     # the KKT factorization every answer here was checked with (0.10's
     # default): 0.11's "auto" picks another, whose end points declined 157 of
     # the property tests' 2,338 mechanisms (2 % allowed; pyproject.toml)

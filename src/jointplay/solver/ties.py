@@ -92,7 +92,11 @@ def least_norm(
         bound = [-(v[k] / rho[i]) @ centres[k] for i, k in zip(leaning, rows, strict=True)]
         rest = rest.with_limits(np.array(lean), np.array(bound))
     metric = ws.asm.metric_matrix
-    prog = conic.cone_program(ws, metric, Eq, e, rest)
+    # its answer may be printed as it is (a long chain's polish fails): at
+    # the first try's regularization a 4,000-shaft bearing chain's stopped
+    # past a clearance and took the retry (``fine_ipm_regularization``)
+    fine = ws.settings.fine_ipm_regularization
+    prog = conic.cone_program(ws, metric, Eq, e, rest, regularization=fine)
     try:
         sol = conic.run(ws, prog, np.zeros(ws.m))
     except SolverError:
