@@ -43,17 +43,19 @@ class SolverSettings:
     fine_ipm_tolerance: float = 1e-12
     #: Clarabel's static regularization of its KKT systems (its own default).
     ipm_regularization: float = 1e-8
-    #: The retry's: it takes another path, not only a finer stop. On a
+    #: The retry's (and a tie's program's, below): the retry takes another
+    #: path, not only a finer stop. On a
     #: degenerate optimum (bearing chains) the interior point stops "almost
     #: solved" on an active set that cannot all touch, at any tolerance;
     #: with this regularization it stops on another. Bearing chains of 2 to
     #: 300 shafts: 5 of 134 declined with the retry at 1e-8 (clarabel 0.10
     #: and 0.11), none now; 70 other chains and strings: 4 declined, now 1.
-    #: A tie's least-norm program has it from the first try: its answer is
-    #: printed as it is where its polish fails (a long bearing chain's), and
-    #: at 1e-8 the 4,000- and 10,000-shaft chains' stopped "almost solved"
-    #: up to 1.6e-5 mm past a clearance, and took the retry (4,000 shafts:
-    #: 13.8 s against 6.2 s; 10,000: about 40 s against 18 s).
+    #: A tie's least-norm program has it from the first try (so there the
+    #: retry changes only the tolerance): its answer is printed as it is
+    #: where its polish fails (a long bearing chain's), and at 1e-8 it
+    #: stopped "almost solved" past a clearance, 4.7e-9 mm on the 4,000-shaft
+    #: chain, and the whole solve took the retry (4,000 shafts: 13.8 s
+    #: against 6.2 s; 10,000: 34.5 s against 13.6-15.8 s, fresh install).
     fine_ipm_regularization: float = 1e-10
     max_iterations: int = 200
     #: Iterative refinement of each interior-point step's linear solve: with
@@ -198,7 +200,8 @@ class SolverSettings:
 
     def retry(self) -> SolverSettings:
         """The one retry's settings (an answer that does not certify, or a
-        step of its route that cannot be done): finer, on another path, the
+        step of its route that cannot be done): finer, on another path (a
+        tie's least-norm program has its regularization already), the
         interior point refined, no warm start."""
         return replace(
             self,
