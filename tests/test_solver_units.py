@@ -245,6 +245,7 @@ def test_a_small_dense_system_is_factored_afresh() -> None:
     assert fresh is not factors
     own, _ = linalg.solve_kkt(nearby, rhs, n)
     assert np.array_equal(step, own)
+    assert np.allclose(step, np.linalg.solve(nearby, rhs), rtol=1e-12, atol=1e-12)
 
 
 def test_the_proximal_solve_converges_to_the_solution_nearest_zero() -> None:

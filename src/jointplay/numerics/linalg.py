@@ -245,7 +245,7 @@ def solve_kkt(
     # system, the solution nearest the current point
     tol = max(DEFAULT.kkt_refined * size, floor)
     step = proximal_solve(K, rhs, n_primal, max(prox, DEFAULT.kkt_round_off * scale), tol)
-    if step is not None and float(np.max(np.abs(rhs - K @ step))) <= tol:
+    if step is not None and largest(rhs - K @ step) <= tol:
         return step, None
     if not sp.issparse(K):
         try:
@@ -281,7 +281,7 @@ def proximal_solve(
     sizes: list[float] = []
     for _ in range(41):
         miss = rhs - K @ step
-        size = float(np.max(np.abs(miss), initial=0.0))
+        size = largest(miss)
         if size <= tol or (stall is not None and size > stall * best_miss):
             if size < best_miss:
                 best = step
