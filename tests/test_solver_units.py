@@ -299,6 +299,41 @@ def test_the_proximal_solve_gives_up_where_its_refinement_stalls(
     assert counts == [41]
 
 
+def test_a_badly_scaled_singular_system_is_equilibrated_before_it_is_regularized(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A tied face's KKT system (``solve_kkt``'s ``plain=False``) holds a
+    metric of lever squared beside rows of size 1, and repeats rows. Its
+    regularization, relative to the largest entry, then swamps a small
+    pivot: refined against K, that mode shrinks by eps / (pivot + eps) a
+    round and the refinement crawls (here 0.97: 41 rounds, the position 0.3
+    off; a 1,000-shaft chain's polish failed so). Scaled first
+    (``_equilibration``: every row's largest entry near 1), the
+    regularization is small against every pivot: exact in two rounds."""
+    H = np.diag([1e8, 1.0, 3e-6])  # a lever squared, a unit stiffness, a weak mode
+    J = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])  # a repeated row
+    K = np.block([[H, J.T], [J, np.zeros((2, 2))]])
+    want = np.r_[1.0, 2.0, -1.0, 0.5, 0.5]
+    rhs = K @ want
+    eps = DEFAULT.kkt_round_off * 1e8
+    d = linalg._equilibration(sp.csc_matrix(K))
+    assert np.allclose(np.max(np.abs(d[:, None] * K * d[None, :]), axis=1), 1.0, rtol=0.05)
+    counts = _counted_solves(monkeypatch)
+    crawled = linalg.proximal_solve(sp.csc_matrix(K), rhs, 3, eps, tol=1e-14)
+    assert crawled is not None and counts == [41]
+    assert abs(crawled[2] - want[2]) > 0.1
+    counts.clear()
+    scaled = linalg.proximal_solve(sp.csc_matrix(K), rhs, 3, eps, tol=1e-14, equilibrated=True)
+    assert scaled is not None and counts[0] <= 3
+    assert np.allclose(scaled[:3], want[:3], rtol=0, atol=1e-12)
+    assert scaled[3] + scaled[4] == pytest.approx(1.0, abs=1e-12)  # the repeated row's share
+    # solve_kkt stops at kkt_refined of the largest term (1e8 here): its
+    # position is good to that over the lever, 1e-12
+    step, _ = linalg.solve_kkt(sp.csc_matrix(K), rhs, 3, plain=False)
+    assert np.max(np.abs(K @ step - rhs)) <= DEFAULT.kkt_refined * np.max(np.abs(rhs))
+    assert np.allclose(step[:3], want[:3], rtol=0, atol=2e-12)
+
+
 TIGHT_DRIVE = {"type": "revolute", "axis": [1, 0, 0], "length": 40, "clearance": 0}
 TIGHT_DRIVE |= {"axial_clearance": 0, "backlash": 0}
 
@@ -1143,13 +1178,43 @@ def calls_to(monkeypatch: pytest.MonkeyPatch, owner: Any, name: str) -> list[int
     return calls
 
 
+def test_a_long_bearing_chain_s_tie_is_polished(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The least-norm point of a long chain's tie is polished by Newton, not
+    printed as its cone program left it. Its KKT system holds the metric
+    (lever squared: 4e6 on 2,000 shafts) beside rows of size 1. Before its
+    regularized factorization was equilibrated, the refinement crawled
+    (0.975 a round on 1,000 shafts) and the polish failed on chains of 600,
+    1,000 and 2,000 shafts; equilibrated but with one absolute floor for
+    all its rows, the second step asked the forces' rows for digits below
+    their round-off and failed from 2,000 shafts on. Measured in Newton's
+    own terms (``solve_kkt``'s ``weights``), both steps solve."""
+    from jointplay.io.generate import bearing_chain
+    from jointplay.solver import ties
+
+    polished: list[bool] = []
+    plain_newton = ties.newton.newton
+
+    def spied(*args: Any, **kwargs: Any) -> Any:
+        out = plain_newton(*args, **kwargs)
+        if kwargs.get("repeated_rows"):
+            polished.append(out is not None)
+        return out
+
+    monkeypatch.setattr(ties.newton, "newton", spied)
+    result = jointplay.solve(bearing_chain(2000))
+    result.check()
+    assert result.certificate.certified and result.certificate.method == "least-norm face"
+    assert polished == [True]
+
+
 def test_a_long_bearing_chain_s_tie_certifies_at_first_try(monkeypatch: pytest.MonkeyPatch) -> None:
     """A tie's least-norm program runs at ``fine_ipm_regularization`` from
-    the first try: on a long bearing chain its polish fails and its own
-    answer is printed, and at ``ipm_regularization`` it stopped "almost
-    solved" past a clearance (3,000 shafts: declined at first try, then the
-    whole solve again as the retry, 6.9 s against 3.2 s). Its answer
-    certifies without the retry now, on the newest and the lowest versions."""
+    the first try: where its polish fails its own answer is printed, and at
+    ``ipm_regularization`` it stopped "almost solved" past a clearance
+    (3,000 shafts, before the polish's systems were equilibrated: declined
+    at first try, then the whole solve again as the retry, 6.9 s against
+    3.2 s). The solve certifies without the retry, on the newest and the
+    lowest versions."""
     from jointplay.io.generate import bearing_chain
 
     retried: list[bool] = []

@@ -52,10 +52,12 @@ class SolverSettings:
     #: and 0.11), none now; 70 other chains and strings: 4 declined, now 1.
     #: A tie's least-norm program has it from the first try (so there the
     #: retry changes only the tolerance): its answer is printed as it is
-    #: where its polish fails (a long bearing chain's), and at 1e-8 it
-    #: stopped "almost solved" past a clearance, 4.7e-9 mm on the 4,000-shaft
-    #: chain, and the whole solve took the retry (4,000 shafts: 13.8 s
-    #: against 6.2 s; 10,000: 34.5 s against 13.6-15.8 s, fresh install).
+    #: where its polish fails. Long bearing chains' polish failed until its
+    #: systems were equilibrated (``equilibration_sweeps``), and at 1e-8
+    #: their program stopped "almost solved" past a clearance (4.7e-9 mm on
+    #: 4,000 shafts) and the whole solve took the retry (4,000 shafts: 13.8 s
+    #: against 6.2 s; 10,000: 34.5 s against 13.6-15.8 s, fresh install). It
+    #: still takes fewer steps than at 1e-8 (4,000 shafts: 12 against 21).
     fine_ipm_regularization: float = 1e-10
     max_iterations: int = 200
     #: Iterative refinement of each interior-point step's linear solve: with
@@ -115,6 +117,12 @@ class SolverSettings:
     #: such systems, found by a random search of 200,000 small ones.
     kkt_refine_stall: float = 1e-3
     kkt_refine_window: int = 12
+    #: Sweeps of the symmetric scaling of a tied face's KKT system before
+    #: its regularized factorization (``linalg.proximal_solve``): each
+    #: halves the exponent of a row's distance from 1. On a 10,000-shaft
+    #: chain's tie (entries from 1 to 1e8) the refinement then takes 45, 16,
+    #: 11 and 9 rounds after 1, 2, 4 and 10 sweeps; 4 cost least in all.
+    equilibration_sweeps: int = 4
     #: Newton on a face that pins the position is accepted when its
     #: equations hold to this (relative): well above where it stops, well
     #: below the certificate.

@@ -250,10 +250,17 @@ def newton(
             # refinement is cheap); a large system's only when its plain step
             # is absurd (they converge slowly on a long chain's weak modes)
             # a step solves its system once its residual is below where Newton stops
-            floor = settings.round_off * min(force_scale, length_scale)
+            # a sparse system's in Newton's own terms (``err``): a long
+            # chain's tie parts forces and lengths by eight orders
+            # (``linalg.solve_kkt``); a dense one's rows are measured alike
+            if sparse:
+                weights = np.r_[np.full(m, 1.0 / force_scale), np.full(n - m, 1.0 / length_scale)]
+                floor = settings.round_off
+            else:
+                weights, floor = None, settings.round_off * min(force_scale, length_scale)
             plain = not (sparse and repeated_rows)
             step, factors = linalg.solve_kkt(
-                Kmat, -F, m, 0.0 if sparse else prox, floor, plain, factors
+                Kmat, -F, m, 0.0 if sparse else prox, floor, plain, factors, weights
             )
             if (
                 prox
@@ -263,7 +270,7 @@ def newton(
                     or linalg.largest(step[m:]) > settings.far * force_scale
                 )
             ):  # round-off's step along a tie or an indeterminate force
-                step, factors = linalg.solve_kkt(Kmat, -F, m, prox, floor)
+                step, factors = linalg.solve_kkt(Kmat, -F, m, prox, floor, weights=weights)
         except linalg.SingularSystemError:
             break
         x = x + step[:m]

@@ -92,9 +92,9 @@ def least_norm(
         bound = [-(v[k] / rho[i]) @ centres[k] for i, k in zip(leaning, rows, strict=True)]
         rest = rest.with_limits(np.array(lean), np.array(bound))
     metric = ws.asm.metric_matrix
-    # its answer may be printed as it is (a long chain's polish fails): at
-    # the first try's regularization a 4,000-shaft bearing chain's stopped
-    # past a clearance and took the retry (``fine_ipm_regularization``)
+    # its answer is printed as it is where the polish fails (a 135-shaft
+    # bearing chain's), and at the first try's regularization it takes more
+    # steps (``fine_ipm_regularization``)
     fine = ws.settings.fine_ipm_regularization
     prog = conic.cone_program(ws, metric, Eq, e, rest, regularization=fine)
     try:
