@@ -332,6 +332,9 @@ def test_a_badly_scaled_singular_system_is_equilibrated_before_it_is_regularized
     step, _ = linalg.solve_kkt(sp.csc_matrix(K), rhs, 3, plain=False)
     assert np.max(np.abs(K @ step - rhs)) <= DEFAULT.kkt_refined * np.max(np.abs(rhs))
     assert np.allclose(step[:3], want[:3], rtol=0, atol=2e-12)
+    # nothing to scale (every entry 0): refused as singular, like any other
+    with pytest.raises(linalg.SingularSystemError):
+        linalg.solve_kkt(sp.csc_matrix((5, 5)), rhs, 3, plain=False)
 
 
 TIGHT_DRIVE = {"type": "revolute", "axis": [1, 0, 0], "length": 40, "clearance": 0}

@@ -252,7 +252,8 @@ def solve_kkt(
         if step is not None:
             return step, factors
     # Quasi-definite regularization, refined against K: on a consistent
-    # system, the solution nearest the current point
+    # system, the solution nearest the current point (in the scaled norm,
+    # where equilibrated: ``proximal_solve``)
     tol = max(DEFAULT.kkt_refined * size, floor)
     eps = max(prox, DEFAULT.kkt_round_off * scale)
     step = proximal_solve(K, rhs, n_primal, eps, tol, equilibrated=not plain, weights=w)
@@ -286,19 +287,22 @@ def proximal_solve(
     matrix cannot be factored): on a system consistent only up to
     round-off, the caller checks what it needs.
 
-    ``equilibrated`` (sparse K): regularize and factor ``D K D`` instead,
-    with D the symmetric scaling that brings each row's largest entry to
-    about 1 (``eps`` kept relative to the largest entry). A tied face's
-    system holds a metric of lever squared (1e8 on a 10,000-shaft chain)
-    beside rows of size 1: a regularization relative to the largest entry
-    then swamps the small rows' pivots and the refinement crawls (0.975 a
-    round on 1,000 shafts; 3 rounds equilibrated). The solution is the
-    same; the one nearest 0 where K is singular is nearest in D's norm."""
+    ``equilibrated`` (sparse, symmetric K): regularize and factor ``D K D``
+    instead, with D the symmetric scaling that brings each row's largest
+    entry to about 1 (``eps`` kept relative to the largest entry). A tied
+    face's system holds a metric of lever squared (1e8 on a 10,000-shaft
+    chain) beside rows of size 1: a regularization relative to the largest
+    entry then swamps the small rows' pivots and the refinement crawls
+    (0.975 a round on 1,000 shafts; 3 rounds equilibrated). The solution is
+    the same; where K is singular, the one it converges to is nearest 0 in
+    the norm ``|D^-1 step|`` (on a tie: the split of the repeated rows'
+    multipliers, which Newton does not read)."""
     signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
     if sp.issparse(K) and equilibrated:
         d = _equilibration(K)
         scaled = sp.diags(d) @ K @ sp.diags(d)
-        eps_d = eps / float(abs(K).max()) * float(abs(scaled).max())
+        top = float(abs(K).max())  # 0: nothing to scale (SuperLU then says singular)
+        eps_d = eps * float(abs(scaled).max()) / top if top > 0 else eps
         factors = _factored(scaled + sp.diags(eps_d * signs))
         solve = None if factors is None else (lambda b: d * factors(d * b))
     else:
@@ -329,9 +333,9 @@ def proximal_solve(
 
 
 def _equilibration(K: Any) -> FloatArray:
-    """The symmetric (Ruiz) scaling d of a sparse K: each row and column of
-    ``diag(d) K diag(d)`` has its largest entry near 1
-    (``equilibration_sweeps``)."""
+    """The symmetric (Ruiz) scaling d of a sparse, symmetric K (a KKT
+    system; its rows are its columns): each row of ``diag(d) K diag(d)``
+    has its largest entry near 1 (``equilibration_sweeps``)."""
     K = sp.csr_matrix(K)
     d = np.ones(K.shape[0])
     filled = np.flatnonzero(np.diff(K.indptr))  # rows with an entry

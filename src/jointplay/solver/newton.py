@@ -252,7 +252,10 @@ def newton(
             # a step solves its system once its residual is below where Newton stops
             # a sparse system's in Newton's own terms (``err``): a long
             # chain's tie parts forces and lengths by eight orders
-            # (``linalg.solve_kkt``); a dense one's rows are measured alike
+            # (``linalg.solve_kkt``). A dense one's keep one floor: weighted
+            # too, a random mechanism of the rigid-motion property test
+            # answered 3e-7 of its energy apart in two placements (the cause
+            # not found; docs/solver-routes.md, session 47)
             if sparse:
                 weights = np.r_[np.full(m, 1.0 / force_scale), np.full(n - m, 1.0 / length_scale)]
                 floor = settings.round_off
