@@ -100,7 +100,8 @@ def least_squares_split(
         if _inside(split.lam, split.f, stack, settings.equilibrium_tolerance):
             return split
     faces = apex & stack.has_offset
-    y = _cone_program(P, G, given, int(np.sum(surface)), stack.k[faces], settings)
+    refine = settings.sparse_interior_refinement or not asm.sparse
+    y = _cone_program(P, G, given, int(np.sum(surface)), stack.k[faces], settings, refine)
     if y is None:
         return None
     split = split_of(y)
@@ -523,13 +524,20 @@ def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any
 
 
 def _cone_program(
-    P: Any, G: Any, given: FloatArray, n_s: int, k_faces: IntArray, settings: SolverSettings
+    P: Any,
+    G: Any,
+    given: FloatArray,
+    n_s: int,
+    k_faces: IntArray,
+    settings: SolverSettings,
+    refine: bool,
 ) -> FloatArray | None:
     """The ``y`` of least ``|P y|`` among ``y = given + z`` with ``G z = 0``
     (the same work as the solver's own split ``given``), surface forces
     non-negative and each face's ``(lam_i, f_i)`` in its cone: one Clarabel
-    call. Written on ``z``, the equalities are consistent even where G's
-    rows depend on each other."""
+    call, ``refine``d or not (``sparse_interior_refinement``). Written on
+    ``z``, the equalities are consistent even where G's rows depend on each
+    other."""
     m, n_y = G.shape
     n_cone = n_s + int(np.sum(k_faces + 1))
     cone_part = sp.eye(n_cone, n_y, format="csr")
@@ -548,7 +556,7 @@ def _cone_program(
         A,
         np.r_[np.zeros(m), given[:n_cone]],
         cones,
-        conic.options(settings),
+        conic.options(settings, refine=refine),
     ).solve()
     if not conic.has_answer(sol):
         return None
