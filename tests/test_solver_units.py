@@ -1078,6 +1078,36 @@ def test_a_large_model_s_split_program_goes_unrefined(monkeypatch: pytest.Monkey
     assert DEFAULT.retry().sparse_interior_refinement
 
 
+def test_a_large_model_s_tie_program_goes_unrefined(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A tie's least-norm program goes without Clarabel's iterative
+    refinement on a large (sparse) model too: its answer is where the
+    polish starts, and long chains' polish succeeds since its systems are
+    equilibrated (``test_a_long_bearing_chain_s_tie_is_polished``). Refined,
+    it cost twice as much (10,000-shaft bearing chain: 3.7 s in 15 steps
+    against 1.8 s in 13); the polished positions moved 1.5e-12 mm (1,000
+    shafts). Where the polish fails (a 135-shaft chain) the program's own
+    answer is printed if it certifies, else the retry refines. A small
+    model's is refined."""
+    from jointplay.io.generate import bearing_chain
+    from jointplay.solver import ties
+
+    refined: list[bool] = []
+    program = ties.conic.cone_program
+
+    def spied(ws: Workspace, P: Any, *args: Any, **kwargs: Any) -> Any:
+        if P is not None:  # the least-norm program (the interior point's has no quadratic)
+            refined.append(kwargs.get("refine", True))  # cone_program's default
+        return program(ws, P, *args, **kwargs)
+
+    monkeypatch.setattr(ties.conic, "cone_program", spied)
+    for shafts, want in ((20, True), (135, False), (300, False)):
+        refined.clear()
+        result = jointplay.solve(bearing_chain(shafts))
+        result.check()
+        assert result.certificate.certified and result.certificate.method == "least-norm face"
+        assert refined[0] is want  # the first try's
+
+
 def test_a_route_that_fails_a_step_takes_the_one_retry(monkeypatch: pytest.MonkeyPatch) -> None:
     """A step of the first try that cannot be done (a tie's least-norm
     program stopping short: the 45-shaft bearing chain on the newest

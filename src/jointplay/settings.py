@@ -67,9 +67,11 @@ class SolverSettings:
     #: A large (sparse) model's interior point goes without it: there its
     #: answer is where Newton starts, which ends at round-off, and it doubled
     #: Clarabel's time (10,000-segment chain: 2.0 s and 16 iterations against
-    #: 0.86 s and 11). So does its split rule's cone program, whose answer is
+    #: 0.86 s and 11). So do its split rule's cone program, whose answer is
     #: refined on its support (10,000-shaft bearing chain: 3.6 s against 1.8 s
-    #: in the same steps). A small model's costs little, and degenerate ones
+    #: in the same steps), and a tie's least-norm program, whose answer the
+    #: polish starts from (there 3.7 s in 15 steps against 1.8 s in 13). A
+    #: small model's costs little, and degenerate ones
     #: need it (bearing chains of 17 to 21 shafts declined without it). An
     #: answer that does not certify is retried with it (``retry``), and a
     #: verdict (not held, not assembled) is read from a refined solve

@@ -94,9 +94,11 @@ def least_norm(
     metric = ws.asm.metric_matrix
     # its answer is printed as it is where the polish fails (a 135-shaft
     # bearing chain's), and at the first try's regularization it takes more
-    # steps (``fine_ipm_regularization``)
+    # steps (``fine_ipm_regularization``); a large model's goes unrefined,
+    # as its interior point does (``sparse_interior_refinement``)
     fine = ws.settings.fine_ipm_regularization
-    prog = conic.cone_program(ws, metric, Eq, e, rest, regularization=fine)
+    refine = ws.settings.sparse_interior_refinement or not ws.asm.sparse
+    prog = conic.cone_program(ws, metric, Eq, e, rest, refine=refine, regularization=fine)
     try:
         sol = conic.run(ws, prog, np.zeros(ws.m))
     except SolverError:
