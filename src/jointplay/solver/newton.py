@@ -250,13 +250,15 @@ def newton(
             # refinement is cheap); a large system's only when its plain step
             # is absurd (they converge slowly on a long chain's weak modes)
             # a step solves its system once its residual is below where Newton stops
-            # a sparse system's in Newton's own terms (``err``): a long
+            # a tie's sparse system in Newton's own terms (``err``): a long
             # chain's tie parts forces and lengths by eight orders
-            # (``linalg.solve_kkt``). A dense one's keep one floor: weighted
-            # too, a random mechanism of the rigid-motion property test
-            # answered 3e-7 of its energy apart in two placements (the cause
-            # not found; docs/solver-routes.md, session 47)
-            if sparse:
+            # (``linalg.solve_kkt``). Every other system keeps one floor:
+            # weighted too, every Newton run of a 10,000-segment chain's
+            # rounds failed and its solve went by a tie (5.3 s to 21 s),
+            # and a dense random mechanism of the rigid-motion property test
+            # answered 3e-7 of its energy apart in two placements (causes
+            # not found)
+            if sparse and repeated_rows:
                 weights = np.r_[np.full(m, 1.0 / force_scale), np.full(n - m, 1.0 / length_scale)]
                 floor = settings.round_off
             else:
