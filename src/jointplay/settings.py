@@ -70,7 +70,10 @@ class SolverSettings:
     #: 0.86 s and 11). So do its split rule's cone program, whose answer is
     #: refined on its support (10,000-shaft bearing chain: 3.6 s against 1.8 s
     #: in the same steps), and a tie's least-norm program, whose answer the
-    #: polish starts from (there 3.7 s in 15 steps against 1.8 s in 13). A
+    #: polish starts from (there 3.7 s in 15 steps against 1.8 s in 13);
+    #: where the refinement or the polish fails (degenerate bearing chains)
+    #: their own answer is printed if it certifies. Not the rest position's
+    #: least-norm program (no load), which stays refined. A
     #: small model's costs little, and degenerate ones
     #: need it (bearing chains of 17 to 21 shafts declined without it). An
     #: answer that does not certify is retried with it (``retry``), and a

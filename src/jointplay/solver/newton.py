@@ -253,8 +253,8 @@ def newton(
             # a tie's sparse system in Newton's own terms (``err``): a long
             # chain's tie parts forces and lengths by eight orders
             # (``linalg.solve_kkt``). Every other system keeps one floor:
-            # weighted too, every Newton run of a 10,000-segment chain's
-            # rounds failed and its solve went by a tie (5.3 s to 21 s),
+            # weighted too, a 10,000-segment chain's first try failed (its
+            # rounds' Newton runs) and it took the retry (5.3 s to 21 s),
             # and a dense random mechanism of the rigid-motion property test
             # answered 3e-7 of its energy apart in two placements (causes
             # not found)
