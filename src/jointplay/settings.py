@@ -73,12 +73,11 @@ class SolverSettings:
     #: polish starts from (there 3.7 s in 15 steps against 1.8 s in 13);
     #: where the refinement or the polish fails (degenerate bearing chains)
     #: their own answer is printed if it certifies. Not the rest position's
-    #: least-norm program (no load), which stays refined. A
-    #: small model's costs little, and degenerate ones
-    #: need it (bearing chains of 17 to 21 shafts declined without it). An
-    #: answer that does not certify is retried with it (``retry``), and a
-    #: verdict (not held, not assembled) is read from a refined solve
-    #: (``conic.run``).
+    #: least-norm program (no load), which stays refined. A small model's
+    #: costs little, and degenerate ones need it (bearing chains of 17 to 21
+    #: shafts declined without it). An answer that does not certify is
+    #: retried with it (``retry``), and a verdict (not held, not assembled)
+    #: is read from a refined solve (``conic.run``); ``conic.refined``.
     sparse_interior_refinement: bool = False
 
     # -- rank and free motions -------------------------------------------------

@@ -103,6 +103,14 @@ def cone_program(
     return ConeProgram(_upper(P, ws.m), A, b, cones, settings, soc_first, ball_rows)
 
 
+def refined(settings: SolverSettings, sparse: bool) -> bool:
+    """Whether a model's cone programs (its interior point, a tie's, the
+    split's) get Clarabel's iterative refinement: a small model's do, a
+    large (sparse) one's only when ``sparse_interior_refinement`` asks (the
+    retry)."""
+    return settings.sparse_interior_refinement or not sparse
+
+
 def options(
     settings: SolverSettings,
     tolerance: float | None = None,

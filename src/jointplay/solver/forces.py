@@ -100,7 +100,7 @@ def least_squares_split(
         if _inside(split.lam, split.f, stack, settings.equilibrium_tolerance):
             return split
     faces = apex & stack.has_offset
-    refine = settings.sparse_interior_refinement or not asm.sparse
+    refine = conic.refined(settings, asm.sparse)
     y = _cone_program(P, G, given, int(np.sum(surface)), stack.k[faces], settings, refine)
     if y is None:
         return None

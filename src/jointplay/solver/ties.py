@@ -97,7 +97,7 @@ def least_norm(
     # steps (``fine_ipm_regularization``); a large model's goes unrefined,
     # as its interior point does (``sparse_interior_refinement``)
     fine = ws.settings.fine_ipm_regularization
-    refine = ws.settings.sparse_interior_refinement or not ws.asm.sparse
+    refine = conic.refined(ws.settings, ws.asm.sparse)
     prog = conic.cone_program(ws, metric, Eq, e, rest, refine=refine, regularization=fine)
     try:
         sol = conic.run(ws, prog, np.zeros(ws.m))

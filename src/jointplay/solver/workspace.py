@@ -102,7 +102,7 @@ class Workspace:
     def interior_program(self) -> conic.ConeProgram:
         """The cone program of the hard problem (its loads are set per solve)."""
         e = np.zeros(self.Eq.shape[0])
-        refine = self.settings.sparse_interior_refinement or not self.asm.sparse
+        refine = conic.refined(self.settings, self.asm.sparse)
         return conic.cone_program(self, None, self.Eq, e, self.stack, refine=refine)
 
     def contacts_share(self, g_hat: FloatArray) -> tuple[FloatArray, float]:
