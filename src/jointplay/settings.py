@@ -110,8 +110,7 @@ class SolverSettings:
     kkt_plain: float = 1e-8
     kkt_refined: float = 1e-10
     #: Newton has stalled when a step gains less than this factor on the best
-    #: of the three before it (round-off, or a slow mode of a long chain); so
-    #: has the refinement of the force split's regularized KKT solve.
+    #: of the three before it (round-off, or a slow mode of a long chain).
     newton_stall: float = 0.5
     #: A regularized KKT solve's refinement is given up when
     #: ``kkt_refine_window`` rounds together gain less than

@@ -94,7 +94,7 @@ def least_squares_split(
 
     given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
     given = given / np.asarray((Z.multiply(Z) if asm.sparse else Z * Z).sum(axis=0)).ravel()
-    y = _least_squares(P, G, b, given, settings)
+    y = _least_squares(P, G, b, given, asm.m, settings)
     if y is not None:
         split = split_of(y)
         if _inside(split.lam, split.f, stack, settings.equilibrium_tolerance):
@@ -124,7 +124,7 @@ def least_squares_split(
         return split
     pushing = split.lam > settings.positive_force * float(np.max(np.abs(split.lam)))
     cols = np.flatnonzero((owner < 0) | pushing[np.maximum(owner, 0)])
-    y = _least_squares(P[:, cols], G[:, cols], b, y[cols], settings)
+    y = _least_squares(P[:, cols], G[:, cols], b, y[cols], asm.m, settings)
     if y is not None:
         exact = split_of(y, cols)
         if _inside(exact.lam, exact.f, stack, settings.equilibrium_tolerance):
@@ -477,15 +477,16 @@ def _wrenches(asm: Assembly, Z: Any) -> Any:
 
 
 def _least_squares(
-    P: Any, G: Any, b: FloatArray, given: FloatArray, settings: SolverSettings
+    P: Any, G: Any, b: FloatArray, given: FloatArray, m: int, settings: SolverSettings
 ) -> FloatArray | None:
     """The ``y`` of least ``|P y|`` with ``G y = b``. Dense: from an SVD of
     G (rows below ``rcond`` of the largest are dependent ones), to machine
     precision. Sparse: ``given + z``, a split near the answer (``G given = b``
     to round-off) corrected by the ``z`` of least ``|P (given + z)|`` with
-    ``G z = b - G given``: one KKT solve, singular where G's rows depend on
-    each other, regularized (``kkt_round_off``) and refined to round-off
-    (``linalg.proximal_solve``). None when ``G y = b`` holds neither to
+    ``G z = b - G given``, each body's six balance rows (the first ``m``)
+    taken by their span (``_spanned_balance``): one KKT solve, refined until
+    ``z`` settles to round-off (``linalg.settled_solve``). None when it does
+    not settle, or ``G y = b`` holds neither to
     ``kkt_refined`` of ``b`` nor as well as for ``given``: a subset of the
     contacts (those the cone program loads) may not balance the loads
     exactly, and its least-squares answer then misses by more than the split
@@ -498,17 +499,66 @@ def _least_squares(
         return y[0] if ok[0] else None
     size_b = float(np.max(np.abs(b), initial=0.0))
     PtP = sp.csr_matrix(P.T @ P)
-    K = sp.bmat([[PtP, G.T], [G, None]], format="csc")
-    rhs = np.r_[-(PtP @ given), b - G @ given]
-    size = float(np.max(np.abs(rhs), initial=0.0))
+    T = _spanned_balance(G, m, settings.free_motion_rcond)
+    G_t = sp.vstack([T @ G[:m], G[m:]], format="csr")
+    miss_given = b - G @ given
+    K = sp.bmat([[PtP, G_t.T], [G_t, None]], format="csc")
+    rhs = np.r_[-(PtP @ given), T @ miss_given[:m], miss_given[m:]]
     eps = kkt_round_off * float(abs(K).max())
-    step = linalg.proximal_solve(K, rhs, n_y, eps, round_off * size, settings.newton_stall)
+    settle = round_off * max(float(np.max(np.abs(given), initial=0.0)), size_b)
+    step = linalg.settled_solve(K, rhs, n_y, settle, eps)
     if step is None:
         return None
     y = np.asarray(given + step[:n_y])
     miss = float(np.max(np.abs(G @ y - b), initial=0.0))
-    bar = max(settings.kkt_refined * size_b, float(np.max(np.abs(G @ given - b), initial=0.0)))
+    bar = max(settings.kkt_refined * size_b, float(np.max(np.abs(miss_given), initial=0.0)))
     return y if miss <= bar else None
+
+
+def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
+    """``T`` (r, m): each body's six balance rows (the first ``m`` rows of
+    the sparse ``G``) replaced by an orthonormal basis of their span: the
+    left singular vectors of the body's block whose singular values are
+    above ``rcond`` of the largest of all. A body's rows often depend on
+    each other (a free spin's row is empty; a tube's three contacts span
+    four of its six), which leaves the least-squares KKT system singular:
+    regularized, its refinement crawled where the balance is ill-conditioned
+    (a 1,000-segment tube string: 115 rounds; taken by their span, the
+    system is regular and 4 rounds of its plain factors settle it)."""
+    top = sp.coo_matrix(G[:m])
+    n_y = G.shape[1]
+    code = (top.row // 6).astype(np.int64) * n_y + top.col
+    pairs, entry_pair = np.unique(code, return_inverse=True)
+    pair_body = pairs // n_y
+    count = np.bincount(pair_body, minlength=m // 6)
+    column = np.arange(len(pairs)) - (np.cumsum(count) - count)[pair_body]
+    body = pair_body[entry_pair]
+    blocks = []
+    for c in np.unique(count[count > 0]).tolist():  # bodies with as many unknowns, together
+        same = np.flatnonzero(count == c)
+        slot = np.full(m // 6, -1)
+        slot[same] = np.arange(len(same))
+        block = np.zeros((len(same), 6, c))
+        mine = slot[body] >= 0
+        block[slot[body[mine]], top.row[mine] % 6, column[entry_pair[mine]]] = top.data[mine]
+        U, sv, _ = np.linalg.svd(block, full_matrices=False)
+        blocks.append((same, U, sv))
+    if not blocks:
+        return sp.csr_matrix((0, m))
+    cutoff = rcond * max(float(sv.max()) for _, _, sv in blocks)
+    rows: list[IntArray] = []
+    vectors: list[FloatArray] = []
+    for same, U, sv in blocks:
+        b_idx, e_idx = np.nonzero(sv > cutoff)
+        rows.append((6 * same[b_idx][:, None] + np.arange(6)).ravel())
+        vectors.append(U[b_idx, :, e_idx].ravel())
+    cols = np.concatenate(rows).reshape(-1, 6)
+    order = np.argsort(cols[:, 0], kind="stable")  # by body; a body's by singular value
+    data = np.concatenate(vectors).reshape(-1, 6)[order]
+    n_t = len(order)
+    return sp.csr_matrix(
+        (data.ravel(), (np.repeat(np.arange(n_t), 6), cols[order].ravel())), shape=(n_t, m)
+    )
 
 
 def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:
