@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from scipy.sparse.csgraph import structural_rank
 
 import jointplay
 from jointplay.numerics import linalg
@@ -256,10 +257,11 @@ def test_the_proximal_solve_converges_to_the_solution_nearest_zero() -> None:
     assert np.allclose(step, np.linalg.lstsq(K, rhs, rcond=None)[0], rtol=0, atol=1e-10)
 
 
-def test_a_settled_solve_reads_its_unknowns_to_round_off() -> None:
+def test_a_settled_solve_reads_its_unknowns_to_round_off(monkeypatch: pytest.MonkeyPatch) -> None:
     """``linalg.settled_solve`` refines until the unknowns its caller reads
     stop moving: from K's plain factors where K is regular, else from the
-    regularized ones (a repeated row), and None where nothing settles."""
+    regularized ones (a repeated row), and None where nothing settles,
+    given up once its moves stall (``kkt_refine_window``), not after 41."""
     K, n = _kkt(duplicate=False)
     rhs = np.arange(1.0, K.shape[0] + 1)
     step = linalg.settled_solve(sp.csc_matrix(K), rhs, n, 1e-15, 1e-12)
@@ -271,10 +273,24 @@ def test_a_settled_solve_reads_its_unknowns_to_round_off() -> None:
     assert step is not None
     exact = np.linalg.lstsq(K, rhs, rcond=None)[0]
     assert np.allclose(step[:n], exact[:n], rtol=0, atol=1e-12)
-    # the same row asked for two values: no step solves it, none settles
-    rhs = np.zeros(K.shape[0])
-    rhs[4], rhs[6] = 1.0, -1.0
+    # factors whose steps never shrink (a refinement that does not
+    # converge): each set of factors is given up after a window of rounds
+    # that gain nothing, and no step is returned
+    counts: list[int] = []
+
+    def stuck(M: object) -> object:
+        counts.append(0)
+
+        def solve(b: np.ndarray) -> np.ndarray:
+            counts[-1] += 1
+            return np.ones(len(b))
+
+        return solve
+
+    monkeypatch.setattr(linalg, "_factored", stuck)
     assert linalg.settled_solve(sp.csc_matrix(K), rhs, n, 1e-15, 1e-6) is None
+    plain = 1 if structural_rank(sp.csr_matrix(K)) == K.shape[0] else 0
+    assert counts == [DEFAULT.kkt_refine_window + 1] * (plain + 1)
 
 
 def test_each_body_s_balance_rows_are_taken_by_their_span() -> None:
@@ -337,6 +353,8 @@ def _counted_solves(monkeypatch: pytest.MonkeyPatch) -> list[int]:
 
     def counting(K: np.ndarray) -> object:
         solve = factored(K)
+        if solve is None:  # not factored: nothing to count
+            return None
         counts.append(0)
 
         def counted(b: np.ndarray) -> np.ndarray:

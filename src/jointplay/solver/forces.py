@@ -38,7 +38,7 @@ from jointplay.assembly import Assembly, BallStack, IntArray
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
-from jointplay.settings import TINY
+from jointplay.settings import GRAM_CERTAIN, GRAM_MARGIN, TINY
 from jointplay.solver import conic
 
 if TYPE_CHECKING:
@@ -519,12 +519,15 @@ def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
     """``T`` (r, m): each body's six balance rows (the first ``m`` rows of
     the sparse ``G``) replaced by an orthonormal basis of their span: the
     left singular vectors of the body's block whose singular values are
-    above ``rcond`` of the largest of all. A body's rows often depend on
-    each other (a free spin's row is empty; a tube's three contacts span
-    four of its six), which leaves the least-squares KKT system singular:
-    regularized, its refinement crawled where the balance is ill-conditioned
-    (a 1,000-segment tube string: 115 rounds; taken by their span, the
-    system is regular and 4 rounds of its plain factors settle it)."""
+    above ``rcond`` of the largest of all, or the rows themselves where
+    their Gram matrix shows them clearly independent (``GRAM_CERTAIN``:
+    most bodies of a closed loop; an SVD each cost 0.2 s on 10,000). A
+    body's rows often depend on each other (a free spin's row is empty; a
+    tube's three contacts span four of its six), which leaves the
+    least-squares KKT system singular: regularized, its refinement crawled
+    where the balance is ill-conditioned (a 1,000-segment tube string: 115
+    rounds; taken by their span, the system is regular and 4 rounds of its
+    plain factors settle it)."""
     top = sp.coo_matrix(G[:m])
     n_y = G.shape[1]
     code = (top.row // 6).astype(np.int64) * n_y + top.col
@@ -541,23 +544,31 @@ def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
         block = np.zeros((len(same), 6, c))
         mine = slot[body] >= 0
         block[slot[body[mine]], top.row[mine] % 6, column[entry_pair[mine]]] = top.data[mine]
-        U, sv, _ = np.linalg.svd(block, full_matrices=False)
-        blocks.append((same, U, sv))
+        blocks.append((same, block, np.linalg.eigvalsh(block @ block.transpose(0, 2, 1))))
     if not blocks:
         return sp.csr_matrix((0, m))
-    cutoff = rcond * max(float(sv.max()) for _, _, sv in blocks)
-    rows: list[IntArray] = []
+    largest = max(float(w[:, -1].max()) for _, _, w in blocks)  # singular value squared
+    certain = max(GRAM_CERTAIN, GRAM_MARGIN * rcond**2) * largest
+    cutoff = rcond * np.sqrt(largest)
+    bodies: list[IntArray] = []
     vectors: list[FloatArray] = []
-    for same, U, sv in blocks:
+    for same, block, w in blocks:
+        clear = w[:, 0] > certain
+        bodies.append(np.repeat(same[clear], 6))
+        vectors.append(np.tile(np.eye(6), (int(np.sum(clear)), 1)))
+        U, sv, _ = np.linalg.svd(block[~clear], full_matrices=False)
         b_idx, e_idx = np.nonzero(sv > cutoff)
-        rows.append((6 * same[b_idx][:, None] + np.arange(6)).ravel())
-        vectors.append(U[b_idx, :, e_idx].ravel())
-    cols = np.concatenate(rows).reshape(-1, 6)
-    order = np.argsort(cols[:, 0], kind="stable")  # by body; a body's by singular value
-    data = np.concatenate(vectors).reshape(-1, 6)[order]
+        bodies.append(same[~clear][b_idx])
+        vectors.append(U[b_idx, :, e_idx])
+    owner = np.concatenate(bodies)
+    order = np.argsort(owner, kind="stable")  # by body; a body's as found
     n_t = len(order)
     return sp.csr_matrix(
-        (data.ravel(), (np.repeat(np.arange(n_t), 6), cols[order].ravel())), shape=(n_t, m)
+        (
+            np.concatenate(vectors)[order].ravel(),
+            (np.repeat(np.arange(n_t), 6), (6 * owner[order][:, None] + np.arange(6)).ravel()),
+        ),
+        shape=(n_t, m),
     )
 
 
