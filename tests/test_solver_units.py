@@ -13,7 +13,6 @@ from typing import Any
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from scipy.sparse.csgraph import structural_rank
 
 import jointplay
 from jointplay.numerics import linalg
@@ -289,29 +288,70 @@ def test_a_settled_solve_reads_its_unknowns_to_round_off(monkeypatch: pytest.Mon
 
     monkeypatch.setattr(linalg, "_factored", stuck)
     assert linalg.settled_solve(sp.csc_matrix(K), rhs, n, 1e-15, 1e-6) is None
-    plain = 1 if structural_rank(sp.csr_matrix(K)) == K.shape[0] else 0
-    assert counts == [DEFAULT.kkt_refine_window + 1] * (plain + 1)
+    assert counts == [DEFAULT.kkt_refine_window + 1] * 2  # plain, then regularized
+    # a pattern that cannot be regular (two rows on one column only): no
+    # plain factors are tried (SuperLU crashed on such a pattern)
+    counts.clear()
+    singular = sp.csc_matrix(np.array([[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 1.0]]))
+    assert linalg.settled_solve(singular, np.ones(3), 1, 1e-15, 1e-6) is None
+    assert counts == [DEFAULT.kkt_refine_window + 1]
 
 
 def test_each_body_s_balance_rows_are_taken_by_their_span() -> None:
     """``forces._spanned_balance``: orthonormal rows, each on one body's six,
     as many as the rank of that body's rows, that keep every balance row (a
-    body with an empty row, one with two rows that repeat each other, one
-    with none at all); the rows past the bodies' are left to the caller."""
+    body with an empty row and two that repeat each other, one with none
+    at all, one whose six rows are clearly independent and stay as they
+    are); the rows past the bodies' are left to the caller."""
     from jointplay.solver import forces
 
     rng = np.random.default_rng(11)
-    G = np.zeros((18 + 2, 7))
+    G = np.zeros((24 + 2, 15))
     G[0:6, 0:3] = rng.standard_normal((6, 3))  # body 0: rank 3
     G[6:12, 2:7] = rng.standard_normal((6, 5))
     G[11] = 0.0  # body 1: an empty row, rank 5
     G[7] = G[6]  # and a repeated one: rank 4
-    G[18:] = rng.standard_normal((2, 7))  # body 2 has no row; two rows past the bodies
-    T = forces._spanned_balance(sp.csr_matrix(G), 18, DEFAULT.free_motion_rcond).toarray()
-    assert T.shape == (3 + 4, 18)
-    assert np.allclose(T @ T.T, np.eye(7), rtol=0, atol=1e-14)
-    assert np.allclose(T.T @ (T @ G[:18]), G[:18], rtol=0, atol=1e-14)
-    assert not np.any(T[:3, 6:]) and not np.any(T[3:, :6]) and not np.any(T[:, 12:])
+    G[18:24, 7:15] = rng.standard_normal((6, 8))  # body 3: rank 6 (body 2 has no row)
+    G[24:] = rng.standard_normal((2, 15))  # two rows past the bodies
+    T = forces._spanned_balance(sp.csr_matrix(G), 24, DEFAULT.free_motion_rcond).toarray()
+    assert T.shape == (3 + 4 + 6, 24)
+    assert np.allclose(T @ T.T, np.eye(13), rtol=0, atol=1e-14)
+    assert np.allclose(T.T @ (T @ G[:24]), G[:24], rtol=0, atol=1e-14)
+    assert not np.any(T[:3, 6:]) and not np.any(T[3:7, :6]) and not np.any(T[:7, 12:])
+    assert np.array_equal(T[7:, 18:], np.eye(6))  # the clear body's own rows
+    # a repeated entry adds up, as in any sparse product
+    # (an entry stored twice, 1 and -1, is 0: the body's rows are empty)
+    twice = sp.csr_matrix((np.r_[1.0, -1.0], np.r_[0, 0], np.r_[0, 2, 2, 2, 2, 2, 2]), shape=(6, 1))
+    assert forces._spanned_balance(twice, 6, DEFAULT.free_motion_rcond).shape == (0, 6)
+
+
+def test_a_closed_loop_s_split_is_its_least_squares() -> None:
+    """The bodies of a closed tube loop have six independent balance rows
+    (kept as they are), and its system stays singular (a contact's
+    tangential motion is no body's): its least squares is found from the
+    regularized factors, and it is the least-squares split (with G of full
+    column rank, the one ``y`` that balances the loads)."""
+    from jointplay.io.generate import tube_string
+    from jointplay.solver import forces
+
+    found: list[tuple[Any, Any, Any, Any]] = []
+    least_squares = forces._least_squares
+
+    def recorded(P: Any, G: Any, b: Any, given: Any, m: int, settings: Any) -> Any:
+        y = least_squares(P, G, b, given, m, settings)
+        found.append((G, b, y, None))
+        return y
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(forces, "_least_squares", recorded)
+        jointplay.solve(tube_string(300, closed=True)).check()
+    assert found
+    G, b, y, _ = found[0]
+    assert y is not None
+    Gd = np.asarray(sp.csr_matrix(G).todense())
+    assert np.linalg.matrix_rank(Gd) == Gd.shape[1]
+    exact = np.linalg.lstsq(Gd, b, rcond=None)[0]
+    assert np.allclose(y, exact, rtol=0, atol=1e-10 * np.max(np.abs(exact)))
 
 
 def test_a_long_string_s_force_split_is_the_same_from_either_start() -> None:

@@ -21,7 +21,7 @@ from scipy.linalg import lapack
 
 from jointplay.geometry import FloatArray
 from jointplay.numerics import free_motions
-from jointplay.settings import DEFAULT, GRAM_CERTAIN, GRAM_MARGIN
+from jointplay.settings import DEFAULT, GRAM_CERTAIN, GRAM_MARGIN, TINY
 
 #: Mechanisms with more unknowns than this (6 per moving body) are assembled
 #: into sparse matrices. Below it, dense LAPACK calls are faster.
@@ -331,47 +331,48 @@ def proximal_solve(
 
 
 def settled_solve(
-    K: Matrix, rhs: FloatArray, n_primal: int, settle: float, eps: float
+    K: sp.spmatrix, rhs: FloatArray, n_primal: int, settle: float, eps: float
 ) -> FloatArray | None:
-    """A solution of ``K step = rhs`` whose first ``n_primal`` unknowns
-    are refined until a round moves none of them by more than ``settle``:
-    from K's plain factors, or, where they do not get there (K singular),
-    from the quasi-definite regularization ``eps`` (``proximal_solve``).
-    None if neither settles in 40 rounds, or its moves stall as a
-    regularized refinement's residual does (``kkt_refine_window``: a
-    2,000-shaft bearing chain's split on the cone program's support moved
-    4.7e-6 a round, 40 rounds of a large factorization for nothing). For
-    a caller that reads those unknowns only, beside multipliers so large
-    that their rows' residual sits at round-off and cannot show the
-    others' progress (a 300-segment tube string's force split: multipliers
-    of 1,800 against forces of 1; stopped by its residual, it was 2e-8 of
-    its forces off, two rounds in)."""
-    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
-    regularized = K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs))
-    # plain factors only where K's pattern lets it be regular: SuperLU
-    # crashed on a singular pattern (a compliant model's split, clarabel 0.11)
-    if sp.issparse(K):
-        from scipy.sparse.csgraph import structural_rank  # large models only: 0.02 s to import
+    """A solution of the sparse ``K step = rhs`` whose first ``n_primal``
+    unknowns are refined until what is left to move them is below
+    ``settle``: from K's plain factors where its pattern lets it be regular,
+    else (or where they do not settle) from the quasi-definite
+    regularization ``eps`` (``proximal_solve``). What is left is read from
+    the last two moves, ``d_k (d_k / d_k-1) / (1 - d_k / d_k-1)``: a slow
+    contraction leaves more than its last move. None if neither settles in
+    41 rounds, or if its moves stall as a regularized refinement's residual
+    does (``kkt_refine_window``: a 2,000-shaft bearing chain's split on the
+    cone program's support moved 4.7e-6 a round, 40 rounds of a large
+    factorization for nothing). For a caller that reads those unknowns
+    only, beside multipliers so large that their rows' residual sits at
+    round-off and cannot show the others' progress (a 300-segment tube
+    string's force split: multipliers of 1,800 against forces of 1;
+    stopped by its residual, it was 2e-8 of its forces off, two rounds in)."""
+    from scipy.sparse.csgraph import structural_rank  # large models only: 0.02 s to import
 
-        plain = structural_rank(sp.csr_matrix(K)) == K.shape[0]
-    else:
-        plain = True
-    for M in (K, regularized)[0 if plain else 1 :]:
-        solve = _factored(M)
+    pattern = sp.csr_matrix(K, copy=True)
+    pattern.eliminate_zeros()
+    # plain factors only where the pattern lets K be regular: SuperLU
+    # crashed on a singular pattern (a compliant model's split, clarabel 0.11)
+    shifts = [0.0, eps] if structural_rank(pattern) == K.shape[0] else [eps]
+    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
+    window, gain = DEFAULT.kkt_refine_window, 1.0 - DEFAULT.kkt_refine_stall
+    for shift in shifts:
+        solve = _factored(K + sp.diags(shift * signs) if shift else K)
         if solve is None:
             continue
         step = np.zeros(K.shape[0])
-        sizes: list[float] = []
-        window, gain = DEFAULT.kkt_refine_window, 1.0 - DEFAULT.kkt_refine_stall
+        sizes = [float("inf")]
         for _ in range(41):
             moved = np.asarray(solve(rhs - K @ step), dtype=float)
             step = step + moved
             if not np.isfinite(step).all():
                 break
             sizes.append(largest(moved[:n_primal]))
-            if sizes[-1] <= settle:
+            left = sizes[-1] ** 2 / max(sizes[-2] - sizes[-1], TINY)
+            if sizes[-1] <= settle and left <= settle:
                 return np.asarray(step, dtype=np.float64)
-            if len(sizes) > window and min(sizes[-window:]) > gain * min(sizes[:-window]):
+            if len(sizes) > window + 1 and min(sizes[-window:]) > gain * min(sizes[1:-window]):
                 break
     return None
 

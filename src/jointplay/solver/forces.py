@@ -528,7 +528,9 @@ def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
     where the balance is ill-conditioned (a 1,000-segment tube string: 115
     rounds; taken by their span, the system is regular and 4 rounds of its
     plain factors settle it)."""
-    top = sp.coo_matrix(G[:m])
+    rows_m = sp.csr_matrix(G[:m], copy=True)
+    rows_m.sum_duplicates()  # a repeated entry adds up, as in any product
+    top = rows_m.tocoo()
     n_y = G.shape[1]
     code = (top.row // 6).astype(np.int64) * n_y + top.col
     pairs, entry_pair = np.unique(code, return_inverse=True)
@@ -547,9 +549,9 @@ def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
         blocks.append((same, block, np.linalg.eigvalsh(block @ block.transpose(0, 2, 1))))
     if not blocks:
         return sp.csr_matrix((0, m))
-    largest = max(float(w[:, -1].max()) for _, _, w in blocks)  # singular value squared
-    certain = max(GRAM_CERTAIN, GRAM_MARGIN * rcond**2) * largest
-    cutoff = rcond * np.sqrt(largest)
+    top_square = max(float(w[:, -1].max()) for _, _, w in blocks)  # largest singular value, squared
+    certain = max(GRAM_CERTAIN, GRAM_MARGIN * rcond**2) * top_square
+    cutoff = rcond * np.sqrt(top_square)
     bodies: list[IntArray] = []
     vectors: list[FloatArray] = []
     for same, block, w in blocks:
