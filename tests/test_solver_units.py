@@ -297,6 +297,19 @@ def test_a_settled_solve_reads_its_unknowns_to_round_off(monkeypatch: pytest.Mon
     assert counts == [DEFAULT.kkt_refine_window + 1]
 
 
+def test_a_settled_solve_counts_what_a_slow_refinement_has_left(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A refinement that shrinks its error by 0.9 a round has nine times its
+    last move still to go: stopped at its first move below ``settle`` (0.02,
+    round 17) it was 0.17 off; read from its last two moves, it goes on to
+    round 38 and ends within ``settle`` of the answer."""
+    monkeypatch.setattr(linalg, "_factored", lambda M: lambda b: 0.1 * b)
+    K = sp.csc_matrix(np.ones((1, 1)))
+    step = linalg.settled_solve(K, np.ones(1), 1, 0.02, 1e-12)
+    assert step is not None and abs(step[0] - 1.0) <= 0.02
+
+
 def test_each_body_s_balance_rows_are_taken_by_their_span() -> None:
     """``forces._spanned_balance``: orthonormal rows, each on one body's six,
     as many as the rank of that body's rows, that keep every balance row (a

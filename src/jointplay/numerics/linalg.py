@@ -321,9 +321,8 @@ def proximal_solve(
         if size < best_miss:
             best, best_miss = step, size
         sizes.append(size)
-        window, gain = DEFAULT.kkt_refine_window, 1.0 - DEFAULT.kkt_refine_stall
-        if len(sizes) > window and min(sizes[-window:]) > gain * min(sizes[:-window]):
-            break  # stalled: the system is not consistent (to round-off)
+        if _stalled(sizes):
+            break  # the system is not consistent (to round-off)
         step = step + np.asarray(solve(miss), dtype=float)
         if not np.all(np.isfinite(step)):
             break
@@ -356,25 +355,33 @@ def settled_solve(
     # crashed on a singular pattern (a compliant model's split, clarabel 0.11)
     shifts = [0.0, eps] if structural_rank(pattern) == K.shape[0] else [eps]
     signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
-    window, gain = DEFAULT.kkt_refine_window, 1.0 - DEFAULT.kkt_refine_stall
     for shift in shifts:
         solve = _factored(K + sp.diags(shift * signs) if shift else K)
         if solve is None:
             continue
         step = np.zeros(K.shape[0])
-        sizes = [float("inf")]
+        sizes: list[float] = []
         for _ in range(41):
             moved = np.asarray(solve(rhs - K @ step), dtype=float)
             step = step + moved
             if not np.isfinite(step).all():
                 break
             sizes.append(largest(moved[:n_primal]))
-            left = sizes[-1] ** 2 / max(sizes[-2] - sizes[-1], TINY)
+            before = sizes[-2] if len(sizes) > 1 else float("inf")
+            left = sizes[-1] ** 2 / max(before - sizes[-1], TINY)
             if sizes[-1] <= settle and left <= settle:
                 return np.asarray(step, dtype=np.float64)
-            if len(sizes) > window + 1 and min(sizes[-window:]) > gain * min(sizes[1:-window]):
+            if _stalled(sizes):
                 break
     return None
+
+
+def _stalled(sizes: list[float]) -> bool:
+    """Whether a refinement's last ``kkt_refine_window`` rounds gained less
+    than ``kkt_refine_stall`` on the best before them (``sizes``: its
+    residuals, or its moves)."""
+    window, gain = DEFAULT.kkt_refine_window, 1.0 - DEFAULT.kkt_refine_stall
+    return len(sizes) > window and min(sizes[-window:]) > gain * min(sizes[:-window])
 
 
 def _equilibration(K: Any) -> FloatArray:
