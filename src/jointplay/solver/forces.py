@@ -576,11 +576,12 @@ def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
 
 def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:
     """Whether every contact pushes (``lam >= 0``) with its force vector
-    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force:
-    one bool, or a mask over rows."""
+    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the unit loads
+    (``g_hat``) or of the largest force if larger, as the certificate
+    measures them: one bool, or a mask over rows."""
     if not lam.shape[-1]:
         return np.ones(lam.shape[:-1], dtype=bool) if lam.ndim > 1 else True
-    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), TINY)
+    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), 1.0)
     f_norm = np.sqrt(stack.segment_sum(f * f))
     inside = np.all(lam >= -size, axis=-1) & np.all(f_norm <= lam + size, axis=-1)
     return inside if lam.ndim > 1 else bool(inside)
