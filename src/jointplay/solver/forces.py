@@ -101,9 +101,11 @@ def least_squares_split(
             return split
     faces = apex & stack.has_offset
     refine = conic.refined(settings, asm.sparse)
-    y = _cone_program(P, G, given, int(np.sum(surface)), stack.k[faces], settings, refine)
+    d = _part_scales(G, given)
+    y = _cone_program(P, G, given / d, int(np.sum(surface)), stack.k[faces], settings, refine)
     if y is None:
         return None
+    y = y * d
     split = split_of(y)
     # the cone program's answer is good to its tolerance; the limits that
     # bind it held as equalities, the split is exact
@@ -576,15 +578,38 @@ def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
 
 def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:
     """Whether every contact pushes (``lam >= 0``) with its force vector
-    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the unit loads
-    (``g_hat``) or of the largest force if larger, as the certificate
-    measures them: one bool, or a mask over rows."""
+    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force:
+    one bool, or a mask over rows."""
     if not lam.shape[-1]:
         return np.ones(lam.shape[:-1], dtype=bool) if lam.ndim > 1 else True
-    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), 1.0)
+    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), TINY)
     f_norm = np.sqrt(stack.segment_sum(f * f))
     inside = np.all(lam >= -size, axis=-1) & np.all(f_norm <= lam + size, axis=-1)
     return inside if lam.ndim > 1 else bool(inside)
+
+
+def _part_scales(G: Any, given: FloatArray) -> FloatArray:
+    """Per unknown, the size of the forces of its part of the mechanism:
+    the largest ``|given|`` among the unknowns that share balance rows with
+    it, directly or through others (``G``'s connected components). The
+    split's program is separable across parts, and each part's unknowns
+    divided by their own size leave its answer the same while its
+    tolerance applies to each part's forces alike: a table on four feet
+    beside a block welded under a load 1e6 times the table's had its feet's
+    split decided to the block's tolerance (8 N off the rule's, of 60)."""
+    from scipy.sparse.csgraph import connected_components  # this route only: 0.02 s to import
+
+    pattern = sp.csr_matrix(G, copy=True) if linalg.is_sparse(G) else sp.csr_matrix(np.asarray(G))
+    pattern.eliminate_zeros()
+    rows = pattern.shape[0]
+    pattern.data[:] = 1.0
+    graph = sp.bmat([[None, pattern], [pattern.T, None]], format="csr")
+    _, label = connected_components(graph, directed=False)
+    part = label[rows:]
+    size = np.zeros(int(label.max()) + 1)
+    np.maximum.at(size, part, np.abs(given))
+    size = size[part]
+    return np.where(size > 0, size, 1.0)
 
 
 def _cone_program(
