@@ -102,7 +102,8 @@ def least_squares_split(
     faces = apex & stack.has_offset
     refine = conic.refined(settings, asm.sparse)
     d = _part_scales(G, given)
-    y = _cone_program(P, G, given / d, int(np.sum(surface)), stack.k[faces], settings, refine)
+    given_hat = np.divide(given, d, out=np.zeros_like(given), where=d > 0)
+    y = _cone_program(P, G, given_hat, int(np.sum(surface)), stack.k[faces], settings, refine)
     if y is None:
         return None
     y = y * d
@@ -589,14 +590,17 @@ def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any
 
 
 def _part_scales(G: Any, given: FloatArray) -> FloatArray:
-    """Per unknown, the size of the forces of its part of the mechanism:
-    the largest ``|given|`` among the unknowns that share balance rows with
-    it, directly or through others (``G``'s connected components). The
+    """Per unknown, the size of the forces of its part of the mechanism,
+    relative to the largest part's: the largest ``|given|`` among the
+    unknowns that share balance rows with it, directly or through others
+    (``G``'s connected components). The
     split's program is separable across parts, and each part's unknowns
     divided by their own size leave its answer the same while its
     tolerance applies to each part's forces alike: a table on four feet
     beside a block welded under a load 1e6 times the table's had its feet's
-    split decided to the block's tolerance (8 N off the rule's, of 60)."""
+    split decided to the block's tolerance (8 N off the rule's, of 60).
+    A part whose ``given`` is 0 carries no load, and its split is 0: its
+    size 0 keeps it there."""
     from scipy.sparse.csgraph import connected_components  # this route only: 0.02 s to import
 
     pattern = sp.csr_matrix(G, copy=True) if linalg.is_sparse(G) else sp.csr_matrix(np.asarray(G))
@@ -608,8 +612,10 @@ def _part_scales(G: Any, given: FloatArray) -> FloatArray:
     part = label[rows:]
     size = np.zeros(int(label.max()) + 1)
     np.maximum.at(size, part, np.abs(given))
-    size = size[part]
-    return np.where(size > 0, size, 1.0)
+    # relative to the largest part's, which keeps its scale: a mechanism of
+    # one part poses the program as before (a uniform rescale moved the
+    # program's path, and file-order scans by 1e2 either way)
+    return np.asarray(size[part] / max(float(size.max()), TINY))
 
 
 def _cone_program(
