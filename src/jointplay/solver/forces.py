@@ -101,7 +101,7 @@ def least_squares_split(
             return split
     faces = apex & stack.has_offset
     refine = conic.refined(settings, asm.sparse)
-    d = _part_scales(G, given)
+    d = _part_scales(G, P, owner, given)
     given_hat = np.divide(given, d, out=np.zeros_like(given), where=d > 0)
     y = _cone_program(P, G, given_hat, int(np.sum(surface)), stack.k[faces], settings, refine)
     if y is None:
@@ -589,11 +589,15 @@ def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any
     return inside if lam.ndim > 1 else bool(inside)
 
 
-def _part_scales(G: Any, given: FloatArray) -> FloatArray:
+def _part_scales(G: Any, P: Any, owner: IntArray, given: FloatArray) -> FloatArray:
     """Per unknown, the size of the forces of its part of the mechanism,
     relative to the largest part's: the largest ``|given|`` among the
-    unknowns that share balance rows with it, directly or through others
-    (``G``'s connected components). The
+    unknowns joined to it, directly or through others, by a row of ``G``
+    (a body's balance) or of ``P`` (a wrench), or by their cone
+    (``owner``): by the balance alone, a face's force and its force vector
+    can fall in different parts, and their cone was scaled apart (two
+    thrust collars' split moved 5.7 N of 50 off the rule's, a review's
+    find). The
     split's program is separable across parts, and each part's unknowns
     divided by their own size leave its answer the same while its
     tolerance applies to each part's forces alike: a table on four feet
@@ -603,7 +607,12 @@ def _part_scales(G: Any, given: FloatArray) -> FloatArray:
     size 0 keeps it there."""
     from scipy.sparse.csgraph import connected_components  # this route only: 0.02 s to import
 
-    pattern = sp.csr_matrix(G, copy=True) if linalg.is_sparse(G) else sp.csr_matrix(np.asarray(G))
+    coned = np.flatnonzero(owner >= 0)
+    cones = sp.csr_matrix(
+        (np.ones(len(coned)), (owner[coned], coned)),
+        shape=(int(owner.max(initial=-1)) + 1, len(owner)),
+    )
+    pattern = sp.vstack([sp.csr_matrix(G), sp.csr_matrix(P), cones], format="csr")
     pattern.eliminate_zeros()
     rows = pattern.shape[0]
     pattern.data[:] = 1.0
