@@ -593,18 +593,16 @@ def _part_scales(G: Any, P: Any, owner: IntArray, given: FloatArray) -> FloatArr
     """Per unknown, the size of the forces of its part of the mechanism,
     relative to the largest part's: the largest ``|given|`` among the
     unknowns joined to it, directly or through others, by a row of ``G``
-    (a body's balance) or of ``P`` (a wrench), or by their cone
-    (``owner``): by the balance alone, a face's force and its force vector
-    can fall in different parts, and their cone was scaled apart (two
-    thrust collars' split moved 5.7 N of 50 off the rule's, a review's
-    find). The
-    split's program is separable across parts, and each part's unknowns
-    divided by their own size leave its answer the same while its
-    tolerance applies to each part's forces alike: a table on four feet
-    beside a block welded under a load 1e6 times the table's had its feet's
-    split decided to the block's tolerance (8 N off the rule's, of 60).
-    A part whose ``given`` is 0 carries no load, and its split is 0: its
-    size 0 keeps it there."""
+    (a body's balance), a row of ``P`` (a wrench) or their cone
+    (``owner``). The split's program is separable across parts, so each
+    part's unknowns divided by their own size leave its answer the same,
+    while its tolerance applies to each part's forces alike: a table on
+    four feet beside a block welded under a load 1e6 times the table's had
+    its feet's split decided to the block's tolerance (8 N off the rule's,
+    of 60). The cone joins what the balance may not: a face's force and
+    its force vector, scaled apart, moved two thrust collars' split by
+    5.7 N of 50. A part whose ``given`` is 0 carries no load and its split
+    is 0: its size 0 keeps it there."""
     from scipy.sparse.csgraph import connected_components  # this route only: 0.02 s to import
 
     coned = np.flatnonzero(owner >= 0)
