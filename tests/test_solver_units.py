@@ -95,8 +95,9 @@ def test_newton_returns_to_the_optimum_from_a_nearby_start(paper: Workspace) -> 
     lam0 = point.lam * (1 + 0.1 * rng.standard_normal(len(point.lam)))
     out = newton.newton(None, -g_hat, face.Eq, face.e, face.stack, x0, lam0[list(surface)])
     assert out is not None
-    x, lam, _, iterations = out
+    x, lam, _, iterations, factors = out
     assert iterations <= 8
+    assert factors is not None and factors.regular(DEFAULT.free_motion_rcond)
     assert np.max(np.abs(x - point.x)) * ws.asm.s <= 1e-12  # mm
     assert np.allclose(lam, point.lam[list(surface)], rtol=1e-10, atol=0)
 
@@ -343,7 +344,10 @@ def test_a_closed_loop_s_split_is_its_least_squares() -> None:
     (kept as they are), and its system stays singular (a contact's
     tangential motion is no body's): its least squares is found from the
     regularized factors, and it is the least-squares split (with G of full
-    column rank, the one ``y`` that balances the loads)."""
+    column rank, the one ``y`` that balances the loads). Newton's system is
+    taken as not regular here, so that the split goes to its least squares
+    (where it is, its forces are the split at once:
+    ``test_a_regular_newton_system_answers_for_its_face_and_its_forces``)."""
     from jointplay.io.generate import tube_string
     from jointplay.solver import forces
 
@@ -357,6 +361,7 @@ def test_a_closed_loop_s_split_is_its_least_squares() -> None:
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(forces, "_least_squares", recorded)
+        patch.setattr(linalg.Factors, "regular", lambda self, cutoff: False)
         jointplay.solve(tube_string(300, closed=True)).check()
     assert found
     G, b, y, _ = found[0]
@@ -1440,3 +1445,90 @@ def test_a_long_bearing_chain_s_tie_certifies_at_first_try(monkeypatch: pytest.M
     result.check()
     assert result.certificate.certified and result.certificate.method == "least-norm face"
     assert not any(retried)
+
+
+@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
+def test_factors_tell_a_regular_system_from_one_singular_but_for_round_off(sparse: bool) -> None:
+    """An LU's pivots say whether K is regular (none below the rank cutoff
+    ``free_motion_rcond`` of the largest): a KKT system with independent
+    rows is; one whose repeated row differs by round-off is not, though it
+    factors (its last pivot is round-off, not 0: without a cutoff it would
+    pass, and a tie or an indeterminate split would be taken for a unique
+    one)."""
+    K, _ = _kkt(duplicate=False)
+    made = sp.csc_matrix if sparse else np.asarray
+    regular = linalg._factored(made(K))
+    assert regular is not None and regular.regular(DEFAULT.free_motion_rcond)
+    D, _ = _kkt(duplicate=True)
+    D[-1, :4] *= 1.0 + 1e-14  # the repeated row, and its column, off by round-off
+    D[:4, -1] = D[-1, :4]
+    nearly = linalg._factored(made(D))
+    assert nearly is not None, "it factors: only its pivots show the rank"
+    assert not nearly.regular(DEFAULT.free_motion_rcond)
+    assert nearly.regular(0.0)
+
+
+def test_a_regular_newton_system_answers_for_its_face_and_its_forces(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Newton's last system on a large face is regular (its LU's pivots):
+    the face pins the position and its forces are the only ones, so the
+    face's elimination (a 1,000-segment loop: 0.09 s; 10,000: 0.65 s) and
+    the split's least squares are skipped. The answer is the one they give:
+    positions to the bit, forces to round-off (their least squares refines
+    Newton's)."""
+    from jointplay.io.generate import tube_string
+    from jointplay.solver import forces
+
+    model = tube_string(60, closed=True)
+    ws = Workspace.of(model)
+    assert ws.sparse
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    eliminated = calls_to(monkeypatch, faces, "_eliminated")
+    splits: list[Any] = []
+    least_squares = forces.least_squares_split
+
+    def split(*args: Any, **kwargs: Any) -> Any:
+        splits.append(least_squares(*args, **kwargs))
+        return splits[-1]
+
+    monkeypatch.setattr(forces, "least_squares_split", split)
+    best = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
+    assert best.regular and best.active is not None and best.certificate is not None
+    assert best.certificate.certified
+    assert not eliminated and splits == [None]
+    # the same faces, tested and split as a face whose system says nothing
+    monkeypatch.setattr(newton.linalg.Factors, "regular", lambda self, cutoff: False)
+    other = pipeline.optimum(Workspace.of(model), g_hat, np.zeros(len(ws.balls)))
+    assert not other.regular and eliminated and splits[-1] is not None
+    assert np.array_equal(best.x, other.x)
+    top = float(np.max(np.abs(other.lam)))
+    assert np.max(np.abs(best.lam - other.lam)) <= 1e-12 * top
+
+
+def test_a_face_without_its_unloaded_contacts_is_tested_for_a_tie(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Newton's system speaks for the face it was solved on. A round that
+    drops contacts that touch with no force (they do not bound a tie, and a
+    bearing chain's axial plays tie without them) leaves a smaller face,
+    which the elimination tests: the answer is not marked regular."""
+    from jointplay.io.generate import tube_string
+
+    ws = Workspace.of(tube_string(60, closed=True))
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    weak = newton.weak_forces
+    dropped: list[int] = []
+
+    def one_unloaded(ws_: Workspace, point: faces.Point, key: faces.FaceKey) -> Any:
+        out = weak(ws_, point, key)
+        if out.size or not point.regular:
+            return out
+        dropped.append(key[0][0])  # as if its force were round-off
+        return np.array(dropped[-1:], dtype=np.intp)
+
+    monkeypatch.setattr(newton, "weak_forces", one_unloaded)
+    eliminated = calls_to(monkeypatch, faces, "_eliminated")
+    best = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
+    assert dropped and best.active is not None and dropped[-1] not in best.active[0]
+    assert not best.regular and eliminated

@@ -46,6 +46,9 @@ class Point:
     nu: FloatArray | None = None  # the rigid rows' multipliers (None: least squares)
     #: The active set of a tie: its face holds every optimum, x is its least-norm point.
     tie: FaceKey | None = None
+    #: Newton's system on ``active`` was regular (``SolverSettings.free_motion_rcond``):
+    #: that face pins x and its forces are the only ones that balance the loads.
+    regular: bool = False
 
 
 @dataclass(frozen=True)

@@ -64,6 +64,7 @@ def least_squares_split(
     g_hat: FloatArray,
     apex_level: float,
     settings: SolverSettings,
+    regular: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
 ) -> Split | None:
     """The least-squares split (module docstring) at positions ``x`` under
     unit loads ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split;
@@ -75,9 +76,14 @@ def least_squares_split(
     caller keeps its own). ``settings``: the
     equilibrium tolerance (how far a force may fall below 0 or outside its
     cone by round-off), the rank cutoff, the KKT regularization and the
-    interior-point tolerance."""
+    interior-point tolerance. ``regular``: a face of hard contacts whose
+    Newton system was regular: if its cones are the touching ones, their
+    forces are the only ones (None is returned at once)."""
     stack = asm.stack
     surface, apex, pressed, u = _classes(stack, x, stack.r, apex_level, settings, lam=lam)
+    touching = set(np.flatnonzero(surface | apex).tolist())
+    if regular is not None and touching == {*regular[0], *regular[1]}:
+        return None
     keep_lam, keep_f = _compliant(stack, lam, f, pressed)
     b = g_hat - stack.adjoint(keep_f, keep_lam)
     Z, owner = _unknowns(stack, surface, apex, u, asm.E.shape[0], asm.sparse)

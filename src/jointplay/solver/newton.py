@@ -106,10 +106,12 @@ def kkt_point(
     )
     if out is None:
         return None
-    x, lam_s, nu, its = out
+    x, lam_s, nu, its, factors = out
     if pinned and not faces.is_determined(ws, face, x):
         return None
-    return assemble_point(ws, x, face, lam_s, nu[ne:], method, iterations + its)
+    point = assemble_point(ws, x, face, lam_s, nu[ne:], method, iterations + its)
+    point.regular = factors is not None and factors.regular(ws.settings.free_motion_rcond)
+    return point
 
 
 def assemble_point(
@@ -149,7 +151,7 @@ def newton(
     prox: float = 0.0,
     accept: float = DEFAULT.newton_accept,
     repeated_rows: bool = False,
-) -> tuple[FloatArray, FloatArray, FloatArray, int] | None:
+) -> tuple[FloatArray, FloatArray, FloatArray, int, linalg.Factors | None] | None:
     """Newton's method on the KKT equations of an active set.
 
     Stationarity ``P x + q + sum lam_i (A_i^T u_i + B_i) + Eq^T nu = 0``,
@@ -165,7 +167,9 @@ def newton(
     ``repeated_rows``: a sparse ``Eq`` may hold rows that repeat each other
     (a tied face's, ``ties.polish_least_norm``): the system is then
     singular by construction, and its steps are regularized from the start
-    (``linalg.solve_kkt``'s ``plain``).
+    (``linalg.solve_kkt``'s ``plain``). Returned with the answer: the
+    plain factors of its last step's system (None if it took a regularized
+    step, or none), whose pivots tell whether the system is regular.
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
@@ -285,4 +289,4 @@ def newton(
     err, x, lam, nu, its = best
     if err > accept:  # the certificate has the last word
         return None
-    return x, lam, nu, its
+    return x, lam, nu, its, factors
