@@ -83,9 +83,11 @@ class SolverSettings:
     # -- rank and free motions -------------------------------------------------
     #: Singular values below this fraction of the largest count as zero: they
     #: span the free motions, dependent rows, indeterminate forces. So do
-    #: the LU pivots of a Newton system (an active set's KKT matrix): with
-    #: none below it the system is regular, its face pins the position and
-    #: its forces are the only ones (``Point.regular``). Pivots measured:
+    #: the LU pivots of a Newton system (an active set's KKT matrix), though
+    #: an LU is not rank revealing: with none below it the system is
+    #: regular, its flat face pins the position and its rows are independent
+    #: (on a hard model whose touching contacts are the face's, its forces
+    #: are the split: ``faces.pins_by_newton``). Pivots measured:
     #: faces that pin x, 7.8e-3 to 0.35 on the examples, 1.5e-3 and 1.2e-3
     #: on 1,000- and 10,000-segment loops, 1.2e-7 on a 1,000-segment open
     #: string (its forces the least squares' to 4.7e-15); ties and redundant

@@ -413,7 +413,9 @@ class Factors:
 
     def regular(self, cutoff: float) -> bool:
         """Whether every pivot is above ``cutoff`` of the largest: K is
-        regular, at that rank cutoff (``SolverSettings.free_motion_rcond``)."""
+        regular (an LU is not rank revealing: a pivot may sit well above the
+        smallest singular value, so near the cutoff this and a rank test by
+        singular values may disagree)."""
         d = np.abs(np.asarray(self.pivots()))
         return bool(d.size) and float(d.min()) >= cutoff * float(d.max())
 

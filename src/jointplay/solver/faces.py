@@ -46,9 +46,10 @@ class Point:
     nu: FloatArray | None = None  # the rigid rows' multipliers (None: least squares)
     #: The active set of a tie: its face holds every optimum, x is its least-norm point.
     tie: FaceKey | None = None
-    #: Newton's system on ``active`` was regular (``SolverSettings.free_motion_rcond``):
-    #: that face pins x and its forces are the only ones that balance the loads.
-    regular: bool = False
+    #: The active set on which Newton's system was regular (``Factors.regular``,
+    #: at ``free_motion_rcond``): while ``active`` is that set, its face pins x
+    #: and its rows are independent (``pins_by_newton``).
+    regular_on: FaceKey | None = None
 
 
 @dataclass(frozen=True)
@@ -100,6 +101,13 @@ class Face:
         face's affine hull, as the free motions' rows ``K`` do for the
         mechanism. None for a face that pins x, tilts, or is large (sparse)."""
         return None if self.determined is not False else self._ties()
+
+
+def pins_by_newton(point: Point) -> bool:
+    """Whether Newton's own system on ``point``'s active set says its face
+    pins x (and that the face's rows are independent); False when it says
+    nothing (the set changed since, or the system was not regular)."""
+    return point.active is not None and point.regular_on == point.active
 
 
 def face_of(ws: Workspace, key: FaceKey) -> Face:

@@ -64,7 +64,7 @@ def least_squares_split(
     g_hat: FloatArray,
     apex_level: float,
     settings: SolverSettings,
-    regular: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
+    unique_on: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
 ) -> Split | None:
     """The least-squares split (module docstring) at positions ``x`` under
     unit loads ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split;
@@ -76,13 +76,16 @@ def least_squares_split(
     caller keeps its own). ``settings``: the
     equilibrium tolerance (how far a force may fall below 0 or outside its
     cone by round-off), the rank cutoff, the KKT regularization and the
-    interior-point tolerance. ``regular``: a face of hard contacts whose
-    Newton system was regular: if its cones are the touching ones, their
-    forces are the only ones (None is returned at once)."""
+    interior-point tolerance. ``unique_on``: a face (surface cones, those
+    at their apex) of a hard model whose Newton system was regular, so its
+    rows are independent: if its cones are the touching ones, in the same
+    classes, their forces are the only ones (None is returned at once)."""
     stack = asm.stack
     surface, apex, pressed, u = _classes(stack, x, stack.r, apex_level, settings, lam=lam)
-    touching = set(np.flatnonzero(surface | apex).tolist())
-    if regular is not None and touching == {*regular[0], *regular[1]}:
+    if unique_on is not None and (
+        np.flatnonzero(surface).tolist() == sorted(unique_on[0])
+        and np.flatnonzero(apex).tolist() == sorted(unique_on[1])
+    ):
         return None
     keep_lam, keep_f = _compliant(stack, lam, f, pressed)
     b = g_hat - stack.adjoint(keep_f, keep_lam)

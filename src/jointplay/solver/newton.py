@@ -110,7 +110,11 @@ def kkt_point(
     if pinned and not faces.is_determined(ws, face, x):
         return None
     point = assemble_point(ws, x, face, lam_s, nu[ne:], method, iterations + its)
-    point.regular = factors is not None and factors.regular(ws.settings.free_motion_rcond)
+    # a tilting face's free motion depends on x, and the factors may be a
+    # few steps old (kept while they solve): they speak for flat faces only
+    tilting = bool(np.any(face.stack.has_offset & (face.stack.k > 0)))
+    if factors is not None and not tilting and factors.regular(ws.settings.free_motion_rcond):
+        point.regular_on = face.key
     return point
 
 
@@ -168,8 +172,10 @@ def newton(
     (a tied face's, ``ties.polish_least_norm``): the system is then
     singular by construction, and its steps are regularized from the start
     (``linalg.solve_kkt``'s ``plain``). Returned with the answer: the
-    plain factors of its last step's system (None if it took a regularized
-    step, or none), whose pivots tell whether the system is regular.
+    plain factors that solved its last step (made at that step or, kept
+    while they solve, a few steps before; a dense run's proximal steps,
+    the last system's own; None if it ended on a regularized or failed
+    step), whose pivots tell whether the system is regular.
     """
     m, na, ne = len(x0), len(stack.k), Eq.shape[0]
     A, start, k, r, Bo = stack.A, stack.start, stack.k, stack.r, stack.B
@@ -191,6 +197,7 @@ def newton(
     best: tuple[float, FloatArray, FloatArray, FloatArray, int] | None = None
     history: list[float] = []
     factors = None  # the last step's plain factors (``linalg.solve_kkt``)
+    failed = False  # a step's system could not be solved
     for it in range(max_iter + 1):
         grad = q + linalg.adjoint(Eq, nu)
         if P is not None:
@@ -281,6 +288,7 @@ def newton(
             ):  # round-off's step along a tie or an indeterminate force
                 step, factors = linalg.solve_kkt(Kmat, -F, m, prox, floor, weights=weights)
         except linalg.SingularSystemError:
+            factors, failed = None, True  # an earlier system's say nothing of this one
             break
         x = x + step[:m]
         lam = lam + step[m : m + na]
@@ -289,4 +297,8 @@ def newton(
     err, x, lam, nu, its = best
     if err > accept:  # the certificate has the last word
         return None
+    if factors is None and not failed and not sparse and len(history) > 1:
+        # proximal steps (a tie may be): the last system's own LU, a few
+        # microseconds, tells whether it is regular
+        factors = linalg._factored(K)
     return x, lam, nu, its, factors

@@ -169,9 +169,9 @@ def split(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Poin
     st = ws.settings
     apex = st.feasibility_tolerance * ws.max_radius  # positions' round-off
     nu = rigid_multipliers(ws, g_hat, point)
-    regular = point.active if point.regular and not np.any(sigma) else None
+    unique_on = point.active if faces.pins_by_newton(point) and not np.any(sigma) else None
     shared = forces.least_squares_split(
-        ws.asm, point.x, point.lam, point.f, nu, g_hat, apex, st, regular
+        ws.asm, point.x, point.lam, point.f, nu, g_hat, apex, st, unique_on
     )
     if shared is not None:
         trial = replace(point, lam=shared.lam, f=shared.f, nu=shared.nu, certificate=None)
@@ -337,7 +337,7 @@ def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Poi
         optimum = point
     elif optimum.active is not None:
         key = optimum.active
-    if optimum.regular or faces.is_determined(ws, faces.face_of(ws, key), optimum.x):
+    if faces.pins_by_newton(optimum) or faces.is_determined(ws, faces.face_of(ws, key), optimum.x):
         return optimum
     optimum.active = None  # the face is not a warm start: x is not unique
     tied = ties.least_norm(ws, sigma, optimum, key)
@@ -443,14 +443,13 @@ def active_set_steps(
         if not past.size:
             trial.certificate = certificate.certify(ws, g_hat, sigma, trial)
             if trial.certificate.certified:
-                # a cone with no force (to round-off) does not bound the tie,
-                # and Newton's system then says nothing of the face without it
+                # a cone with no force (to round-off) does not bound the tie
+                # (and Newton's system then says nothing of the face left)
                 unloaded = set(weak.tolist())
                 trial.active = (
                     tuple(i for i in trial_key[0] if i not in unloaded),
                     tuple(i for i in trial_key[1] if i not in unloaded),
                 )
-                trial.regular = trial.regular and not unloaded
                 return trial
             if not weak.size:
                 return None
@@ -503,7 +502,7 @@ def pushing_optimum(
     rows = stack.rows_of(surface)
     v, rho = stack.norms(trial.x)
     f[rows] = stack.take(surface).surface_forces(v[rows], rho[list(surface)], lam[list(surface)])
-    point = replace(trial, lam=lam, f=f, certificate=None, regular=False)
+    point = replace(trial, lam=lam, f=f, certificate=None)
     point.certificate = certificate.certify(ws, g_hat, sigma, point)
     if not point.certificate.certified:
         return None
