@@ -1589,3 +1589,32 @@ def test_a_small_model_s_proximal_newton_run_factors_its_last_system_once(
     other = pipeline.split(fresh, g_hat, sigma, pipeline.contacts_optimum(fresh, g_hat, sigma))
     assert ranks and pins and not faces.pins_by_newton(other)
     assert np.array_equal(best.x, other.x) and np.array_equal(best.lam, other.lam)
+
+
+def test_a_tilting_face_is_not_marked_by_newton_s_factors(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A tilting face (a face resting on its rim) leaves free a motion that
+    depends on x, and Newton's factors may be a few steps old: even regular,
+    they do not mark it, and the face's own test decides. Here every
+    factorization is taken as regular; the flat faces of the paper's shaft
+    are marked, the slider's tilting disc face is not."""
+    from jointplay.numerics.linalg import Factors
+
+    monkeypatch.setattr(Factors, "regular", lambda self, cutoff: True)
+    factored = linalg._factored
+    monkeypatch.setattr(
+        linalg,
+        "_factored",
+        lambda K: factored(K) or Factors(lambda b: b, lambda: np.ones(K.shape[0])),
+    )
+    paper_shaft = ROOT / "examples" / "paper" / "6.1.6.1.yaml"
+    slider = ROOT / "tests" / "property_cases" / "slider_and_disc.yaml"
+    for path, tilting in ((paper_shaft, False), (slider, True)):
+        ws = Workspace.of(jointplay.load(path))
+        g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+        point = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
+        assert point.active is not None
+        surface = list(point.active[0])
+        assert bool(np.any(ws.stack.has_offset[surface] & (ws.stack.k[surface] > 0))) is tilting
+        assert faces.pins_by_newton(point) is not tilting
