@@ -75,6 +75,9 @@ class Face:
     e: FloatArray
     surface_rows: IntArray  # rows of the full stack's A (and f) of the surface cones
     linear_rows: IntArray  # ... and of the linear cones
+    #: A surface cone with an offset (a face on its rim): the motions the face
+    #: leaves free then depend on x (``is_determined``).
+    tilting: bool
     #: Whether the active cones and equalities determine x uniquely; None when
     #: that depends on x (a tilting face: see ``is_determined``).
     #: Computed when first asked (a null space): most trial faces never are.
@@ -166,6 +169,7 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
             np.concatenate([np.zeros(ws.Eq.shape[0]), rhs]),
             stack.rows_of(surface),
             stack.rows_of(linear),
+            tilting,
             determined,
             ties,
             free_left,

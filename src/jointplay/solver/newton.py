@@ -112,8 +112,7 @@ def kkt_point(
     point = assemble_point(ws, x, face, lam_s, nu[ne:], method, iterations + its)
     # a tilting face's free motion depends on x, and the factors may be a
     # few steps old (kept while they solve): they speak for flat faces only
-    tilting = bool(np.any(face.stack.has_offset & (face.stack.k > 0)))
-    if factors is not None and not tilting and factors.regular(ws.settings.free_motion_rcond):
+    if factors is not None and not face.tilting and factors.regular(ws.settings.free_motion_rcond):
         point.regular_on = face.key
     return point
 
