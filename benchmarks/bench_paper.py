@@ -479,12 +479,14 @@ def stream_benchmark(
     agree = max(diff for name, _, _, diff in rows if name.startswith("SLSQP (paper"))
     ok = best >= SPEED_TARGET and agree <= AGREEMENT_MM
     print(
-        f"Target on this stream: a jointplay mode {SPEED_TARGET:g}x faster per solve than "
-        f"SLSQP with the same answers to {AGREEMENT_MM:g} mm: best {best:.1f}x, "
+        f"Issue 2's target on this stream: a jointplay mode {SPEED_TARGET:g}x faster per solve "
+        f"than SLSQP with the same answers to {AGREEMENT_MM:g} mm: best {best:.1f}x, "
         f"max|Δ| {agree:.1e} mm -> {'MET' if ok else 'NOT MET'}"
     )
     ratios = {name: slsqp / per for name, per, _, _ in rows}
     ratios["SLSQP us"] = slsqp * 1e6
+    # same answers: the row's own against the batch's, and SLSQP's against the batch's
+    ratios.update({f"{name} agrees": max(diff, agree) for name, _, _, diff in rows})
     return ok, ratios
 
 
@@ -635,7 +637,7 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print("jointplay.solve per stage (median ms; timed apart, the last on a reused Workspace):")
     for stage, times in stages.items():
-        print(f"  {stage:<22}{statistics.median(times) * 1e3:>8.3f}")
+        print(f"  {stage:<26}{statistics.median(times) * 1e3:>8.3f}")
     print()
 
     speedup = statistics.median(t_sl) / jp_med
@@ -643,7 +645,7 @@ def main(argv: list[str] | None = None) -> int:
     speed_ok = speedup >= SPEED_TARGET
     same_ok = diff_mm <= AGREEMENT_MM
     print(
-        f"Target: jointplay at least {SPEED_TARGET:g}x faster than SLSQP (median), "
+        f"Issue 2's target: jointplay at least {SPEED_TARGET:g}x faster than SLSQP (median), "
         f"same answer to {AGREEMENT_MM:g} mm."
     )
     print(f"  speed:     {speedup:.2f}x  -> {'MET' if speed_ok else 'NOT MET'}")
@@ -658,14 +660,23 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  overall:   {'MET' if (speed_ok or stream_ok) and same_ok else 'NOT MET'}")
     print()
     print("Issue 18's targets (against SLSQP with analytic gradients, same answers):")
+    warm, batch = "Workspace.solve (warm stream)", "Workspace.solve_batch"
     targets = (
-        ("one cold jointplay.solve", speedup, 5.0),
-        ("a re-solve with new loads (warm stream)", stream["Workspace.solve (warm stream)"], 12.0),
-        (f"a batch of {args.steps} turning loads, per load", stream["Workspace.solve_batch"], 50.0),
+        ("one cold jointplay.solve", speedup, 5.0, diff_mm),
+        ("a re-solve with new loads (warm stream)", stream[warm], 12.0, stream[f"{warm} agrees"]),
+        (
+            f"a batch of {args.steps} turning loads, per load",
+            stream[batch],
+            50.0,
+            stream[f"{batch} agrees"],
+        ),
     )
-    for what, ratio, target in targets:
-        verdict = "MET" if ratio >= target and same_ok else "NOT MET"
-        print(f"  {what:<44}{ratio:>8.2f}x  (>= {target:g}x) -> {verdict}")
+    for what, ratio, target, apart in targets:
+        verdict = "MET" if ratio >= target and apart <= AGREEMENT_MM else "NOT MET"
+        print(
+            f"  {what:<44}{ratio:>8.2f}x  (>= {target:g}x, answers {apart:.1e} mm apart) "
+            f"-> {verdict}"
+        )
     budget = stream["SLSQP us"] / 12.0
     print(
         f"  (12x leaves a re-solve {budget:.0f} us; of it, checking the answer's certificate "
