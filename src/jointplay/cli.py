@@ -809,7 +809,12 @@ def _with_progress(label: str, total: int, shown: bool, run: Callable[[Any], R])
 
 def _console() -> Console:
     # names from the model are printed as they are: "[/b]" is not markup, ":x:" no emoji
-    return Console(highlight=False, soft_wrap=False, markup=False, emoji=False)
+    console = Console(highlight=False, soft_wrap=False, markup=False, emoji=False)
+    if not console.is_terminal:  # a pipe, a file, a CI log: no line is wrapped
+        from jointplay.present.textreport import UNBROKEN
+
+        console.width = UNBROKEN
+    return console
 
 
 def _guarded(run: Any, as_json: bool) -> None:

@@ -22,7 +22,8 @@ from jointplay.errors import SolverError
 from jointplay.finite import IDENTITY, Linearization, Placement, linearization
 from jointplay.geometry import FloatArray, cross, describe_motion
 from jointplay.numerics.free_motions import IntArray, column_groups
-from jointplay.settings import DEFAULT, TINY
+from jointplay.proven import Resolution, proven
+from jointplay.settings import DEFAULT, SolverSettings
 
 if TYPE_CHECKING:
     from jointplay.assembly import Assembly
@@ -375,20 +376,6 @@ class Result:
             )
 
 
-def _clean(v: FloatArray, scale: float) -> FloatArray:
-    """Zero the round-off (below ``round_off`` of the scale) that the solver
-    leaves in exact zeros."""
-    out = np.array(v, dtype=float)
-    out[np.abs(out) < DEFAULT.round_off * scale] = 0.0
-    return out
-
-
-def _clean_rows(v: FloatArray, scale: float | FloatArray) -> FloatArray:
-    """``_clean`` on each row of ``v`` (n, 3), with one scale or one per row."""
-    v = np.asarray(v, dtype=float)
-    return np.where(np.abs(v) < DEFAULT.round_off * np.reshape(scale, (-1, 1)), 0.0, v)
-
-
 def _list(v: FloatArray) -> list[float]:
     return [float(c) + 0.0 for c in v]  # + 0.0 turns -0.0 into 0.0
 
@@ -404,8 +391,10 @@ def build_result(
     describe_free: Callable[[], tuple[str, ...]],
     loads: tuple[Load, ...],
     g: FloatArray,
+    settings: SolverSettings = DEFAULT,
 ) -> Result:
-    """Turn the solver's numbers into a ``Result``.
+    """Turn the solver's numbers into a ``Result``, each to what the
+    certificate proves (``proven``).
 
     ``ball_forces``: the force (N) of each clearance contact (``asm.balls``
     order), ``ball_vectors`` their force vectors (N, stacked like the rows
@@ -420,13 +409,6 @@ def build_result(
     X = x.reshape(n, 6)
     omega = asm.turn[:, None] * X[:, 3:]
     v_origin = asm.s * X[:, :3] - cross(omega, asm.body_ref)
-    omega, v_origin = _clean_rows(omega, asm.s / asm.ell), _clean_rows(v_origin, asm.s)
-    names = tuple(b.name for b in model.bodies)
-    translation, rotation = np.zeros((len(names), 3)), np.zeros((len(names), 3))
-    moving = np.array([asm.body_index.get(name, -1) for name in names], dtype=np.intp)
-    has = moving >= 0
-    translation[has], rotation[has] = v_origin[moving[has]], omega[moving[has]]
-    bodies = Rows(names, BodyTable(names, translation, rotation).row)
 
     T = asm.tables
     stack = asm.stack
@@ -453,26 +435,34 @@ def build_result(
         f = ball_vectors[stack.start[i] : stack.start[i] + stack.k[i]]
         local[c] = asm.contacts[c].contact.acting_point(f, float(ball_forces[i]))
     point = T.centre[T.joint_of] + np.einsum("cab,cb->ca", T.R_world_joint[T.joint_of], local)
-    force = wrench[:, :3]
-    force = _clean_rows(force, np.maximum(TINY, np.abs(force).max(axis=1, initial=0.0)))
-    # what the contact adds besides its force at its point: a drive's torque
-    torque = wrench[:, 3:] - cross(local, wrench[:, :3])
-    torque = _clean_rows(torque, np.maximum(TINY, np.abs(wrench[:, 3:]).max(axis=1)))
     reaction = np.zeros((len(model.joints), 6))
     np.add.at(reaction, T.joint_of, wrench)
+    residual = equilibrium_residual(asm, reaction, loads)
+    res = Resolution.of(asm.s, asm.ell, largest_force(asm, reaction, loads), settings)
+
+    names = tuple(b.name for b in model.bodies)
+    translation, rotation = np.zeros((len(names), 3)), np.zeros((len(names), 3))
+    moving = np.array([asm.body_index.get(name, -1) for name in names], dtype=np.intp)
+    has = moving >= 0
+    translation[has] = proven(v_origin[moving[has]], res.length)
+    rotation[has] = proven(omega[moving[has]], res.angle)
+    bodies = Rows(names, BodyTable(names, translation, rotation).row)
+    # what the contact adds besides its force at its point: a drive's torque
+    torque = wrench[:, 3:] - cross(local, wrench[:, :3])
     contacts = ContactTable(
         T.contact_name,
         gap,
         gap >= TOUCHING,
-        force + 0.0,  # + 0.0 turns -0.0 into 0.0
+        proven(wrench[:, :3], res.force),
         point,
         past,
-        torque + 0.0,
+        proven(torque, res.moment),
         is_turn,
     )
+    reaction = np.c_[proven(reaction[:, :3], res.force), proven(reaction[:, 3:], res.moment)]
 
     taus = (T.tau_map @ x).reshape(-1, 6)
-    t_rel, w_rel = _clean_rows(taus[:, :3], asm.s), _clean_rows(taus[:, 3:], asm.s / asm.ell)
+    t_rel, w_rel = proven(taus[:, :3], res.length), proven(taus[:, 3:], res.angle)
     table = JointTable(
         T.joint_name,
         T.joint_type,
@@ -488,8 +478,7 @@ def build_result(
     )
     joints = Rows(T.joint_name, table.row)
 
-    points = points_of(model, bodies)
-    residual = equilibrium_residual(asm, reaction, loads)
+    points = points_of(model, bodies, res)
     energy = -float(g @ x) + 0.0  # no load: 0, not -0
     reach_mm = stack.r * asm.s + penetration
     return Result(
@@ -551,17 +540,9 @@ def equilibrium_residual(
             moment[at_rows] += cross(at - ref[on[at_rows]], force[at_rows])
         np.add.at(F, on, force)
         np.add.at(M, on, moment)
-        # each load's own norm, as one vector (the rounding of every release before)
-        scale = max(
-            max(float(np.linalg.norm(v)) for v in force),
-            max(float(np.linalg.norm(v)) for v in moment) / asm.ell,
-        )
-    else:  # no load: springs that deviations press may still push
-        scale = 0.0
     T = asm.tables
     if len(reaction):  # every joint at once: large mechanisms have thousands
         rf, rm = reaction[:, :3], reaction[:, 3:]
-        scale = max(scale, _largest_norm(rf), _largest_norm(rm) / asm.ell)
         centre = T.centre
         if place:
             a_places = [place.get(a, IDENTITY) for a, _ in T.between]
@@ -578,10 +559,24 @@ def equilibrium_residual(
         force, moment, centre = (np.concatenate([v, v])[moving] for v in (force, moment, centre))
         np.add.at(F, body, sign * force)
         np.add.at(M, body, sign * (moment + cross(centre - ref[body], force)))
+    scale = largest_force(asm, reaction, loads)
     if scale == 0.0:
         return 0.0
     worst = max(_largest_norm(F), _largest_norm(M) / asm.ell)
     return worst / scale
+
+
+def largest_force(asm: Assembly, reaction: FloatArray, loads: tuple[Load, ...]) -> float:
+    """N: the largest force in the balance, a load's or a joint's reaction
+    (a moment counting as moment / ``ell``); 0 with neither. ``reaction``
+    as in ``equilibrium_residual``."""
+    # each load's own norm, as one vector
+    forces = [0.0, *(float(np.linalg.norm(ld.force)) for ld in loads if ld.force is not None)]
+    torques = [0.0, *(float(np.linalg.norm(ld.torque)) for ld in loads if ld.torque is not None)]
+    scale = max(max(forces), max(torques) / asm.ell)
+    if len(reaction):
+        scale = max(scale, _largest_norm(reaction[:, :3]), _largest_norm(reaction[:, 3:]) / asm.ell)
+    return scale
 
 
 def _largest_norm(rows: FloatArray) -> float:
@@ -590,11 +585,16 @@ def _largest_norm(rows: FloatArray) -> float:
     return math.sqrt(float((rows * rows).sum(axis=1).max(initial=0.0)))
 
 
-def points_of(model: Model, bodies: Mapping[str, BodyResult]) -> dict[str, PointResult]:
+def points_of(
+    model: Model, bodies: Mapping[str, BodyResult], res: Resolution
+) -> dict[str, PointResult]:
     """The functional points' displacements, from the bodies' results."""
     return {
         p.name: PointResult(
-            p.name, p.body, np.array(p.at), bodies[p.body].displacement_of(np.array(p.at))
+            p.name,
+            p.body,
+            np.array(p.at),
+            proven(bodies[p.body].displacement_of(np.array(p.at)), res.length),
         )
         for p in model.points
     }

@@ -31,17 +31,72 @@ def _vec(v: FloatArray, digits: int = 4) -> str:
     return "[" + ", ".join(f"{float(c) + 0.0:.{digits}g}" for c in v) + "]"
 
 
-def _unclipped(console: Console, *parts: Any) -> Group:
-    """The parts as one group, no table cell cut short: a table wider than the
-    terminal closes up its padding, and a number that still does not fit
-    wraps onto a second line instead of ending in '…'."""
+#: The width of a console that is not a terminal (a pipe, a file, a CI log):
+#: wider than any line, so that no line is ever wrapped.
+UNBROKEN = 1_000_000
+
+
+def _fit(console: Console, *parts: Any) -> Group:
+    """The parts laid out so that no number or name is broken across lines.
+
+    A table's title goes on a line of its own (Rich wraps a title to the
+    table's width), and each cell on one line. A table wider than the
+    console closes up its padding; where it still does not fit, each row is
+    printed as a list of "column: value" instead. Text wraps between words
+    only; a console that is not a terminal is ``UNBROKEN`` wide, so nothing
+    wraps there."""
+    laid: list[Any] = []
     for part in parts:
-        wide = console.options.update_width(10_000)
-        if isinstance(part, Table) and console.measure(part, options=wide).maximum > console.width:
+        if not isinstance(part, Table):
+            laid.append(part)
+            continue
+        if part.title:
+            laid.append(Text(str(part.title)))
+            part.title = None
+        for column in part.columns:  # a cell is one line: a number or a name whole
+            column.no_wrap, column.overflow = True, "fold"  # never '…': caught below
+        wide = console.options.update_width(UNBROKEN)
+        if console.measure(part, options=wide).maximum > console.width:
             part.collapse_padding = True  # one space between columns, not two
-        for column in getattr(part, "columns", ()):
-            column.overflow = "fold"
-    return Group(*parts)
+            if not _cells_whole(console, part):
+                laid.append(_as_list(part))
+                continue
+        laid.append(part)
+    return Group(*laid)
+
+
+def _cells(table: Table) -> list[list[str]]:
+    """The header and the cells of each column of ``table``, as plain text."""
+    return [[str(c.header), *(str(cell) for cell in c.cells)] for c in table.columns]
+
+
+def _cells_whole(console: Console, table: Table) -> bool:
+    """Whether ``table`` at the console's width shows every cell on one line."""
+    from collections import Counter
+
+    lines = ["".join(s.text for s in line) for line in console.render_lines(table, pad=False)]
+    cells = [cell.strip() for column in _cells(table) for cell in column]
+    shown = Counter(word for line in lines for word in line.split())
+    if Counter(word for cell in cells for word in cell.split()) - shown:
+        return False  # a word cut in two
+    text = "\n".join(lines)
+    return all(cell in text for cell in cells if " " in cell)
+
+
+def _as_list(table: Table) -> Text:
+    """A table too wide for the console, a row a paragraph: its first cell,
+    then "column: value" for each other cell that holds something (a row
+    with no first cell continues the one above)."""
+    headers, *rows = zip(*_cells(table), strict=True)
+    lines = []
+    for first, *rest in rows:
+        named = [
+            f"{h.strip()}: {v.strip()}" if h.strip() else v.strip()
+            for h, v in zip(headers[1:], rest, strict=True)
+            if v.strip()
+        ]
+        lines.append((f"{first.strip()}: " if first.strip() else "    ") + "; ".join(named))
+    return Text("\n".join(lines))
 
 
 def _xyz_table(title: str, leading: list[str]) -> Table:
@@ -174,7 +229,7 @@ def render(
                 + "\n".join(f"  {m}" for m in result.free_motions)
             )
         )
-    console.print(_unclipped(console, *parts))
+    console.print(_fit(console, *parts))
 
 
 def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -> None:
@@ -254,7 +309,7 @@ def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -
                 f"worst estimate's relative error {worst:.3g}"
             )
         )
-    console.print(_unclipped(console, *parts))
+    console.print(_fit(console, *parts))
 
 
 def render_envelope(
@@ -279,7 +334,7 @@ def render_envelope(
     for i, axis in enumerate("XYZ"):
         lo, hi = result.extent[i]
         table.add_row(axis, f"{lo + 0.0:.6g}", f"{hi + 0.0:.6g}")
-    console.print(_unclipped(console, head, table))
+    console.print(_fit(console, head, table))
 
 
 #: Rows of a sweep printed to the terminal; the rest go to --csv.
@@ -335,7 +390,7 @@ def render_sweep(
         )
     if tail:
         parts.append(tail)
-    console.print(_unclipped(console, *parts))
+    console.print(_fit(console, *parts))
 
 
 def _bar(percent: float, width: int = 10) -> str:
@@ -385,7 +440,7 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         parts.append(table)
         if notes:
             parts.append(notes)
-    console.print(_unclipped(console, *parts))
+    console.print(_fit(console, *parts))
 
 
 def _contributions_table(
@@ -461,7 +516,7 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
         parts.append(table)
         if r.beyond_stack:
             parts.append(Text(r.beyond_words(mc.samples) + "\n"))
-    console.print(_unclipped(console, *parts))
+    console.print(_fit(console, *parts))
 
 
 def _cap(value: float) -> str:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -37,14 +38,15 @@ from jointplay.geometry import (
     skew,
 )
 from jointplay.model.mechanism import Load
+from jointplay.proven import Resolution, proven
 from jointplay.result import (
     BodyResult,
     Certificate,
     ContactResult,
     JointResult,
     Result,
-    _clean,
     equilibrium_residual,
+    largest_force,
     points_of,
     requirements_of,
 )
@@ -275,9 +277,7 @@ def _build(
     bodies = {}
     for b in model.bodies:
         pl = place.get(b.name, IDENTITY)
-        bodies[b.name] = BodyResult(
-            b.name, _clean(pl.shift, asm.s), _clean(rotation_vector(pl.R), asm.s / asm.ell), pl.R
-        )
+        bodies[b.name] = BodyResult(b.name, pl.shift, rotation_vector(pl.R), pl.R)
     ball_index = {id(c): i for i, c in enumerate(asm.balls)}
     fixed_index: dict[int, int] = {}
     row = 0
@@ -322,7 +322,7 @@ def _build(
                     wrench[:3] + 0.0,
                     a_place(joint.centre + Rw @ q),
                     past if c.contact.turn_lever is None else past / c.contact.turn_lever,
-                    _clean(wrench[3:] - np.cross(q, wrench[:3]), float(np.max(np.abs(wrench)))),
+                    wrench[3:] - np.cross(q, wrench[:3]),
                     "mm" if c.contact.turn_lever is None else "rad",
                 )
             )
@@ -332,16 +332,25 @@ def _build(
             joint.between,
             joint.centre,
             Rw,
-            _clean(t_rel, asm.s),
-            _clean(phi, asm.s / asm.ell),
+            t_rel,
+            phi,
             tuple(contacts),
             total[:3],
             total[3:],
         )
-    points = points_of(model, bodies)
     reactions = np.array(
         [np.r_[jr.reaction_force, jr.reaction_moment] for jr in joints.values()]
     ).reshape(-1, 6)
+    residual = equilibrium_residual(asm, reactions, loads, place)
+    res = Resolution.of(asm.s, asm.ell, largest_force(asm, reactions, loads), st)
+    bodies = {
+        n: replace(
+            b, translation=proven(b.translation, res.length), rotation=proven(b.rotation, res.angle)
+        )
+        for n, b in bodies.items()
+    }
+    joints = {n: _proven_joint(jr, res) for n, jr in joints.items()}
+    points = points_of(model, bodies, res)
     energy = 0.0
     for ld in loads:
         if ld.force is not None:
@@ -355,9 +364,25 @@ def _build(
         joints,
         points,
         Certificate(True, "exact", 0.0, 0.0, 0.0, 0.0, 0),
-        equilibrium_residual(asm, reactions, loads, place),
+        residual,
         0.0,
         ws.free_motions,
         requirements=requirements_of(model, points),
         model_warnings=asm.model_warnings,
+    )
+
+
+def _proven_joint(jr: JointResult, res: Resolution) -> JointResult:
+    """``jr`` to what the answer proves (``proven``)."""
+    contacts = tuple(
+        replace(c, force=proven(c.force, res.force), torque=proven(c.torque, res.moment))
+        for c in jr.contacts
+    )
+    return replace(
+        jr,
+        translation=proven(jr.translation, res.length),
+        rotation=proven(jr.rotation, res.angle),
+        contacts=contacts,
+        reaction_force=proven(jr.reaction_force, res.force),
+        reaction_moment=proven(jr.reaction_moment, res.moment),
     )

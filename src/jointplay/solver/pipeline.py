@@ -108,6 +108,7 @@ def _solve_loads(ws: Workspace, loads: Sequence[Load] | None) -> Result:
         ws.free_motions,
         loads,
         g,
+        ws.settings,
     )
     # The certificate balances the forces in the solver's scaled unknowns;
     # per body and in newtons (Result.check) a badly scaled mechanism can
