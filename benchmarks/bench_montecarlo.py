@@ -11,16 +11,16 @@ over all samples, and the largest difference of point B's displacement from
 an independent full ``jointplay.solve`` (interior point + polish) and from
 SLSQP on the checked subset.
 
-Target (issue 5): 100,000 samples/s on a 2-core machine, every sample exact
+Target: 100,000 samples/s on a 2-core machine, every sample exact
 to 1e-7 mm.
 
-Then the studies of examples/studies (issue 18's targets: 300,000 samples/s
+Then the studies of examples/studies (targets: 300,000 samples/s
 on shaft_fits.yaml, 100,000 on carriage.yaml, with 2 workers): each run with
 1 and ``--workers`` processes, at two sample counts and two chunk sizes
 (time should be linear in the samples and not depend on the chunk), against
 the obvious alternative, one full ``jointplay.solve`` per sample.
 
-Last, deviations (issue 21's target: a study with deviations runs at least
+Last, deviations (target: a study with deviations runs at least
 at 80 % of the same study without them): examples/studies/shaft_deviations.yaml
 (its bore's play, position zone and parallelism drawn) against the same
 model with the bore's deviation left out, in the same run; then

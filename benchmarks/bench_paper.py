@@ -479,7 +479,7 @@ def stream_benchmark(
     agree = max(diff for name, _, _, diff in rows if name.startswith("SLSQP (paper"))
     ok = best >= SPEED_TARGET and agree <= AGREEMENT_MM
     print(
-        f"Issue 2's target on this stream: a jointplay mode {SPEED_TARGET:g}x faster per solve "
+        f"The target on this stream: a jointplay mode {SPEED_TARGET:g}x faster per solve "
         f"than SLSQP with the same answers to {AGREEMENT_MM:g} mm: best {best:.1f}x, "
         f"max|Δ| {agree:.1e} mm -> {'MET' if ok else 'NOT MET'}"
     )
@@ -645,7 +645,7 @@ def main(argv: list[str] | None = None) -> int:
     speed_ok = speedup >= SPEED_TARGET
     same_ok = diff_mm <= AGREEMENT_MM
     print(
-        f"Issue 2's target: jointplay at least {SPEED_TARGET:g}x faster than SLSQP (median), "
+        f"The speed target: jointplay at least {SPEED_TARGET:g}x faster than SLSQP (median), "
         f"same answer to {AGREEMENT_MM:g} mm."
     )
     print(f"  speed:     {speedup:.2f}x  -> {'MET' if speed_ok else 'NOT MET'}")
@@ -659,7 +659,7 @@ def main(argv: list[str] | None = None) -> int:
     stream_ok, stream = stream_benchmark(model, args.steps, args.subset)
     print(f"  overall:   {'MET' if (speed_ok or stream_ok) and same_ok else 'NOT MET'}")
     print()
-    print("Issue 18's targets (against SLSQP with analytic gradients, same answers):")
+    print("The targets by mode (against SLSQP with analytic gradients, same answers):")
     warm, batch = "Workspace.solve (warm stream)", "Workspace.solve_batch"
     targets = (
         ("one cold jointplay.solve", speedup, 5.0, diff_mm),

@@ -29,7 +29,7 @@ what the solve added to it after the model was built. With ``--cvxpy-max N``
 (default 1000) CVXPY + Clarabel builds and solves the same cone program for
 sizes up to N, in the same process, as a reference.
 
-Targets (issue 18): 1,000 bodies in at most 0.5 s; 10,000 in at most 6 s
+Targets: 1,000 bodies in at most 0.5 s; 10,000 in at most 6 s
 and 2 GB; at most 12x per decade. Each is printed with its verdict.
 
 Run from the repository root: ``python benchmarks/bench_scaling.py``
@@ -46,7 +46,7 @@ import sys
 import time
 from typing import Any
 
-#: Issue 18's targets: seconds per solve by size, peak MB at 10,000, growth per decade.
+#: The targets: seconds per solve by size, peak MB at 10,000, growth per decade.
 SECONDS_TARGET = {1000: 0.5, 10000: 6.0}
 MB_TARGET = 2048.0
 DECADE_TARGET = 12.0

@@ -5,7 +5,7 @@ Each command runs as a new process, as a user starts it; the commands take
 turns (A B C ... A B C ...) so that drift of the machine's speed hits all of
 them alike. The yardstick is a process that only imports the solver's
 dependencies: ``import numpy, scipy.sparse, clarabel, pydantic, yaml, pint``.
-The target (issue 19): ``jointplay solve`` on the paper's case, and
+The target: ``jointplay solve`` on the paper's case, and
 ``jointplay --help``, within 0.3 s of it (medians).
 
 Run from the repository root with jointplay installed:

@@ -4,8 +4,8 @@
 Not a timing benchmark and not a test: it prints, per family, how many
 models were solved, which were declined (exit 1: "could not be certified"),
 the worst balance of the certified ones and the time, and exits 0. The
-families are the ones docs/solver-routes.md counts (the retry's other path,
-``fine_ipm_regularization``):
+families are degenerate optima that take the retry's other path
+(``fine_ipm_regularization``; docs/solver.md, "Known limits"):
 
 * ``bearing``: ``bearing_chain(n)`` for n = 2..60, 70, 80, 90, 100, 120,
   150, 200, 300 (67 chains);

@@ -978,8 +978,8 @@ def test_a_start_from_before_the_batch_is_given_up_only_on_a_part_of_many_rows(
     """The rule above reads a whole part's failure as evidence; a part of a
     few rows (a 20-segment string, 9 rows a part) is none. Here its 9 first
     samples carry loads of their own and the others the nominal load: given
-    up after those 9, the nominal start left the others to neighbours
-    solved later, at 2.3 times the Newton row-steps (review of 91c2c81)."""
+    up after those 9, the nominal start would leave the others to neighbours
+    solved later, at 2.3 times the Newton row-steps."""
     from dataclasses import replace
 
     from jointplay.io.generate import tube_string_dict

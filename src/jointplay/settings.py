@@ -44,20 +44,16 @@ class SolverSettings:
     #: Clarabel's static regularization of its KKT systems (its own default).
     ipm_regularization: float = 1e-8
     #: The retry's (and a tie's program's, below): the retry takes another
-    #: path, not only a finer stop. On a
-    #: degenerate optimum (bearing chains) the interior point stops "almost
-    #: solved" on an active set that cannot all touch, at any tolerance;
-    #: with this regularization it stops on another. Bearing chains of 2 to
-    #: 300 shafts: 5 of 134 declined with the retry at 1e-8 (clarabel 0.10
-    #: and 0.11), none now; 70 other chains and strings: 4 declined, now 1.
+    #: path, not only a finer stop. On a degenerate optimum (bearing chains)
+    #: the interior point stops "almost solved" on an active set that cannot
+    #: all touch, at any tolerance; with this regularization it stops on
+    #: another (``benchmarks/scan_degenerate.py`` counts the chains declined).
     #: A tie's least-norm program has it from the first try (so there the
     #: retry changes only the tolerance): its answer is printed as it is
-    #: where its polish fails. Long bearing chains' polish failed until its
-    #: systems were equilibrated (``equilibration_sweeps``), and at 1e-8
-    #: their program stopped "almost solved" past a clearance (4.7e-9 mm on
-    #: 4,000 shafts) and the whole solve took the retry (4,000 shafts: 13.8 s
-    #: against 6.2 s; 10,000: 34.5 s against 13.6-15.8 s, fresh install). It
-    #: still takes fewer steps than at 1e-8 (4,000 shafts: 12 against 21).
+    #: where its polish fails, and at 1e-8 a long bearing chain's program
+    #: stops "almost solved" past a clearance (4.7e-9 mm on 4,000 shafts),
+    #: sending the whole solve to the retry. It also takes fewer steps than
+    #: at 1e-8 (4,000 shafts: 12 against 21).
     fine_ipm_regularization: float = 1e-10
     max_iterations: int = 200
     #: Iterative refinement of each interior-point step's linear solve: with
@@ -65,7 +61,7 @@ class SolverSettings:
     #: some programs "AlmostSolved" at a 1e-7 gap.
     ipm_refinement: float = 1e-14
     #: A large (sparse) model's interior point goes without it: there its
-    #: answer is where Newton starts, which ends at round-off, and it doubled
+    #: answer is where Newton starts, which ends at round-off, and it doubles
     #: Clarabel's time (10,000-segment chain: 2.0 s and 16 iterations against
     #: 0.86 s and 11). So do its split rule's cone program, whose answer is
     #: refined on its support (10,000-shaft bearing chain: 3.6 s against 1.8 s
@@ -75,7 +71,7 @@ class SolverSettings:
     #: their own answer is printed if it certifies. Not the rest position's
     #: least-norm program (no load), which stays refined. A small model's
     #: costs little, and degenerate ones need it (bearing chains of 17 to 21
-    #: shafts declined without it). An answer that does not certify is
+    #: shafts are declined without it). An answer that does not certify is
     #: retried with it (``retry``), and a verdict (not held, not assembled)
     #: is read from a refined solve (``conic.run``); ``conic.refined``.
     sparse_interior_refinement: bool = False
@@ -159,9 +155,10 @@ class SolverSettings:
     #: Newton runs each (a round drops one cone; a start that keeps finding
     #: sets may use the runs of later ones). Three: of 13,738 starts that
     #: found the optimum (the whole suite, and a long random search of the
-    #: property tests, when a round dropped every weak cone), 687 needed a
-    #: second round, 32 a third and none a fourth; a degenerate bearing chain
-    #: walks one contact a round (20 shafts: 15 rounds from the first start).
+    #: property tests, with every weak cone dropped in one round), 687 needed
+    #: a second round, 32 a third and none a fourth; a degenerate bearing
+    #: chain walks one contact a round (20 shafts: 15 rounds from the first
+    #: start).
     #: The sets a start met are not tried again, so a later start may walk on
     #: where it stopped.
     near_limit: float = 1e-3
