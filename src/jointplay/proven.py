@@ -35,11 +35,12 @@ class Resolution:
         cls,
         play_mm: float,
         ell_mm: float,
-        largest_force: float,
+        largest_force: float = 0.0,
         settings: SolverSettings = DEFAULT,
     ) -> Resolution:
         """``play_mm``: the largest play; ``largest_force``: the largest force
-        in the balance (N, a moment counting as moment / ``ell_mm``)."""
+        in the balance (N, a moment counting as moment / ``ell_mm``; 0 where
+        only positions are read)."""
         length = settings.feasibility_tolerance * play_mm
         force = settings.equilibrium_tolerance * largest_force
         return cls(length, length / ell_mm, force, force * ell_mm)

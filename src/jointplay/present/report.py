@@ -621,7 +621,7 @@ class _Page:
                 [
                     (
                         _num(env.largest),
-                        _vec(env.largest_vector / max(env.largest, 1e-300), 4),
+                        _vec(env.largest_direction, 4),
                         f"{_num(ext[0, 0])} .. {_num(ext[0, 1])}",
                         f"{_num(ext[1, 0])} .. {_num(ext[1, 1])}",
                         f"{_num(ext[2, 0])} .. {_num(ext[2, 1])}",

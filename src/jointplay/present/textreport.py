@@ -326,7 +326,7 @@ def render_envelope(
     for words in result.not_held:
         head.append(f"not held, left out: {words}\n")
     size = result.largest
-    direction = result.largest_vector / size if size > 0 else np.zeros(3)
+    direction = result.largest_direction
     head.append(f"largest displacement: {size:.6g} mm along {_vec(direction)}\n")
     table = Table(title="extent along each axis (mm)", title_justify="left", show_edge=False)
     for name in ("axis", "least", "greatest"):

@@ -64,7 +64,7 @@ from jointplay.errors import (
 from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model
 from jointplay.model.tolerance import Toleranced
-from jointplay.settings import DEFAULT
+from jointplay.proven import Resolution, direction, proven
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.variation import deviation_map, load_map, play_map
 from jointplay.units import LIMITS
@@ -175,11 +175,11 @@ class Envelope:
         if dmap.variables:
             return self._over_zones(rigid, ws, dmap, point.body, at, directions, mode)
 
+        resolution = Resolution.of(asm.s, asm.ell, settings=ws.settings)
+
         def motion_of(work: FloatArray) -> FloatArray:
             motion = ws.solve_batch(work, forces=False).body_displacement(point.body)
-            d = np.asarray(motion[:, :3] + np.cross(motion[:, 3:], at))
-            d[np.abs(d) < DEFAULT.round_off * asm.s] = 0.0  # round-off of exact zeros
-            return d
+            return proven(motion[:, :3] + np.cross(motion[:, 3:], at), resolution.length)
 
         if mode == "model":
             d, over, not_held = self._over_model(rigid, asm, motion_of, source)
@@ -506,6 +506,11 @@ class EnvelopeResult:
             return np.zeros((3, 2))
         return np.column_stack([self.hull.min(axis=0), self.hull.max(axis=0)])
 
+    @property
+    def largest_direction(self) -> FloatArray:
+        """(3,) the unit vector of the largest displacement (0 where there is none)."""
+        return direction(self.largest_vector, 0.0)
+
     def contains(self, displacement: FloatArray, tol: float = 1e-9) -> FloatArray:
         """(N,) bool: each displacement (N, 3) is inside every supporting plane."""
         d = np.atleast_2d(displacement)
@@ -513,7 +518,7 @@ class EnvelopeResult:
 
     def to_dict(self) -> dict[str, Any]:
         ext = self.extent
-        direction = (self.largest_vector / self.largest).tolist() if self.largest > 0 else [0.0] * 3
+        direction = self.largest_direction.tolist()
         return {
             "study": "envelope",
             "point": self.settings.point,
@@ -581,7 +586,7 @@ class _ZoneProgram:
         stack, m = ws.stack, ws.m
         nd = len(dmap.variables)
         self.m, self.P = m, P
-        self.zero = DEFAULT.round_off * ws.asm.s
+        self.zero = Resolution.of(ws.asm.s, ws.asm.ell, settings=ws.settings).length
         A, B = linalg.dense(stack.A), linalg.dense(stack.B)
         Eq = linalg.dense(ws.Eq)
         blocks: list[FloatArray] = [np.hstack([Eq, np.zeros((len(Eq), nd))])]
@@ -655,8 +660,7 @@ class _ZoneProgram:
                 f"{conic.status_name(sol)}"
             )
         d = np.asarray(self.P @ np.asarray(sol.x)[: self.m])
-        d[np.abs(d) < self.zero] = 0.0  # round-off of exact zeros
-        return d
+        return proven(d, self.zero)
 
     def _holds(self, sol: Any) -> bool:
         """Whether an inaccurate answer (Clarabel's "AlmostSolved", its gap

@@ -31,6 +31,7 @@ from jointplay.assembly import Assembly, assemble
 from jointplay.errors import ModelError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
+from jointplay.proven import Resolution, proven
 from jointplay.solver.batch import Start, solved_start
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.parallel import run_chunks
@@ -246,10 +247,11 @@ def _solve_chunk(model: Model, mc: MonteCarlo, index: int, size: int, run: str |
         centres = dmap.centres(deviations)
     batch = ws.solve_batch(work, radii, centres, forces=False, starts=prepared.starts)
     displacement = np.zeros((size, len(model.points), 3))
+    step = Resolution.of(asm.s, asm.ell, settings=ws.settings).length  # at the nominal plays
     for p, point in enumerate(model.points):
         motion = batch.body_displacement(point.body)
         at = np.asarray(point.at)
-        displacement[:, p] = motion[:, :3] + np.cross(motion[:, 3:], at)
+        displacement[:, p] = proven(motion[:, :3] + np.cross(motion[:, 3:], at), step)
     displacement[~batch.assembled] = np.nan  # every point, those on the ground too
     return _Chunk(
         index,
@@ -517,8 +519,9 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
 
 
 def _wilson(k: int, n: int, z: float) -> tuple[float, float]:
-    """Wilson score interval of a binomial fraction k / n."""
+    """Wilson score interval of a binomial fraction k / n; its bound at a
+    count of 0 (or n) is exactly 0 (or 1), not the formula's round-off."""
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    return (0.0 if k == 0 else centre - half, 1.0 if k == n else centre + half)
