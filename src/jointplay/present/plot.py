@@ -64,8 +64,13 @@ JOINTS_PER_ROW = 4
 #: A view is edge-on when the bodies and points extend less than this share of
 #: the mechanism's size along one of its axes (a planar mechanism seen from the side).
 FLAT = 0.02
-#: Where a label may sit around its mark (points across, up), tried in order.
-LABEL_OFFSETS = ((5, 4), (-5, 4), (5, -4), (-5, -4), (7, 0), (-7, 0), (0, 7), (0, -7))
+#: Where a label may sit around its mark (points across, up), tried in order:
+#: the eight ways beside it, then the same farther out (marks close together).
+LABEL_OFFSETS = tuple(
+    (k * dx, k * dy)
+    for k in (1, 3)
+    for dx, dy in ((5, 4), (-5, 4), (5, -4), (-5, -4), (7, 0), (-7, 0), (0, 7), (0, -7))
+)
 #: Pixels kept between two labels, and between a label and its panel's frame.
 LABEL_GAP = 3.0
 #: In the 3D panel a direction spans at least this share of the longest (its
@@ -373,15 +378,28 @@ def place_point_labels(fig: Figure, model: Model) -> set[int]:
     numbered: set[int] = set()
     for ax in fig.axes:
         placed: list[Bbox] = []
+        tags: list[Annotation] = []  # the labels that are numbers
         for text in ax.texts:
             gid = text.get_gid() or ""
             if not gid.startswith("point ") or not isinstance(text, Annotation):
                 continue
             number = int(gid.split()[1])
-            if not _place(text, ax, placed, renderer):
+            if not text.get_text():  # its number joined another's
+                continue
+            name = model.points[number - 1].name
+            if text.get_text() == name and _place(text, ax, placed, renderer):
+                placed.append(text.get_window_extent(renderer))
+                continue
+            if text.get_text() == name:
                 text.set_text(str(number))
-                numbered.add(number)
-                _place(text, ax, placed, renderer)  # else where it first was
+            numbered.update(int(k) for k in text.get_text().split(","))
+            if not _place(text, ax, placed, renderer) and tags:
+                # no room even for the number: it joins the nearest mark's ('3,4')
+                near = min(tags, key=lambda t: math.dist(t.xy, text.xy))
+                near.set_text(f"{near.get_text()},{text.get_text()}")
+                text.set_text("")
+                continue
+            tags.append(text)
             placed.append(text.get_window_extent(renderer))
     return numbered
 
