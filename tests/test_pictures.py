@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from matplotlib.patches import FancyArrowPatch
 from PIL import Image
 from typer.testing import CliRunner
 
@@ -85,10 +86,11 @@ def test_the_paper_scene_places_every_point_by_the_solution() -> None:
     scene = mechanism_scene(model, result, magnify=m)
     assert scene.magnify == m and scene.size == pytest.approx(300.0, abs=MM)
     d = result.bodies["S1"].displacement_of
-    # the shaft is one line O - O2-20 - O2 - O2+20 - B, initial and displaced
+    # the shaft is one line O - B along its axis, initial and displaced
     initial = [ln.points for ln in scene.lines if ln.role == "initial"]
     displaced = [ln.points for ln in scene.lines if ln.role == "displaced"]
-    assert len(initial) == len(displaced) == 4
+    assert len(initial) == len(displaced) == 1
+    np.testing.assert_allclose(initial[0], [[0, 0, 0], [300, 0, 0]], atol=MM)
     for before, after in zip(initial, displaced, strict=True):
         for P, Q in zip(before, after, strict=True):
             np.testing.assert_allclose(Q, P + m * d(P), atol=MM)
@@ -473,3 +475,143 @@ def test_joint_panel_labels_stay_inside_their_panels(path: Path, case: str | Non
             assert inside.y0 >= box.y0 - slack and inside.y1 <= box.y1 + slack, text.get_text()
             checked += 1
     assert checked >= len(with_play(model))  # a label at least per joint panel
+
+
+# -- the layout: everything inside its panel, nothing over anything else -----------------
+def _gear_shaft() -> jointplay.Model:
+    """A shaft on two bearings along x, its gear's mesh point 50 mm off the
+    axis, with four functional points crowded on the axis at the shaft's end."""
+    from jointplay import model_from_dict
+
+    ends = [[300, 0, 0], [301, 0, 0], [300.5, 0, 0], [301.5, 0, 0]]
+    names = ["top corner", "latch", "tool", "probe"]
+    return model_from_dict(
+        {
+            "bodies": [{"name": "housing", "ground": True}, {"name": "shaft"}],
+            "joints": [
+                {
+                    "name": "front",
+                    "type": "spherical",
+                    "between": ["housing", "shaft"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.02,
+                },
+                {
+                    "name": "rear",
+                    "type": "cylindrical",
+                    "between": ["housing", "shaft"],
+                    "at": [200, 0, 0],
+                    "axis": [1, 0, 0],
+                    "length": 40,
+                    "clearance": 0.03,
+                },
+            ],
+            "loads": [{"body": "shaft", "at": [100, 50, 0], "force": [0, -200, 0]}],
+            "points": [
+                {"name": n, "body": "shaft", "at": P} for n, P in zip(names, ends, strict=True)
+            ],
+        }
+    )
+
+
+def _within(frame: object, box: object, slack: float = 2.0) -> bool:
+    return bool(
+        box.x0 >= frame.x0 - slack  # type: ignore[attr-defined]
+        and box.x1 <= frame.x1 + slack  # type: ignore[attr-defined]
+        and box.y0 >= frame.y0 - slack  # type: ignore[attr-defined]
+        and box.y1 <= frame.y1 + slack  # type: ignore[attr-defined]
+    )
+
+
+def test_crowded_point_labels_stay_in_their_panels_and_clear_of_each_other() -> None:
+    """Four points within a millimetre: in each view their labels do not
+    overlap and stay inside the panel; those that cannot fit are numbered and
+    named in the legend."""
+    model = _gear_shaft()
+    fig = mechanism_figure(model, jointplay.solve(model), joints=False)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    names = {p.name for p in model.points}
+    numbers = {str(k) for k in range(1, len(names) + 1)}
+    for ax in fig.axes:
+        frame = ax.get_window_extent(renderer)
+        labels = [t for t in ax.texts if (t.get_gid() or "").startswith("point ")]
+        labels = [t for t in labels if t.get_text()]  # a number may join another's: '3,4'
+        if not labels:
+            continue
+        written = [w for t in labels for w in t.get_text().split(",")]
+        assert sorted(written) == sorted(set(written)) and len(written) >= len(names)
+        boxes = [t.get_window_extent(renderer) for t in labels]
+        for text, box in zip(labels, boxes, strict=True):
+            assert set(text.get_text().split(",")) <= names | numbers or text.get_text() in names
+            assert _within(frame, box), (ax.get_title(), text.get_text())
+        for i, a in enumerate(boxes):
+            for b in boxes[i + 1 :]:
+                assert not a.overlaps(b), ax.get_title()
+        legend = [t.get_text() for t in fig.legends[0].get_texts()]
+        for number in set(written) & numbers:  # a number stands for its point, named in the legend
+            assert model.points[int(number) - 1].name in legend
+
+
+def test_the_envelope_arrow_stays_inside_its_view() -> None:
+    """The carriage's tool moves a way its envelope does not hold the rest
+    position in: the largest displacement's arrow, from the rest position,
+    lies inside each view (it used to cross into the 3D panel)."""
+    model = jointplay.load(STUDIES / "carriage.yaml")
+    fig = envelope_figure(Envelope("tool", directions=24).run(model))
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    arrows = 0
+    for ax in fig.axes[1:]:
+        frame = ax.get_window_extent(renderer)
+        for patch in ax.patches:
+            if isinstance(patch, FancyArrowPatch):
+                assert patch.get_clip_on() and patch.get_clip_box() is not None
+                assert _within(frame, patch.get_window_extent(renderer)), ax.get_title()
+                arrows += 1
+    assert arrows == 3
+
+
+def test_panels_do_not_overlap() -> None:
+    """No panel's drawn box, its tick and axis labels included (the 3D panel's
+    'Z (mm)' used to sit on the YZ view's), meets another's."""
+    model, result = _paper()
+    fig = mechanism_figure(model, result)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    boxes = [(ax.get_title(), ax.get_tightbbox(renderer)) for ax in fig.axes]
+    for i, (name, a) in enumerate(boxes):
+        for other, b in boxes[i + 1 :]:
+            assert not a.overlaps(b), (name, other)
+
+
+def test_a_planar_mechanism_has_no_edge_on_view() -> None:
+    """The four-bar lies in XY: its XZ and YZ views would be lines with every
+    arrow on them; only the XY view is drawn beside the 3D panel."""
+    model = jointplay.load(GALLERY / "four_bar.yaml")
+    fig = mechanism_figure(model, jointplay.solve(model), joints=False)
+    titles = [ax.get_title() for ax in fig.axes]
+    assert "XY (along Z)" in titles
+    assert "XZ (along -Y)" not in titles and "YZ (along X)" not in titles
+    carriage = jointplay.load(STUDIES / "carriage.yaml")  # a solid one: every view
+    fig = mechanism_figure(carriage, jointplay.solve(carriage), joints=False)
+    assert {"XY (along Z)", "XZ (along -Y)", "YZ (along X)"} <= {ax.get_title() for ax in fig.axes}
+
+
+def test_a_shaft_without_outline_is_drawn_along_its_axis() -> None:
+    """The shaft's joints lie on one straight line (its axis), and the load's
+    point 50 mm off it hangs on a stub square to the axis: not a V."""
+    model = _gear_shaft()
+    scene = mechanism_scene(model, jointplay.solve(model))
+    initial = [ln.points for ln in scene.lines if ln.role == "initial"]
+    axis = max(initial, key=lambda P: float(np.linalg.norm(P[-1] - P[0])))
+    u = (axis[-1] - axis[0]) / np.linalg.norm(axis[-1] - axis[0])
+    for joint in model.joints:  # every joint on the axis line
+        off = joint.centre - axis[0]
+        assert np.linalg.norm(off - (off @ u) * u) < MM
+    mesh = np.array([100.0, 50.0, 0.0])
+    (stub,) = [P for P in initial if np.allclose(P[-1], mesh)]
+    assert abs((stub[-1] - stub[0]) @ u) < MM  # square to the axis
+    off = stub[0] - axis[0]
+    assert np.linalg.norm(off - (off @ u) * u) < MM  # from a point on it
+    assert len(initial) == 2  # the axis and the stub: the points on the axis need none

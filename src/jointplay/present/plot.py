@@ -25,13 +25,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.lines import Line2D
-from matplotlib.patches import Circle, Polygon, Rectangle
+from matplotlib.patches import Circle, FancyArrowPatch, Polygon, Rectangle
+from matplotlib.text import Annotation
+from matplotlib.transforms import Bbox
 
 from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
 from jointplay.present.outputs import check_figure_path
-from jointplay.present.scene import JointView, Scene, joint_view, mechanism_scene
+from jointplay.present.scene import JointView, Marker, Scene, joint_view, mechanism_scene
 
 # a stale font cache makes matplotlib log each font it falls back from; the
 # figure is drawn all the same, and only jointplay's own words reach stderr
@@ -58,6 +61,18 @@ BODY_COLOURS = ("#1f4e79", "#8c564b", "#9467bd", "#17becf", "#bcbd22", "#e377c2"
 #: The three orthographic views: (name, horizontal axis, vertical axis).
 VIEWS = (("XY (along Z)", 0, 1), ("XZ (along -Y)", 0, 2), ("YZ (along X)", 1, 2))
 JOINTS_PER_ROW = 4
+#: A view is edge-on when the bodies and points extend less than this share of
+#: the mechanism's size along one of its axes (a planar mechanism seen from the side).
+FLAT = 0.02
+#: Where a label may sit around its mark (points across, up), tried in order:
+#: the eight ways beside it, then the same farther out (marks close together).
+LABEL_OFFSETS = tuple(
+    (k * dx, k * dy)
+    for k in (1, 3)
+    for dx, dy in ((5, 4), (-5, 4), (5, -4), (-5, -4), (7, 0), (-7, 0), (0, 7), (0, -7))
+)
+#: Pixels kept between two labels, and between a label and its panel's frame.
+LABEL_GAP = 3.0
 #: In the 3D panel a direction spans at least this share of the longest (its
 #: ticks need room); the 2D views keep true scale.
 THIN_3D = 0.3
@@ -105,25 +120,34 @@ def mechanism_figure(
     joint_rows = math.ceil(len(views) / JOINTS_PER_ROW)
     lo, hi = _padded_bounds(scene)
     span = hi - lo
-    # the XY and XZ views share a row: as tall as the taller needs at half the width
-    flat = float(np.clip(6.2 * max(span[1], span[2]) / span[0], 1.6, 6.0))
-    heights = [4.6, flat] + [3.2] * joint_rows
-    fig = plt.figure(figsize=(13, sum(heights) + 1.2), layout="constrained")
+    shown = shown_views(scene)
+    if len(shown) == 3:
+        # the XY and XZ views share a row: as tall as the taller needs at half the width
+        heights = [4.6, float(np.clip(6.2 * max(span[1], span[2]) / span[0], 1.6, 6.0))]
+    else:  # a planar mechanism: the 3D panel and its plane, side by side
+        _, h, v = shown[0]
+        heights = [float(np.clip(6.2 * span[v] / span[h], 3.0, 6.0))]
+    heights += [3.2] * joint_rows
+    # room between the panels: the 3D panel's axis labels stand out of its box
+    layout = ConstrainedLayoutEngine(w_pad=0.1, wspace=0.05)
+    fig = plt.figure(figsize=(13, sum(heights) + 1.2), layout=layout)
     # 12 columns: halves for the views; the joint panels share each row evenly,
     # so that two or three of them fill it (no empty quarter)
-    grid = fig.add_gridspec(2 + joint_rows, 12, height_ratios=heights)
+    grid = fig.add_gridspec(len(heights), 12, height_ratios=heights)
     ax3d: Axes3D = fig.add_subplot(grid[0, :6], projection="3d")
     draw_scene_3d(ax3d, scene)
-    slots = (grid[1, :6], grid[1, 6:], grid[0, 6:])
-    for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
-        draw_scene_view(fig.add_subplot(slot), scene, h, v, title, reference=slot is slots[0])
+    slots = {"XY (along Z)": grid[1, :6], "XZ (along -Y)": grid[1, 6:]} if len(shown) == 3 else {}
+    for title, h, v in shown:
+        ax = fig.add_subplot(slots.get(title, grid[0, 6:]))
+        draw_scene_view(ax, scene, h, v, title, reference=title == shown[0][0])
+    first_joint_row = len(heights) - joint_rows
     reach = _common_reach(views)
     # as even rows as can be: five panels as 3 + 2, not 4 + 1
     per_row = math.ceil(len(views) / joint_rows) if views else 1
     width = 12 // per_row
     for i, view in enumerate(views):
         column = (i % per_row) * width
-        ax = fig.add_subplot(grid[2 + i // per_row, column : column + width])
+        ax = fig.add_subplot(grid[first_joint_row + i // per_row, column : column + width])
         draw_joint_view(ax, view, reach)
     what = model.name or "mechanism"
     if case is not None:
@@ -139,7 +163,27 @@ def mechanism_figure(
         fontsize=12,
     )
     fig.legend(handles=_legend_handles(scene), loc="outside lower center", ncols=7, fontsize=9)
+    numbered = place_point_labels(fig, model)
+    if numbered:  # the points named only by number, named in the legend
+        fig.legends[0].remove()
+        tags = [
+            Line2D([], [], color=POINT, marker=f"${k}$", ls="", label=model.points[k - 1].name)
+            for k in sorted(numbered)
+        ]
+        handles = _legend_handles(scene) + tags
+        fig.legend(handles=handles, loc="outside lower center", ncols=7, fontsize=9)
+        place_point_labels(fig, model)  # the legend took room: again, at the final size
     return fig
+
+
+def shown_views(scene: Scene) -> list[tuple[str, int, int]]:
+    """The orthographic views that show something: a view along a plane in
+    which everything lies (the edge-on views of a planar mechanism) is left
+    out; at least the view of the widest extent stays."""
+    span = scene.body_span()
+    thick = span >= FLAT * scene.size
+    shown = [view for view in VIEWS if thick[view[1]] and thick[view[2]]]
+    return shown or [max(VIEWS, key=lambda view: min(span[view[1]], span[view[2]]))]
 
 
 def with_play(model: Model) -> list[str]:
@@ -233,9 +277,6 @@ def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
         if marks:
             P = np.array([m.at for m in marks])
             ax.scatter(P[:, 0], P[:, 1], P[:, 2], **_marker_style(role))
-    for mk in scene.markers:
-        if mk.role == "point":
-            ax.text(*mk.at, f" {mk.label}", fontsize=8)
     for start, vector, colour in _arrow_groups(scene):
         ax.quiver(
             start[:, 0],
@@ -256,6 +297,13 @@ def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
     # three views beside it are at true scale)
     span = hi - lo
     ax.set_box_aspect(tuple(np.maximum(span, THIN_3D * float(np.max(span)))))
+    # the points' labels in the projection's plane (fixed by the limits and
+    # the view), so that place_point_labels can move them as in the 2D views
+    from mpl_toolkits.mplot3d import proj3d
+
+    for k, mk in enumerate(_points(scene), start=1):
+        x, y, _ = proj3d.proj_transform(*mk.at, ax.get_proj())
+        _point_label(ax, mk.label, (float(x), float(y)), k)
     from matplotlib.ticker import MaxNLocator
 
     for axis, span_i in zip((ax.xaxis, ax.yaxis, ax.zaxis), span, strict=True):
@@ -283,18 +331,8 @@ def draw_scene_view(
             P = np.array([m.at for m in marks])
             ax.scatter(P[:, h], P[:, v], **_marker_style(role))
     lo, hi = _padded_bounds(scene)
-    for mk in scene.markers:
-        if mk.role == "point":  # written toward the middle, so that it stays inside
-            right = mk.at[h] > lo[h] + 0.7 * (hi[h] - lo[h])
-            top = mk.at[v] > lo[v] + 0.85 * (hi[v] - lo[v])
-            ax.annotate(
-                mk.label,
-                (mk.at[h], mk.at[v]),
-                xytext=(-4 if right else 4, -4 if top else 4),
-                ha="right" if right else "left",
-                va="top" if top else "bottom",
-                **_small,
-            )
+    for k, mk in enumerate(_points(scene), start=1):
+        _point_label(ax, mk.label, (mk.at[h], mk.at[v]), k)
     for start, vector, colour in _arrow_groups(scene):
         ax.quiver(
             start[:, h],
@@ -317,6 +355,73 @@ def draw_scene_view(
     ax.grid(True, linewidth=0.3)
     if reference and scene.force_scale > 0:
         _reference_arrow(ax, scene.force_scale, lo[h], hi[h] - lo[h])
+
+
+def _points(scene: Scene) -> list[Marker]:
+    """The functional points, in the model's order (their numbers from 1)."""
+    return [mk for mk in scene.markers if mk.role == "point"]
+
+
+def _point_label(ax: Axes, label: str, at: tuple[float, float], number: int) -> None:
+    """The point's name beside its mark; ``place_point_labels`` settles where."""
+    text = ax.annotate(label, at, xytext=LABEL_OFFSETS[0], **_small)
+    text.set_gid(f"point {number}")
+
+
+def place_point_labels(fig: Figure, model: Model) -> set[int]:
+    """Move each point's label to the first place around its mark where it
+    lies inside its panel and clear of the labels placed before it; a label
+    that fits nowhere gives way to the point's number. Returns the numbers
+    written (for the legend, which names them)."""
+    fig.canvas.draw()  # the layout: where every panel and text sits
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    numbered: set[int] = set()
+    for ax in fig.axes:
+        placed: list[Bbox] = []
+        tags: list[Annotation] = []  # the labels that are numbers
+        for text in ax.texts:
+            gid = text.get_gid() or ""
+            if not gid.startswith("point ") or not isinstance(text, Annotation):
+                continue
+            number = int(gid.split()[1])
+            if not text.get_text():  # its number joined another's
+                continue
+            name = model.points[number - 1].name
+            if text.get_text() == name and _place(text, ax, placed, renderer):
+                placed.append(text.get_window_extent(renderer))
+                continue
+            if text.get_text() == name:
+                text.set_text(str(number))
+            numbered.update(int(k) for k in text.get_text().split(","))
+            if not _place(text, ax, placed, renderer) and tags:
+                # no room even for the number: it joins the nearest mark's ('3,4')
+                near = min(tags, key=lambda t: math.dist(t.xy, text.xy))
+                near.set_text(f"{near.get_text()},{text.get_text()}")
+                text.set_text("")
+                continue
+            tags.append(text)
+            placed.append(text.get_window_extent(renderer))
+    return numbered
+
+
+def _place(text: Annotation, ax: Axes, placed: list[Bbox], renderer: Any) -> bool:
+    """Try ``text`` at each of ``LABEL_OFFSETS``; False (and left at the
+    first) if it fits at none."""
+    frame = ax.get_window_extent(renderer).padded(-LABEL_GAP)
+    for dx, dy in (*LABEL_OFFSETS, LABEL_OFFSETS[0]):
+        text.xyann = (dx, dy)
+        text.set_horizontalalignment("left" if dx > 0 else "right" if dx < 0 else "center")
+        text.set_verticalalignment("bottom" if dy > 0 else "top" if dy < 0 else "center")
+        box = text.get_window_extent(renderer)
+        if _inside(box, frame) and not any(box.padded(LABEL_GAP).overlaps(b) for b in placed):
+            return True
+    return False
+
+
+def _inside(box: Bbox, frame: Bbox) -> bool:
+    return bool(
+        frame.x0 <= box.x0 <= box.x1 <= frame.x1 and frame.y0 <= box.y0 <= box.y1 <= frame.y1
+    )
 
 
 def round_force(largest: float) -> float:
@@ -575,12 +680,14 @@ def envelope_figure(result: EnvelopeResult) -> Figure:
     ext = result.extent
     for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
         ax = fig.add_subplot(slot)
+        # the arrow from the rest position, which may lie outside the envelope:
+        # both its ends in the view, and the arrow clipped to it like the rest
+        ax.update_datalim([(0.0, 0.0), (L[h], L[v])])
         _hull_patch(ax, H[:, [h, v]], "envelope")
-        ax.annotate(
-            "",
-            xy=(L[h], L[v]),
-            xytext=(0, 0),
-            arrowprops={"arrowstyle": "-|>", "color": TOUCHING},
+        ax.add_patch(
+            FancyArrowPatch(
+                (0.0, 0.0), (L[h], L[v]), arrowstyle="-|>", mutation_scale=12, color=TOUCHING
+            )
         )
         ax.axvline(ext[h, 0], color=INITIAL, linestyle=":", linewidth=0.8)
         ax.axvline(ext[h, 1], color=INITIAL, linestyle=":", linewidth=0.8)

@@ -83,6 +83,17 @@ class Scene:
     arrows: tuple[Arrow, ...]
     largest_displacement: float  # mm, real (not magnified)
 
+    def body_span(self) -> FloatArray:
+        """The extent (3,) along each axis of the bodies' lines, initial and
+        displaced, and of the points and load points: what a view shows,
+        without the domains and arrows drawn about it (mm)."""
+        pts = [ln.points for ln in self.lines if ln.role != "domain"]
+        pts += [m.at[None, :] for m in self.markers if m.role in ("point", "load point")]
+        if not pts:
+            return np.zeros(3)
+        every = np.vstack(pts)
+        return np.asarray(every.max(axis=0) - every.min(axis=0))
+
     def bounds(self) -> tuple[FloatArray, FloatArray]:
         """Least and greatest corner of everything drawn (mm)."""
         pts = [ln.points for ln in self.lines]
@@ -141,8 +152,8 @@ def mechanism_scene(
 
     lines: list[Polyline] = []
     markers: list[Marker] = []
-    for body, pts in nodes.items():
-        for path in _body_paths(model.body(body), pts):
+    for body in nodes:
+        for path in _body_paths(model, loads, model.body(body)):
             lines.append(Polyline(path, "initial", body))
             shifted = np.array([P + m * moved(body, P) for P in path])
             lines.append(Polyline(shifted, "displaced", body))
@@ -196,6 +207,12 @@ def _body_nodes(model: Model, loads: tuple[Load, ...], body: str) -> list[FloatA
     """The points that draw a body: its joints' centres and the ends of their
     engagement on the axis, its load points, functional points and centre
     of mass; without repeats."""
+    return _unique(_joint_nodes(model, body) + _attached_nodes(model, loads, body))
+
+
+def _joint_nodes(model: Model, body: str) -> list[FloatArray]:
+    """The centres of the body's joints and the ends of their engagement on
+    their axes."""
     out: list[FloatArray] = []
     for joint in model.joints:
         if body not in joint.between:
@@ -203,30 +220,85 @@ def _body_nodes(model: Model, loads: tuple[Load, ...], body: str) -> list[FloatA
         out.append(joint.centre)
         axis = joint.R_world_joint[:, 0]
         out.extend(joint.centre + float(c.point[0]) * axis for c in joint.cones)
-    out.extend(np.asarray(ld.at, dtype=float) for ld in loads if ld.body == body and ld.at)
+    return out
+
+
+def _attached_nodes(model: Model, loads: tuple[Load, ...], body: str) -> list[FloatArray]:
+    """The body's load points, functional points and centre of mass."""
+    out = [np.asarray(ld.at, dtype=float) for ld in loads if ld.body == body and ld.at]
     out.extend(np.asarray(p.at, dtype=float) for p in model.points if p.body == body)
     com = model.body(body).center_of_mass
     if com is not None:
         out.append(np.asarray(com, dtype=float))
+    return out
+
+
+def _unique(points: list[FloatArray]) -> list[FloatArray]:
     unique: list[FloatArray] = []
-    for p in out:
+    for p in points:
         if not any(np.allclose(p, q, rtol=0.0, atol=1e-9) for q in unique):
             unique.append(np.asarray(p, dtype=float))
     return unique
 
 
-def _body_paths(body: Body, nodes: list[FloatArray]) -> list[FloatArray]:
+def _body_paths(model: Model, loads: tuple[Load, ...], body: Body) -> list[FloatArray]:
     """The lines that draw ``body`` at rest: its outline, closed, if the model
-    gives one; else the edges of the shortest tree through its ``nodes``."""
+    gives one. Else, when its joints sit on one line (a shaft, a link between
+    two pins), that line through them, with a stub square to it out to each
+    point off it (a gear's mesh point, a lever's load): the centre line and
+    arms a designer sketches, where a tree through the points would draw a
+    shaft as a V. Else (a plate on joints all about) the shortest tree
+    through its joints and points."""
     if body.outline is not None:
         corners = np.array(body.outline, dtype=float)
         return [np.vstack([corners, corners[:1]]) if len(corners) > 2 else corners]
-    return [np.vstack([nodes[i], nodes[k]]) for i, k in _tree_edges(nodes)]
+    joints = _unique(_joint_nodes(model, body.name))
+    attached = _unique(_attached_nodes(model, loads, body.name))
+    every = _unique(joints + attached)
+    tol = 1e-6 * max(_span(every), 1.0)
+    axis = _axis_line(model, body.name, tol)
+    if axis is None:
+        return [np.vstack([every[i], every[k]]) for i, k in _tree_edges(every)]
+    origin, u = axis
+
+    def foot(P: FloatArray) -> FloatArray:
+        return np.asarray(origin + float((P - origin) @ u) * u)
+
+    # a pin's engagement ends lie across a link's line: the link is the line
+    on_line = [P for P in joints if np.linalg.norm(P - foot(P)) <= tol]
+    arms = [(foot(P), P) for P in attached if np.linalg.norm(P - foot(P)) > tol]
+    along = [float((P - origin) @ u) for P in on_line + [f for f, _ in arms] + attached]
+    paths = [np.vstack([a, b]) for a, b in arms]
+    if max(along) - min(along) > tol:
+        paths.insert(0, np.vstack([origin + min(along) * u, origin + max(along) * u]))
+    return paths
+
+
+def _axis_line(model: Model, body: str, tol: float) -> tuple[FloatArray, FloatArray] | None:
+    """The line (a point, a unit direction) the body's joint centres sit on:
+    through the two farthest apart, or a lone joint's axis; None when they do
+    not sit on one line."""
+    joints = [j for j in model.joints if body in j.between]
+    centres = _unique([j.centre for j in joints])
+    if not centres:
+        return None
+    if len(centres) == 1:
+        return centres[0], joints[0].R_world_joint[:, 0]
+    C = np.array(centres)
+    d = np.linalg.norm(C[:, None, :] - C[None, :, :], axis=2)
+    i, k = np.unravel_index(int(np.argmax(d)), d.shape)
+    u = (C[k] - C[i]) / d[i, k]
+    off = C - C[i] - np.outer((C - C[i]) @ u, u)
+    return (C[i], u) if float(np.max(np.linalg.norm(off, axis=1))) <= tol else None
+
+
+def _span(points: list[FloatArray]) -> float:
+    P = np.array(points)
+    return float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) if len(P) else 0.0
 
 
 def _tree_edges(points: list[FloatArray]) -> list[tuple[int, int]]:
-    """Edges of the shortest tree through ``points`` (a shaft's points in a
-    row become one line; a plate's become a frame)."""
+    """Edges of the shortest tree through ``points`` (a plate's become a frame)."""
     if len(points) < 2:
         return []
     from scipy.sparse.csgraph import minimum_spanning_tree
