@@ -367,3 +367,31 @@ def test_a_narrow_terminal_keeps_every_number_and_name_whole(width: int) -> None
     assert f"RSS sigma {study.rss_sigma[0]:.6g} mm" in " ".join(text.split())
     for share in (*study.rss[0], *study.worst_case[0]):
         assert f"{share:5.1f} %".strip() in text
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (("montecarlo", "examples/gallery/lathe_slide.yaml"), "varies from part to part"),
+        (("contributions", "examples/paper/6.1.6.1.yaml"), "varies from part to part"),
+        (("tolerances", "examples/paper/6.1.6.1.yaml"), "add 'requirements:"),
+        (("envelope", "examples/paper/6.1.6.1.yaml"), "add 'points:"),
+    ],
+    ids=["montecarlo", "contributions", "tolerances", "envelope"],
+)
+def test_a_valid_model_with_nothing_to_study_is_not_called_invalid(
+    args: tuple[str, ...], words: str
+) -> None:
+    """A valid model in which the study has nothing to work on is told so,
+    with what to add: one line, exit 2, and not "invalid model"."""
+    proc = run(args[0], str(ROOT / args[1]))
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("jointplay: nothing to study: "), proc.stderr
+    assert words in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_envelope_without_a_point_lists_the_points() -> None:
+    proc = run("envelope", str(ROOT / "examples" / "studies" / "shaft_cases.yaml"))
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("jointplay: invalid option: --point: ")
+    assert "'tip'" in proc.stderr

@@ -123,7 +123,8 @@ def test_without_toleranced_plays_or_points_the_message_says_what_to_add(
     path.write_text(json.dumps(shaft(0.2, 0.2, 300, [0, 0, 1])))
     out = CliRunner().invoke(app, ["contributions", str(path)])
     assert out.exit_code == 2
-    assert "no play varies" in out.output and "fixed.json" in out.output
+    assert "nothing to study" in out.output and "varies from part to part" in out.output
+    assert "fixed.json" in out.output
     data = shaft({"min": 0.1, "max": 0.2}, 0.2, 300, [0, 0, 1])
     del data["points"]
     path.write_text(json.dumps(data))

@@ -245,7 +245,8 @@ def test_a_study_needs_plays_and_points(tmp_path: Path) -> None:
     path = tmp_path / "fixed.json"
     path.write_text(json.dumps(fixed))
     out = run_cli("montecarlo", str(path))
-    assert out.exit_code == 2 and "no play varies" in out.output
+    assert out.exit_code == 2 and "nothing to study" in out.output
+    assert "varies from part to part" in out.output
     no_points = {**SHAFT, "points": [], "requirements": []}
     path.write_text(json.dumps(no_points))
     out = run_cli("montecarlo", str(path))

@@ -18,8 +18,8 @@ from rich.console import Console
 from jointplay import __version__
 from jointplay.errors import (
     JointplayError,
-    ModelError,
     OptionError,
+    StudyError,
     UnassembledError,
     UnboundedMechanismError,
 )
@@ -343,8 +343,11 @@ def montecarlo(
 def envelope(
     model_path: ModelPath,
     point: Annotated[
-        str, typer.Option("--point", metavar="NAME", help="The functional point to bound.")
-    ],
+        str | None,
+        typer.Option(
+            "--point", metavar="NAME", help="The functional point to bound (without it: a list)."
+        ),
+    ] = None,
     directions: Annotated[
         int, typer.Option("--directions", min=6, help="Directions over the sphere.")
     ] = 200,
@@ -408,6 +411,8 @@ def envelope(
             raise OptionError(f"--loads {loads!r}: expected 'auto', 'model' or 'probes'")
         _check_outputs(csv, plot)
         model = load(model_path)
+        if point is None:
+            raise _no_point(model, model_path)
         settings = Envelope(
             point,
             directions,
@@ -778,6 +783,18 @@ def sweep_envelopes(model: Any, source: str) -> dict[str, Any]:
     return found
 
 
+def _no_point(model: Any, model_path: Path) -> JointplayError:
+    """The error of ``envelope`` without ``--point``: the points to choose from."""
+    if not model.points:
+        return StudyError(
+            "the envelope bounds a functional point, and the model has none; add "
+            "'points: [{name: tip, body: ..., at: [x, y, z]}]'",
+            source=str(model_path),
+        )
+    names = ", ".join(repr(p.name) for p in model.points)
+    return OptionError(f"--point: name the point to bound, one of {names}")
+
+
 def _first_case(model: Any, case: str | None) -> str | None:
     """``case``, or the model's first load case (said on stderr) when it has some."""
     if case is not None or not model.case_names:
@@ -827,22 +844,13 @@ def _guarded(run: Any, as_json: bool) -> None:
                 warnings.simplefilter("ignore", RuntimeWarning)
             run()
     except JointplayError as exc:
-        kind = (
-            "invalid option"
-            if isinstance(exc, OptionError)
-            else "invalid model"
-            if isinstance(exc, ModelError)
-            else "not held"
-            if isinstance(exc, UnboundedMechanismError)
-            else "error"
-        )
         if as_json:
             status = {2: "invalid", 3: "unbounded"}.get(exc.exit_code, "error")
             doc: dict[str, Any] = {"status": status, "message": str(exc)}
             if isinstance(exc, UnboundedMechanismError):
                 doc.update(body=exc.body, motion=exc.motion)
             typer.echo(json.dumps(doc, indent=2))
-        err.print(f"jointplay: {kind}: {exc}", markup=False)
+        err.print(f"jointplay: {exc.label}: {exc}", markup=False)
         raise typer.Exit(exc.exit_code) from None
     except (typer.Exit, typer.Abort, KeyboardInterrupt):
         raise

@@ -12,6 +12,8 @@ class JointplayError(Exception):
     """Base class of every error jointplay raises on purpose."""
 
     exit_code: int = 1
+    #: What the command line says before the message ("jointplay: LABEL: ...").
+    label: str = "error"
 
 
 class ModelError(JointplayError, ValueError):
@@ -22,6 +24,7 @@ class ModelError(JointplayError, ValueError):
     """
 
     exit_code = 2
+    label = "invalid model"
 
     def __init__(self, message: str, *, source: str | None = None, entry: str | None = None):
         self.problem = message
@@ -35,6 +38,16 @@ class OptionError(ModelError):
     """A command-line option is invalid (an output path that cannot be
     written, a value out of range): exit code 2, like a model error, and
     labelled 'invalid option'."""
+
+    label = "invalid option"
+
+
+class StudyError(ModelError):
+    """A valid model that lacks what a study needs: nothing that varies from
+    part to part, no functional point, no requirement. Exit code 2, labelled
+    'nothing to study': the model is fine, the study has nothing to work on."""
+
+    label = "nothing to study"
 
 
 class UnassembledError(ModelError):
@@ -57,6 +70,7 @@ class UnboundedMechanismError(JointplayError):
     """
 
     exit_code = 3
+    label = "not held"
 
     def __init__(
         self,

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.assembly import assemble
-from jointplay.errors import ModelError, UnassembledError
+from jointplay.errors import StudyError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
 from jointplay.solver.workspace import Workspace
@@ -52,6 +52,7 @@ from jointplay.studies.variation import (
     PlayVariable,
     deviation_map,
     load_map,
+    nothing_varies,
     play_map,
 )
 
@@ -107,14 +108,7 @@ class Contributions:
         dmap = deviation_map(asm)
         variables: list[PlayVariable | LoadVariable] = [*pmap.variables, *lmap.variables]
         if not variables and not dmap.variables:
-            raise ModelError(
-                "no play varies from part to part, so none contributes; give a joint's "
-                "clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
-                "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12}, "
-                "or a joint a deviation zone, deviation: {position: '0.02 mm'})",
-                source=source,
-                entry="joints",
-            )
+            raise nothing_varies("nothing contributes to a spread", source)
         measures = _measures(model, source)
         nv = len(variables) + len(dmap.variables)
         width = np.array(
@@ -239,7 +233,7 @@ def _grouped(
 
 def _measures(model: Model, source: str) -> list[Measure]:
     if not model.points:
-        raise ModelError(
+        raise StudyError(
             "contributions are to the deviation of functional points, and the model has "
             "none; add 'points: [{name: tip, body: ..., at: [x, y, z]}]'",
             source=source,

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.assembly import Assembly, assemble
-from jointplay.errors import ModelError, UnassembledError
+from jointplay.errors import StudyError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.proven import Resolution, proven
@@ -41,6 +41,7 @@ from jointplay.studies.variation import (
     PlayMap,
     deviation_map,
     load_map,
+    nothing_varies,
     play_map,
 )
 
@@ -154,16 +155,9 @@ def _study_inputs(model: Model, case: str | None, source: str) -> None:
         and not load_map(asm, case).variables
         and not deviation_map(asm).variables
     ):
-        raise ModelError(
-            "no play varies from part to part, so every sample would be the same; give a "
-            "joint's clearance as limits, {min: 0.02, max: 0.06}, or as an ISO fit, "
-            "{fit: 'H7/g6', diameter: 20} (or a load's component as {min: 8, max: 12}, "
-            "or a joint a deviation zone, deviation: {position: '0.02 mm'})",
-            source=source,
-            entry="joints",
-        )
+        raise nothing_varies("every sample of a Monte Carlo would be the same", source)
     if not model.points:
-        raise ModelError(
+        raise StudyError(
             "a Monte Carlo study measures functional points, and the model has none; add "
             "'points: [{name: tip, body: ..., at: [x, y, z]}]'",
             source=source,

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from jointplay.errors import ModelError
+from jointplay.errors import StudyError
 from jointplay.model.mechanism import Model, Requirement
 from jointplay.studies.contributions import Contributions, ContributionsResult, Measure
 from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
@@ -172,7 +172,7 @@ class Tolerances:
     ) -> TolerancesResult:
         source = source or model.name or "<model>"
         if not model.requirements:
-            raise ModelError(
+            raise StudyError(
                 "the side-by-side tolerance figures are per requirement, and the model has "
                 "none; add 'requirements: [{point: tip, max_displacement: \"40 um\"}]'",
                 source=source,

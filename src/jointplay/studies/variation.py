@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from jointplay.assembly import Assembly
-from jointplay.errors import ModelError
+from jointplay.errors import ModelError, StudyError
 from jointplay.geometry import FloatArray
 from jointplay.model.deviations import Zone
 from jointplay.model.joints import Joint
@@ -321,4 +321,17 @@ def deviation_map(asm: Assembly) -> DeviationMap:
         stack.centres().copy(),
         np.array(C_rows).reshape(nd, stack.A.shape[0]),
         np.array(D_rows).reshape(nd, len(asm.balls)),
+    )
+
+
+def nothing_varies(what: str, source: str) -> StudyError:
+    """The error of a study (``what`` it would do) on a model in which
+    nothing varies from part to part."""
+    return StudyError(
+        "nothing in this model varies from part to part (every play is one length, every "
+        f"load fixed, no deviation zone), so {what}; to study it, give a joint's clearance "
+        "as limits, {min: 0.02, max: 0.06}, or as an ISO fit, {fit: 'H7/g6', diameter: 20}, "
+        "a load's component as {min: 8, max: 12}, or a joint a deviation zone, "
+        "deviation: {position: '0.02 mm'}",
+        source=source,
     )
