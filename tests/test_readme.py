@@ -82,3 +82,49 @@ def test_readme_pictures_example_runs(tmp_path: Path) -> None:
     assert (tmp_path / "shaft.svg").read_text().count("<svg") == 1
     assert (tmp_path / "joints.png").read_bytes().startswith(b"\x89PNG")
     assert "jp-view-0" in (tmp_path / "shaft.html").read_text(encoding="utf-8")
+
+
+#: A printed output in the README follows a line `<!-- output of: jointplay ... -->`.
+OUTPUT = re.compile(r"<!-- output of: (jointplay [^>]*?) -->\n```[a-z]*\n(.*?)```", re.S)
+
+
+def _words(line: str) -> list[str]:
+    return line.split()
+
+
+@pytest.mark.parametrize(
+    ("command", "block"),
+    OUTPUT.findall((ROOT / "README.md").read_text(encoding="utf-8")),
+    ids=lambda v: v if v.startswith("jointplay") else "",
+)
+def test_readme_outputs_are_what_jointplay_prints(command: str, block: str) -> None:
+    """Every line the README shows of a command's output is a line of what
+    the command prints now, in the same order (spacing aside; a line '...'
+    stands for lines left out)."""
+    import shlex
+    import subprocess
+    import sys
+
+    args = shlex.split(command)[1:]
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert proc.returncode in (0, 4), proc.stderr
+    printed = [_words(line) for line in proc.stdout.splitlines()]
+    at = 0
+    for line in block.splitlines():
+        if line.strip() in ("", "...", "…"):
+            continue
+        wanted = _words(line)
+        try:
+            at = printed.index(wanted, at) + 1
+        except ValueError:
+            pytest.fail(f"README line not printed (in this order) by '{command}': {line!r}")
+
+
+def test_the_readme_shows_outputs() -> None:
+    assert len(OUTPUT.findall((ROOT / "README.md").read_text(encoding="utf-8"))) >= 4

@@ -46,6 +46,10 @@ class Resolution:
         return cls(length, length / ell_mm, force, force * ell_mm)
 
 
+#: A resolution that zeroes nothing.
+EXACT = Resolution(0.0, 0.0, 0.0, 0.0)
+
+
 def proven(values: FloatArray | float, step: float) -> FloatArray:
     """``values`` with every component smaller than ``step`` given as 0 (and
     no -0)."""

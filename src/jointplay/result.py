@@ -22,7 +22,7 @@ from jointplay.errors import SolverError
 from jointplay.finite import IDENTITY, Linearization, Placement, linearization
 from jointplay.geometry import FloatArray, cross, describe_motion
 from jointplay.numerics.free_motions import IntArray, column_groups
-from jointplay.proven import Resolution, proven
+from jointplay.proven import EXACT, Resolution, proven
 from jointplay.settings import DEFAULT, SolverSettings
 
 if TYPE_CHECKING:
@@ -301,6 +301,9 @@ class Result:
     requirements: tuple[RequirementResult, ...] = ()
     #: What the model says that is legal but likely a slip (``Model.warnings``).
     model_warnings: tuple[str, ...] = ()
+    #: The smallest length, angle, force and moment this answer proves: every
+    #: number of it below them is 0.
+    resolution: Resolution = EXACT
 
     @property
     def linearization(self) -> Linearization:
@@ -316,7 +319,7 @@ class Result:
     @property
     def linearization_error(self) -> float:
         """mm: the largest overshoot of a clearance under exact rotations."""
-        return self.linearization.error_mm
+        return float(proven(self.linearization.error_mm, self.resolution.length))
 
     @property
     def warnings(self) -> tuple[str, ...]:
@@ -494,6 +497,7 @@ def build_result(
         lambda: linearization(asm, x, reach_mm),
         requirements_of(model, points),
         asm.model_warnings,
+        res,
     )
 
 

@@ -13,7 +13,8 @@ from rich.text import Text
 
 from jointplay.geometry import FloatArray, fmt_point
 from jointplay.model.mechanism import Model
-from jointplay.result import Result
+from jointplay.result import EQUILIBRIUM_TOLERANCE, Result
+from jointplay.settings import DEFAULT
 
 if TYPE_CHECKING:  # the studies bring SciPy's statistics: a solve does not need them
     from jointplay.studies.contributions import ContributionsResult
@@ -30,6 +31,12 @@ def _num(v: float, digits: int = 8) -> str:
 def _vec(v: FloatArray, digits: int = 4) -> str:
     return "[" + ", ".join(f"{float(c) + 0.0:.{digits}g}" for c in v) + "]"
 
+
+#: What every certified answer of a study proves.
+CERTIFIED = (
+    f"no contact past its play by {DEFAULT.feasibility_tolerance:g} of the largest play, "
+    f"every body balanced to {EQUILIBRIUM_TOLERANCE:g} of the largest force"
+)
 
 #: The width of a console that is not a terminal (a pipe, a file, a CI log):
 #: wider than any line, so that no line is ever wrapped.
@@ -117,20 +124,23 @@ def render(
     header = Text()
     header.append(f"{title}" + (f" - load case '{case}'" if case else "") + "\n", style="bold")
     header.append(f"status: {result.status}\n")
-    header.append(
-        f"certificate: {'holds' if cert.certified else 'FAILED'} ({cert.method}): "
-        f"past clearance {cert.feasibility_mm:.1e} mm, "
-        f"imbalance {cert.equilibrium_residual:.1e}\n"
-    )
-    header.append(
-        f"equilibrium of every body (loads + contact forces): residual "
-        f"{result.equilibrium_residual:.1e} of the largest force\n"
-    )
+    res = result.resolution
+    if cert.certified:  # what it proves, not the round-off it measured
+        header.append(
+            f"certificate: holds ({cert.method}): no contact past its play by "
+            f"{res.length:.2g} mm or more; the loads and contact forces of every body "
+            f"balance to {res.force:.2g} N ({EQUILIBRIUM_TOLERANCE:g} of the largest force)\n"
+        )
+    else:
+        header.append(
+            f"certificate: FAILED ({cert.method}): past clearance {cert.feasibility_mm:.1e} "
+            f"mm, imbalance {result.equilibrium_residual:.1e} of the largest force\n"
+        )
     energy = result.potential_energy + 0.0  # no "-0" when nothing moves
     header.append(f"potential energy of the loads: {energy:.9g} N*mm\n")
     header.append(
         f"linearization error (contacts placed with exact rotations, past their play): "
-        f"{result.linearization_error:.2e} mm"
+        f"{result.linearization_error:.3g} mm"
     )
     for warning in result.warnings:
         header.append(f"\nwarning: {warning}", style="bold yellow")
@@ -240,9 +250,8 @@ def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -
     head.append(
         f"{result.samples:,} sets of parts, seed {mc.seed}"
         + (f", load case '{mc.case}'" if mc.case else "")
-        + f"; every sample certified: past clearance {result.feasibility_mm:.1e} mm, "
-        f"imbalance {result.equilibrium_residual:.1e} "
-        f"({result.batched:,} by batched Newton, {result.full_solves} full solves)\n"
+        + f"; every sample certified ({result.batched:,} by batched Newton, "
+        f"{result.full_solves} full solves): {CERTIFIED}\n"
     )
     if result.unassembled:
         head.append(
@@ -348,10 +357,7 @@ def render_sweep(
     head = Text()
     head.append(f"{result.model_name or source}: sweep of {result.steps} steps\n", style="bold")
     head.append("parameters: " + ", ".join(result.labels) + "\n")
-    head.append(
-        f"every step certified: past clearance at most {result.feasibility_mm:.1e} mm, "
-        f"imbalance at most {result.equilibrium_residual:.1e}"
-    )
+    head.append(f"every step certified: {CERTIFIED}")
     table = Table(show_edge=False)
     table.add_column("step", justify="right")
     for label in result.labels:

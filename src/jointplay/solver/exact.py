@@ -369,6 +369,7 @@ def _build(
         ws.free_motions,
         requirements=requirements_of(model, points),
         model_warnings=asm.model_warnings,
+        resolution=res,
     )
 
 
