@@ -253,8 +253,9 @@ def test_the_retry_shares_the_free_motions_and_answers_as_a_new_workspace(
     the faces, whose rows and ranks depend on nothing else; and the
     answer is the one a workspace made anew with the retry's settings gives
     (to the promise: positions to MM and RAD, forces to the certificate's
-    balance; not to the bit, which is round-off of a degenerate chain). A solve whose first try is refused takes the retry on the
-    same workspace's data: refused here by hand, since which degenerate
+    balance; not to the bit, which is round-off of a degenerate chain). A
+    solve whose first try is refused takes the retry on the same
+    workspace's data: refused here by hand, since which degenerate
     model's first try fails depends on the installed Clarabel (the
     15-shaft bearing chain's does on 0.10, not on 0.11.1)."""
     asm = assemble(bearing_chain(15))
