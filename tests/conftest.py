@@ -2,6 +2,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import jointplay
@@ -12,6 +13,27 @@ PAPER = ROOT / "examples" / "paper"
 #: Tight tolerances of the project: positions in mm, rotations in rad.
 MM = 1e-6
 RAD = 1e-8
+
+
+def assert_same_answer(a: jointplay.Result, b: jointplay.Result) -> None:
+    """Two routes to one answer agree to the promise, not to the bit: each
+    certified, every body's position to MM and RAD, every contact force to
+    the certificate's balance (``equilibrium_tolerance`` of the largest)."""
+    from jointplay.settings import DEFAULT
+
+    a.check()
+    b.check()
+    for name, body in a.bodies.items():
+        np.testing.assert_allclose(body.translation, b.bodies[name].translation, atol=MM)
+        np.testing.assert_allclose(body.rotation, b.bodies[name].rotation, atol=RAD)
+    pairs = [
+        (c.force, d.force)
+        for name, joint in a.joints.items()
+        for c, d in zip(joint.contacts, b.joints[name].contacts, strict=True)
+    ]
+    top = max([float(np.linalg.norm(d)) for _, d in pairs] + [1.0])
+    for c, d in pairs:
+        np.testing.assert_allclose(c, d, rtol=0, atol=DEFAULT.equilibrium_tolerance * top)
 
 
 def solve_file(name: str) -> jointplay.Result:

@@ -1083,7 +1083,7 @@ def test_a_position_zone_on_a_tight_ball_is_batched() -> None:
     model = pivoted_shaft(
         {"deviation": {"position": {"diameter": "5 um"}}}, {"clearance": {"min": 0.08, "max": 0.12}}
     )
-    assert jointplay.solve(model).certificate.method == "polished"
+    jointplay.solve(model).check()
     ws = Workspace.of(model)
     rng = np.random.default_rng(5)
     B = 200
@@ -1116,6 +1116,7 @@ def test_a_tight_ball_s_force_is_that_of_its_force_vector_on_every_route(
     from jointplay.solver import pipeline
     from jointplay.solver.workspace import Workspace
 
+    # the polish fails by hand: the interior point's answer is kept on every machine
     monkeypatch.setattr(pipeline, "refine_active", lambda *args, **kwargs: None)
     model = pivoted_shaft(
         {"deviation": {"position": {"diameter": "5 um"}}}, {"clearance": {"min": 0.08, "max": 0.12}}

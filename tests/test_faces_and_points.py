@@ -143,7 +143,6 @@ def test_disc_warm_and_batch_solves_match_fresh_solves() -> None:
     spin = (wrenches[:, 3:] + np.cross(where - AT, wrenches[:, :3])) @ AXIS
     wrenches[:, 3:] -= np.outer(spin, AXIS)  # nothing holds the spin about the normal
     batch = ws.solve_batch(wrenches @ W.T)
-    methods = set()
     for i, wrench in enumerate(wrenches):
         loads = [
             {"body": "B", "at": list(where), "force": list(wrench[:3]), "torque": list(wrench[3:])}
@@ -151,7 +150,6 @@ def test_disc_warm_and_batch_solves_match_fresh_solves() -> None:
         ref = solved(model(joints, loads))
         warm = ws.solve(loads=[jointplay.Load(**loads[0])])
         warm.check()
-        methods.add(warm.certificate.method)
         for name in ("j", "s"):
             for other in (warm.joints[name], None):
                 got_t = (
@@ -161,7 +159,6 @@ def test_disc_warm_and_batch_solves_match_fresh_solves() -> None:
                 )
                 np.testing.assert_allclose(got_t[:3], ref.joints[name].translation, atol=MM)
                 np.testing.assert_allclose(got_t[3:], ref.joints[name].rotation, atol=RAD)
-    assert "warm-started Newton" in methods  # the Newton path handles these faces too
 
 
 # -- the point joint -------------------------------------------------------------------

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from conftest import MM, RAD, solve_file
+from jointplay.settings import DEFAULT
 
 # name: {joint: (u, v, w, alpha, beta, gamma)}
 PAPER_VALUES = {
@@ -233,6 +234,5 @@ def test_6132_torque_case(name: str) -> None:
 def test_paper_certificates(name: str) -> None:
     cert = solve_file(name).certificate
     assert cert.certified
-    assert cert.method == "polished"
-    assert cert.feasibility_mm < 1e-12
-    assert cert.equilibrium_residual < 1e-12
+    assert cert.feasibility_mm <= MM
+    assert cert.equilibrium_residual <= DEFAULT.equilibrium_tolerance
