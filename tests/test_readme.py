@@ -128,3 +128,35 @@ def test_readme_outputs_are_what_jointplay_prints(command: str, block: str) -> N
 
 def test_the_readme_shows_outputs() -> None:
     assert len(OUTPUT.findall((ROOT / "README.md").read_text(encoding="utf-8"))) >= 4
+
+
+def test_the_readme_says_which_example_gives_which_study() -> None:
+    """The README's table of examples and studies is what each model allows:
+    an envelope needs a point, Monte Carlo something that varies, tolerances
+    a requirement too."""
+    import jointplay
+    from jointplay.assembly import assemble
+    from jointplay.studies.variation import deviation_map, load_map, play_map
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    rows = re.findall(r"^\| `([a-z]+/[\w*.]+)` \| (\w+) \| (\w+) \| (\w+) \| (\w+) \|$", text, re.M)
+    listed = set()
+    for pattern, *cells in rows:
+        for path in sorted((ROOT / "examples").glob(pattern)):
+            listed.add(path)
+            model = jointplay.load(path)
+            asm = assemble(model)
+            varies = bool(
+                play_map(asm, str(path)).variables
+                or deviation_map(asm).variables
+                or any(load_map(asm, c).variables for c in model.case_names or (None,))
+            )
+            points = bool(model.points)
+            expected = [
+                True,
+                points,
+                points and varies,
+                points and varies and bool(model.requirements),
+            ]
+            assert [c == "yes" for c in cells] == expected, path.name
+    assert listed == set((ROOT / "examples").glob("*/*.yaml"))
