@@ -517,8 +517,11 @@ def _result(model: Model, mc: MonteCarlo, parts: list[_Chunk]) -> MonteCarloResu
 
 
 def _wilson(k: int, n: int, z: float) -> tuple[float, float]:
-    """Wilson score interval of a binomial fraction k / n."""
+    """Wilson score interval of a binomial fraction k / n: from exactly 0 when
+    no sample fails (and to exactly 1 when all do), where the formula's
+    round-off would leave 1e-13."""
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    low = 0.0 if k == 0 else max(0.0, centre - half)
+    return (low, 1.0 if k == n else min(1.0, centre + half))

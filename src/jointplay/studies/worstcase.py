@@ -37,7 +37,7 @@ from jointplay.assembly import assemble
 from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
-from jointplay.studies.contributions import Measure
+from jointplay.studies.contributions import Measure, unit_of
 from jointplay.studies.envelope import MOST_LOAD_SETS
 from jointplay.studies.parts import Inputs, inputs_of, measured, solve_sets
 
@@ -52,7 +52,7 @@ class Reach:
     measure: str
     worst: float
     at: str  # the configuration, in words
-    over: str  # which sets of parts and loads, in words
+    over: str  # over which load sets (or positions), in words
     signed: float | None = None  # d . u at the worst case (along a direction)
 
     def to_dict(self) -> dict[str, Any]:
@@ -99,7 +99,7 @@ def _over_load_sets(
     y = measured(model, measures, solve_sets(model, case, rows))
     plays = _plays_words(inputs)
     each = "both limits" if levels == 2 else "the limits and the mean"
-    over = f"{plays}, " + (
+    over = (
         f"{len(loads):,} load sets ({each} of each varying load component)"
         if nl
         else "the model's loads"
@@ -107,7 +107,8 @@ def _over_load_sets(
 
     def at(j: int) -> str:
         words = ", ".join(
-            f"{v.label} = {value:g}" for v, value in zip(lmap.variables, loads[j], strict=True)
+            f"{v.label} = {value:g} {unit_of(v.label)}"
+            for v, value in zip(lmap.variables, loads[j], strict=True)
         )
         return plays + (f", {words}" if words else "")
 
@@ -124,8 +125,8 @@ def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, sour
     from jointplay.studies.envelope import Envelope, _point_map, _ZoneProgram
 
     over = (
-        f"{_plays_words(inputs)} and every deviation within its zone: the support of "
-        "every position they allow, whatever the loads"
+        "every position the plays and the deviation zones allow (the envelope's support, "
+        "whatever the loads)"
     )
     words = _plays_words(inputs) + ", the deviations and the position that reach it"
     if m.along is None:
