@@ -361,17 +361,26 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
     for k, measure in enumerate(result.measures):
         # the figures above the table, not as its title: a title is cut to the
         # table's width, numbers and all
-        parts.append(
-            Text(
-                f"{measure}: {result.nominal[k]:.6g} mm at the nominal; worst-case spread "
-                f"{result.worst_case_range[k]:.6g} mm, RSS sigma {result.rss_sigma[k]:.6g} mm"
-            )
+        spread = (
+            f"worst-case spread {result.worst_case_range[k]:.6g} mm, RSS sigma "
+            f"{result.rss_sigma[k]:.6g} mm"
+            if result.linear(k)
+            else "the linear stack and RSS do not hold over the ranges"
         )
+        parts.append(Text(f"{measure}: {result.nominal[k]:.6g} mm at the nominal; {spread}"))
         order = np.argsort(-rss[k], kind="stable")
         # the widest that fits: with bars, then without, then names folded
         wide = console.options.update_width(10_000)
+        by_variance = not result.linear(k) and result.sobol is not None
+        if by_variance:
+            parts.append(_not_linear_words(result, k))
+            order = np.argsort(-result.sobol.total[k], kind="stable")  # type: ignore[union-attr]
         for bars, whole_names in ((True, True), (False, True), (False, False)):
-            table = _contributions_table(result, k, order, bars, whole_names)
+            table = (
+                _variance_table(result, k, order, bars, whole_names)
+                if by_variance
+                else _contributions_table(result, k, order, bars, whole_names)
+            )
             if console.measure(table, options=wide).maximum <= console.width:
                 break
         notes = Text()
@@ -505,3 +514,49 @@ def _tolerance_table(r: Any, samples: int) -> list[Table | Text]:
     if r.beyond_bound:
         notes.append(r.beyond_words(samples) + "\n", style="bold")
     return [table, notes]
+
+
+def _not_linear_words(result: ContributionsResult, k: int) -> Text:
+    """Why measure ``k``'s linear shares do not hold, and what replaces them."""
+    sobol = result.sobol
+    assert sobol is not None
+    return Text(
+        f"  not linear over the ranges: {result.linearity[k].why()}. So the shares below are "
+        f"of the variance, Sobol' indices from {sobol.settings.samples:,} base sets of parts "
+        f"({sobol.solves:,} solves, {sobol.settings.confidence:.0%} intervals): first order, "
+        "what an input explains alone; total, with its interactions (total - first: its "
+        "share in interactions, contacts that change with several inputs together)"
+    )
+
+
+def _variance_table(
+    result: ContributionsResult, k: int, order: Any, bars: bool, whole_names: bool
+) -> Table:
+    """Measure ``k``'s rows by their shares of the variance (Sobol'), in ``order``."""
+    sobol = result.sobol
+    assert sobol is not None
+    table = Table(show_edge=False)
+    widest = max((len(p) for p in result.plays), default=8)
+    names = ("variable", "tolerance T", "first order %", "total %", "interactions %", "")
+    for name in names[: len(names) if bars else -1]:
+        table.add_column(
+            name,
+            justify="left" if name in ("variable", "") else "right",
+            min_width=widest if name == "variable" and whole_names else None,
+        )
+
+    def share(v: float, interval: Any) -> str:
+        lo, hi = (100 * float(x) for x in interval)
+        return f"{100 * v:.1f} [{lo:.0f}, {hi:.0f}]"
+
+    for i in order:
+        total = float(sobol.total[k, i])
+        row = [
+            result.plays[i],
+            f"{result.width[i]:.6g}",
+            share(float(sobol.first[k, i]), sobol.first_interval[k, i]),
+            share(total, sobol.total_interval[k, i]),
+            f"{100 * float(sobol.interactions[k, i]):.1f}",
+        ]
+        table.add_row(*row, *([_bar(min(max(100 * total, 0.0), 100.0))] if bars else []))
+    return table
