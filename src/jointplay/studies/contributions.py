@@ -379,7 +379,7 @@ class ContributionsResult:
 
     def _variance_row(self, k: int, i: int) -> dict[str, float]:
         """Measure ``k``'s and input ``i``'s Sobol' indices (NaN: not taken)."""
-        names = ("sobol_first", "sobol_first_low", "sobol_first_high")
+        names: tuple[str, ...] = ("sobol_first", "sobol_first_low", "sobol_first_high")
         names += ("sobol_total", "sobol_total_low", "sobol_total_high")
         if self.sobol is None:
             return dict.fromkeys(names, float("nan"))

@@ -106,13 +106,14 @@ def check_linearity(
     x0 = inputs.nominal
     rows, owner = [], []
     n_single = len(inputs.pmap.variables) + len(inputs.lmap.variables)
-    limits = [(v.value.low, v.value.high) for v in (*inputs.pmap.variables, *inputs.lmap.variables)]
+    limits = [(v.value.low, v.value.high) for v in inputs.pmap.variables]
+    limits += [(v.value.low, v.value.high) for v in inputs.lmap.variables]
     for g, columns in enumerate(inputs.groups):
         for c in columns:
             if c < n_single:
                 low, high = limits[c]
                 mean = x0[c]
-                values = (low, (low + mean) / 2, (mean + high) / 2, high)
+                values: tuple[float, ...] = (low, (low + mean) / 2, (mean + high) / 2, high)
             else:
                 radius = inputs.dmap.variables[c - n_single].zone.radius
                 values = (x0[c] - radius, x0[c] + radius)
