@@ -33,12 +33,13 @@ from jointplay.studies.contributions import Measure
 from jointplay.studies.parts import Inputs, measured, solve_sets
 
 #: Largest error of the slopes' prediction, as a share of the linear stack's
-#: half-width, for RSS to hold. A distance |d| bends over a fit's range (a
-#: norm of displacements that grow apart): on the bundled linear examples
-#: the error stays below 0.17 of the half-width; a change of contacts gives
-#: errors of the order of the half-width or many times it (the four-bar's
-#: out-of-plane force: 25 times).
-LINEAR_ERROR_SHARE = 0.25
+#: half-width, for RSS to hold. A distance |d| bends over a fit's range or a
+#: position zone (a norm of displacements that grow apart): on the bundled
+#: examples whose contacts stay the same the error is at most 0.4 of the
+#: half-width (shaft_deviations, where RSS's sigma is within 10 % of the
+#: Monte Carlo's), most below 0.15; a change of contacts gives errors of the
+#: half-width or many times it (the four-bar's out-of-plane force: 23 times).
+LINEAR_ERROR_SHARE = 0.5
 #: Random sets of parts in the check: a few beyond the limits' one-at-a-time
 #: solves, to catch inputs that bend the measure only together.
 DESIGN = 16
