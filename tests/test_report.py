@@ -229,7 +229,7 @@ def test_the_deviation_example_s_report_ranks_deviations_with_plays() -> None:
     side = page[page.index("Requirements: worst case, RSS and Monte Carlo side by side") :]
     assert f"{row.mc_ppm:.4g}" in side and f"{row.rss_ppm:.4g}" in side
     assert f"{row.mc_low:.5g} .. {row.mc_high:.5g}" in side
-    if row.beyond_stack:
+    if row.beyond_bound:
         assert html_lib.escape(row.beyond_words(2000)) in side
     assert "Over the tolerances: worst case" in page
 

@@ -515,9 +515,31 @@ def contributions(
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the study as JSON.")] = False,
     plot: PlotOption = None,
+    variance: Annotated[
+        str,
+        typer.Option(
+            "--variance",
+            metavar="auto|always|never",
+            help="Shares of the variance (Sobol' indices): 'auto' where a measure is not "
+            "linear over the ranges, 'always', or 'never'.",
+        ),
+    ] = "auto",
+    samples: Annotated[
+        int,
+        typer.Option(
+            "--samples",
+            "-n",
+            min=8,
+            help="Sobol' base sets of parts (it solves samples x (2 x inputs + 2)).",
+        ),
+    ] = 1024,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Random seed.")] = 0,
+    workers: WorkersOption = None,
 ) -> None:
     """Which toleranced play drives each functional point: sensitivities at the
-    nominal plays and percent contributions, worst case and statistical (RSS)."""
+    nominal plays and percent contributions, worst case and statistical (RSS),
+    where the measure is linear over the ranges; where it is not, the shares of
+    its variance (Sobol' first-order and total indices, with intervals)."""
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render_contributions
     from jointplay.studies.contributions import Contributions
@@ -525,12 +547,12 @@ def contributions(
     def run() -> None:
         source = str(model_path)
         try:
-            settings = Contributions(step, case)
+            settings = Contributions(step, case, variance, samples, seed)  # type: ignore[arg-type]
         except ValueError as exc:
             raise OptionError(f"--{exc}", source=source) from None
         _check_outputs(csv, plot)
         model = load(model_path)
-        result = settings.run(model, source=source)
+        result = settings.run(model, source=source, workers=workers)
         _finish_study(
             result,
             csv,

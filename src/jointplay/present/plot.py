@@ -766,33 +766,58 @@ def contributions_figure(result: ContributionsResult) -> Figure:
     zones): each one's share of the worst-case and of the statistical (RSS)
     stack, the largest worst-case share first, with the cumulative worst-case
     share as a line; a hatched bar is a kink (the contacts change at the
-    nominal: the slope is one of two)."""
+    nominal: the slope is one of two). Where the measure is not linear over
+    the ranges and the Sobol' indices were taken, its panel shows both: the
+    linear shares (faded: they do not hold there) and the shares of the
+    variance, first order and total with their intervals, the largest total
+    first."""
     M = len(result.measures)
+    sobol = result.sobol
+    both = [sobol is not None and not result.linear(k) for k in range(M)]
     fig, axes = plt.subplots(
         M,
         1,
-        figsize=(9, 1.6 + 0.45 * len(result.plays) * M + 0.8 * M),
+        figsize=(9, 1.6 + (0.45 + 0.3 * any(both)) * len(result.plays) * M + 0.8 * M),
         squeeze=False,
         layout="constrained",
     )
     y = np.arange(len(result.plays))
     wc, rss = result.worst_case, result.rss
     for k, (ax, measure) in enumerate(zip(axes[:, 0], result.measures, strict=True)):
-        order = np.argsort(-wc[k], kind="stable")
-        for row, i in enumerate(order):
-            hatch = "//" if result.kink[k, i] else None
-            ax.barh(y[row] - 0.2, wc[k, i], height=0.38, color="#2f6db5", hatch=hatch)
-            ax.barh(y[row] + 0.2, rss[k, i], height=0.38, color="#f28e2b", hatch=hatch)
-        ax.plot(np.cumsum(wc[k, order]), y, color="black", marker="o", markersize=3, lw=0.8)
+        if both[k]:
+            assert sobol is not None
+            order = np.argsort(-sobol.total[k], kind="stable")
+            for row, i in enumerate(order):
+                hatch = "//" if result.kink[k, i] else None
+                ax.barh(y[row] - 0.3, wc[k, i], height=0.18, color="#2f6db5", alpha=0.35)
+                ax.barh(y[row] - 0.1, rss[k, i], height=0.18, color="#f28e2b", alpha=0.35)
+                for dy, value, interval, colour in (
+                    (0.1, sobol.first[k, i], sobol.first_interval[k, i], "#59a14f"),
+                    (0.3, sobol.total[k, i], sobol.total_interval[k, i], "#b07aa1"),
+                ):
+                    low, high = 100 * interval[0], 100 * interval[1]
+                    ax.barh(y[row] + dy, 100 * value, height=0.18, color=colour, hatch=hatch)
+                    ax.plot([low, high], [y[row] + dy] * 2, color="black", lw=0.8)
+            title = (
+                f"{measure}: not linear over the ranges; shares of the variance "
+                f"(Sobol', {sobol.settings.samples:,} base sets of parts)"
+            )
+        else:
+            order = np.argsort(-wc[k], kind="stable")
+            for row, i in enumerate(order):
+                hatch = "//" if result.kink[k, i] else None
+                ax.barh(y[row] - 0.2, wc[k, i], height=0.38, color="#2f6db5", hatch=hatch)
+                ax.barh(y[row] + 0.2, rss[k, i], height=0.38, color="#f28e2b", hatch=hatch)
+            ax.plot(np.cumsum(wc[k, order]), y, color="black", marker="o", markersize=3, lw=0.8)
+            title = (
+                f"{measure}: worst-case spread {result.worst_case_range[k]:.4g} mm, "
+                f"RSS σ {result.rss_sigma[k]:.4g} mm"
+            )
         ax.set_yticks(y, labels=_plain_labels([result.plays[i] for i in order]))
         ax.invert_yaxis()
         ax.set_xlim(0, 105)
         ax.set_xlabel("contribution (%)")
-        ax.set_title(
-            f"{measure}: worst-case spread {result.worst_case_range[k]:.4g} mm, "
-            f"RSS σ {result.rss_sigma[k]:.4g} mm",
-            fontsize=10,
-        )
+        ax.set_title(title, fontsize=10)
         ax.grid(True, axis="x", linewidth=0.3)
     handles = [
         Rectangle((0, 0), 1, 1, color="#2f6db5", label="worst case"),
@@ -802,6 +827,11 @@ def contributions_figure(result: ContributionsResult) -> Figure:
             [0], [0], color="black", marker="o", markersize=3, lw=0.8, label="cumulative worst case"
         ),
     ]
+    if any(both):
+        handles += [
+            Rectangle((0, 0), 1, 1, color="#59a14f", label="Sobol' first order"),
+            Rectangle((0, 0), 1, 1, color="#b07aa1", label="Sobol' total"),
+        ]
     fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8)
     fig.suptitle(f"{result.model_name or 'mechanism'}: contributions")
     return fig

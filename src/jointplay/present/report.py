@@ -148,10 +148,24 @@ class Report:
         )
         page.montecarlo(mc)
         say("contributions")
-        linear = Contributions(case=self.case).run(model, source=source)
+        # the shares of the variance where a measure is not linear: a Sobol' design
+        # of about as many sets of parts as the Monte Carlo study's
+        inputs = _inputs(model, self.case, source)
+        base = max(8, min(1024, self.samples // (2 * inputs + 2)))
+        linear = Contributions(case=self.case, samples=base, seed=self.seed).run(
+            model, source=source
+        )
         page.contributions(linear)
         if model.requirements:
-            page.tolerances(side_by_side(linear, mc), mc.settings.confidence, mc.samples)
+            rows = side_by_side(model, linear, mc, source=source)
+            page.tolerances(rows, mc.settings.confidence, mc.samples)
+
+
+def _inputs(model: Model, case: str | None, source: str) -> int:
+    """How many inputs vary (plays, load components, whole deviation zones)."""
+    from jointplay.studies.parts import inputs_of
+
+    return len(inputs_of(model, case, source).groups)
 
 
 def _varies(model: Model, case: str | None, source: str) -> bool:
@@ -694,25 +708,52 @@ class _Page:
 
         self.subsection("Contributions")
         wc, rss = co.worst_case, co.rss
+        sobol = co.sobol
+
+        def variance(k: int, i: int) -> tuple[str, str]:
+            if sobol is None or co.linear(k):
+                return "", ""
+            f, t = sobol.first_interval[k, i], sobol.total_interval[k, i]
+            return (
+                f"{100 * sobol.first[k, i]:.1f} % [{100 * f[0]:.0f}, {100 * f[1]:.0f}]",
+                f"{100 * sobol.total[k, i]:.1f} % [{100 * t[0]:.0f}, {100 * t[1]:.0f}]",
+            )
+
         self.parts.append(
             _table(
-                ["measure", "variable", "sensitivity", "worst case", "RSS", "note"],
+                [
+                    "measure",
+                    "variable",
+                    "sensitivity",
+                    "worst case",
+                    "RSS",
+                    "Sobol' first order",
+                    "Sobol' total",
+                    "note",
+                ],
                 [
                     (
                         m,
                         p,
                         _num(co.sensitivity[k, i], 5),
-                        f"{wc[k, i]:.1f} %",
-                        f"{rss[k, i]:.1f} %",
+                        f"{wc[k, i]:.1f} %" if co.linear(k) else "n/a",
+                        f"{rss[k, i]:.1f} %" if co.linear(k) else "n/a",
+                        *variance(k, i),
                         "kink: the contacts change here" if co.kink[k, i] else "",
                     )
                     for k, m in enumerate(co.measures)
                     for i, p in sorted(enumerate(co.plays), key=lambda ip: -wc[k, ip[0]])
                 ],
                 "Sensitivities at the nominal, and shares of the stacks (the largest share "
-                "first, as in the Pareto)",
+                "first, as in the Pareto); where a measure is not linear over the ranges the "
+                "linear shares do not apply (n/a) and the shares of its variance (Sobol' "
+                "indices, with their intervals) stand in",
             )
         )
+        for k, check in enumerate(co.linearity):
+            if not check.linear:
+                words = f"{co.measures[k]}: not linear over the ranges: {check.why()}."
+                self.parts.append(f"<p>{html.escape(words)}</p>")
         self.parts.append(_svg(contributions_figure(co)))
 
     def tolerances(
@@ -736,11 +777,16 @@ class _Page:
                 + "</p>",
             )
         self.subsection("Requirements: worst case, RSS and Monte Carlo side by side")
+
+        def rss(r: RequirementTolerances, text: str) -> str:
+            return text if r.rss_applies else "n/a"
+
         self.parts.append(
             _table(
                 [
                     "requirement",
                     "worst case (mm)",
+                    "linear estimate (mm)",
                     "RSS σ (mm)",
                     "Cp",
                     "Cpk",
@@ -754,12 +800,14 @@ class _Page:
                 [
                     (
                         r.requirement.describe(),
-                        f"{_num(r.worst_low, 5)} .. {_num(r.worst_high, 5)} "
-                        + ("pass" if r.worst_case_passes else "FAIL"),
-                        _num(r.rss_sigma, 4),
-                        _capability(r.cp),
-                        _capability(r.cpk),
-                        f"{r.rss_ppm:.4g}",
+                        f"{_num(r.worst, 5)} " + ("pass" if r.worst_case_passes else "FAIL"),
+                        f"{_num(r.linear_low, 5)} .. {_num(r.linear_high, 5)}"
+                        if r.linear_agrees
+                        else "n/a",
+                        rss(r, _num(r.rss_sigma, 4)),
+                        rss(r, _capability(r.cp)),
+                        rss(r, _capability(r.cpk)),
+                        rss(r, f"{r.rss_ppm:.4g}"),
                         _num(r.mc_sigma, 4),
                         f"{_num(r.mc_low, 5)} .. {_num(r.mc_high, 5)}",
                         _capability(r.pp),
@@ -768,13 +816,19 @@ class _Page:
                     )
                     for r in rows
                 ],
-                "Worst case: the linear stack of the tolerances; RSS: a normal law of the "
-                f"contributions' sigma; Monte Carlo: the sampled parts ({100 * confidence:g} % "
-                "interval). Formulas: docs/conventions.md.",
+                "Worst case: the measure's greatest value over the worst-case envelope, with "
+                "the linear stack as an estimate where it agrees; RSS: a normal law of the "
+                "contributions' sigma, only where the measure is linear over the ranges; "
+                f"Monte Carlo: the sampled parts ({100 * confidence:g} % interval). "
+                "Formulas: docs/conventions.md; which holds when: docs/tolerancing.md.",
             )
         )
         for r in rows:
-            if r.beyond_stack:
+            words = f"{r.requirement.describe()}: worst case at {r.worst_at}."
+            if not r.rss_applies:
+                words += f" RSS, Cp, Cpk: not applicable: {r.linear_why}."
+            self.parts.append(f"<p>{html.escape(words)}</p>")
+            if r.beyond_bound:
                 words = f"{r.requirement.describe()}: {r.beyond_words(samples)}."
                 self.parts.append(f"<p><strong>{html.escape(words)}</strong></p>")
 

@@ -422,17 +422,26 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
     for k, measure in enumerate(result.measures):
         # the figures above the table, not as its title: a title is cut to the
         # table's width, numbers and all
-        parts.append(
-            Text(
-                f"{measure}: {result.nominal[k]:.6g} mm at the nominal; worst-case spread "
-                f"{result.worst_case_range[k]:.6g} mm, RSS sigma {result.rss_sigma[k]:.6g} mm"
-            )
+        spread = (
+            f"worst-case spread {result.worst_case_range[k]:.6g} mm, RSS sigma "
+            f"{result.rss_sigma[k]:.6g} mm"
+            if result.linear(k)
+            else "the linear stack and RSS do not hold over the ranges"
         )
+        parts.append(Text(f"{measure}: {result.nominal[k]:.6g} mm at the nominal; {spread}"))
         order = np.argsort(-rss[k], kind="stable")
         # the widest that fits: with bars, then without, then names folded
         wide = console.options.update_width(10_000)
+        by_variance = not result.linear(k) and result.sobol is not None
+        if by_variance:
+            parts.append(_not_linear_words(result, k))
+            order = np.argsort(-result.sobol.total[k], kind="stable")  # type: ignore[union-attr]
         for bars, whole_names in ((True, True), (False, True), (False, False)):
-            table = _contributions_table(result, k, order, bars, whole_names)
+            table = (
+                _variance_table(result, k, order, bars, whole_names)
+                if by_variance
+                else _contributions_table(result, k, order, bars, whole_names)
+            )
             if console.measure(table, options=wide).maximum <= console.width:
                 break
         notes = Text()
@@ -477,18 +486,23 @@ def _contributions_table(
 
 
 def render_tolerances(result: TolerancesResult, source: str, console: Console) -> None:
-    """The report of ``jointplay tolerances``: per requirement, worst case,
-    RSS and Monte Carlo side by side (mm; ppm out of the limits)."""
+    """The report of ``jointplay tolerances``: per requirement, the worst case
+    (the bound over the envelope, and the linear estimate where it agrees),
+    RSS where the measure is linear, and Monte Carlo, side by side (mm; ppm
+    out of the limits)."""
     mc = result.montecarlo
     head = Text()
     head.append(f"{result.model_name or source}: tolerance results side by side\n", style="bold")
     for play, words in result.linear.plays_described.items():
         head.append(f"  {play}: {words}\n")
     head.append(
-        "worst case: the linear stack y0 -/+ sum |s| T / 2; RSS: sigma = sqrt(sum (s sigma)^2), "
-        f"normal law; Monte Carlo: {mc.samples:,} sets of parts (seed {result.settings.seed}), "
-        f"ppm with its {result.settings.confidence:.0%} interval. Cp/Pp only for a two-sided "
-        "requirement (a component along a direction)"
+        "worst case: the measure's greatest value over the worst-case envelope (a certified "
+        "equilibrium), with the linear stack y0 -/+ sum |s| T / 2 as an estimate where it "
+        "agrees; RSS: sigma = sqrt(sum (s sigma)^2), normal law, only where the measure is "
+        f"linear over the ranges; Monte Carlo: {mc.samples:,} sets of parts (seed "
+        f"{result.settings.seed}), ppm with its {result.settings.confidence:.0%} interval. "
+        "Cp/Pp only for a two-sided requirement (a component along a direction); "
+        "docs/tolerancing.md says which holds when"
     )
     if mc.unassembled:
         head.append(
@@ -499,31 +513,111 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
         )
     parts: list[Table | Text] = [head]
     for r in result.requirements:
-        low, high = r.limits
-        span = f"{low:g} to {high:g}" if low is not None else f"at most {high:g}"
-        note = " (contacts change at the nominal)" if r.kink else ""
-        table = Table(
-            title=f"{r.requirement.describe()}; nominal {r.nominal:.6g} mm{note}",
-            title_justify="left",
-            show_edge=False,
-        )
-        for name in ("", "worst case", "RSS", "Monte Carlo"):
-            table.add_column(name, justify="left" if not name else "right")
-        verdict = "pass" if r.worst_case_passes else "FAIL"
-        sampled = f"{r.mc_low:.5g} to {r.mc_high:.5g}"
-        table.add_row("mm", f"{r.worst_low:.5g} to {r.worst_high:.5g}", "", sampled)
-        table.add_row("mean (mm)", "", f"{r.nominal:.6g}", f"{r.mc_mean:.6g}")
-        table.add_row("sigma (mm)", "", f"{r.rss_sigma:.4g}", f"{r.mc_sigma:.4g}")
-        table.add_row("Cp, Pp", "", _cap(r.cp), _cap(r.pp))
-        table.add_row("Cpk, Ppk", "", _cap(r.cpk), _cap(r.ppk))
-        lo, hi = r.mc_interval_ppm
-        table.add_row("ppm out", verdict, f"{r.rss_ppm:.4g}", f"{r.mc_ppm:.4g}")
-        table.add_row("", f"(limits {span})", "(normal law)", f"[{lo:.4g}, {hi:.4g}]")
-        parts.append(table)
-        if r.beyond_stack:
-            parts.append(Text(r.beyond_words(mc.samples) + "\n"))
+        parts.extend(_tolerance_table(r, mc.samples))
     console.print(_fit(console, *parts))
 
 
 def _cap(value: float) -> str:
     return "-" if value != value else f"{value:.3g}"  # NaN: not defined (one-sided)
+
+
+#: What the RSS column says where the measure is not linear over the ranges.
+NOT_APPLICABLE = "n/a"
+
+
+def _tolerance_table(r: Any, samples: int) -> list[Table | Text]:
+    """One requirement's (``RequirementTolerances``) side-by-side table, and the
+    notes under it: where the worst case is reached, why RSS does not apply."""
+    low, high = r.limits
+    span = f"{low:g} to {high:g}" if low is not None else f"at most {high:g}"
+    note = " (contacts change at the nominal)" if r.kink else ""
+    table = Table(
+        title=f"{r.requirement.describe()}; nominal {r.nominal:.6g} mm{note}",
+        title_justify="left",
+        show_edge=False,
+    )
+    for name in ("", "worst case", "RSS", "Monte Carlo"):
+        table.add_column(name, justify="left" if not name else "right")
+    verdict = "pass" if r.worst_case_passes else "FAIL"
+    bound = f"within -/+{r.worst:.5g}" if r.two_sided else f"at most {r.worst:.5g}"
+    na = NOT_APPLICABLE
+    rss = r.rss_applies
+
+    def when(text: str) -> str:
+        return text if rss else na
+
+    table.add_row("mm", bound, "", f"{r.mc_low:.5g} to {r.mc_high:.5g}")
+    estimate = f"{r.linear_low:.5g} to {r.linear_high:.5g}" if r.linear_agrees else na
+    table.add_row("linear estimate", estimate, "", "")
+    table.add_row("mean (mm)", "", when(f"{r.nominal:.6g}"), f"{r.mc_mean:.6g}")
+    table.add_row("sigma (mm)", "", when(f"{r.rss_sigma:.4g}"), f"{r.mc_sigma:.4g}")
+    table.add_row("Cp, Pp", "", when(_cap(r.cp)), _cap(r.pp))
+    table.add_row("Cpk, Ppk", "", when(_cap(r.cpk)), _cap(r.ppk))
+    lo, hi = r.mc_interval_ppm
+    table.add_row("ppm out", verdict, when(f"{r.rss_ppm:.4g}"), f"{r.mc_ppm:.4g}")
+    table.add_row("", f"(limits {span})", "(normal law)" if rss else "", f"[{lo:.4g}, {hi:.4g}]")
+    notes = Text()
+    where = f" (d . u = {r.worst_signed:.5g} mm)" if r.worst_signed is not None else ""
+    notes.append(
+        f"worst case {r.worst:.6g} mm{where}, at {r.worst_at}: the greatest over {r.worst_over}\n"
+    )
+    if not r.linear_agrees:
+        notes.append(
+            f"linear estimate {r.linear_low:.5g} to {r.linear_high:.5g} mm: not shown, it "
+            "does not agree with the worst case (the slopes at the nominal do not hold "
+            "over the ranges)\n"
+        )
+    if not rss:
+        notes.append(
+            f"RSS, Cp, Cpk: not applicable: {r.linear_why}; the verdict comes from the worst "
+            "case and the Monte Carlo\n"
+        )
+    if r.beyond_bound:
+        notes.append(r.beyond_words(samples) + "\n", style="bold")
+    return [table, notes]
+
+
+def _not_linear_words(result: ContributionsResult, k: int) -> Text:
+    """Why measure ``k``'s linear shares do not hold, and what replaces them."""
+    sobol = result.sobol
+    assert sobol is not None
+    return Text(
+        f"  not linear over the ranges: {result.linearity[k].why()}. So the shares below are "
+        f"of the variance, Sobol' indices from {sobol.settings.samples:,} base sets of parts "
+        f"({sobol.solves:,} solves, {sobol.settings.confidence:.0%} intervals): first order, "
+        "what an input explains alone; total, with its interactions (total - first: its "
+        "share in interactions, contacts that change with several inputs together)"
+    )
+
+
+def _variance_table(
+    result: ContributionsResult, k: int, order: Any, bars: bool, whole_names: bool
+) -> Table:
+    """Measure ``k``'s rows by their shares of the variance (Sobol'), in ``order``."""
+    sobol = result.sobol
+    assert sobol is not None
+    table = Table(show_edge=False)
+    widest = max((len(p) for p in result.plays), default=8)
+    names = ("variable", "tolerance T", "first order %", "total %", "interactions %", "")
+    for name in names[: len(names) if bars else -1]:
+        table.add_column(
+            name,
+            justify="left" if name in ("variable", "") else "right",
+            min_width=widest if name == "variable" and whole_names else None,
+        )
+
+    def share(v: float, interval: Any) -> str:
+        lo, hi = (100 * float(x) for x in interval)
+        return f"{100 * v:.1f} [{lo:.0f}, {hi:.0f}]"
+
+    for i in order:
+        total = float(sobol.total[k, i])
+        row = [
+            result.plays[i],
+            f"{result.width[i]:.6g}",
+            share(float(sobol.first[k, i]), sobol.first_interval[k, i]),
+            share(total, sobol.total_interval[k, i]),
+            f"{100 * float(sobol.interactions[k, i]):.1f}",
+        ]
+        table.add_row(*row, *([_bar(min(max(100 * total, 0.0), 100.0))] if bars else []))
+    return table

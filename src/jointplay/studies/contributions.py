@@ -37,7 +37,7 @@ direction, as a play.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -58,6 +58,9 @@ from jointplay.studies.variation import (
 
 if TYPE_CHECKING:
     import pandas as pd
+
+    from jointplay.studies.linearity import Linearity
+    from jointplay.studies.sobol import SobolResult
 
 #: One-sided slopes differing by more than this (relative), and not converging
 #: as the step halves, mark a kink.
@@ -90,16 +93,32 @@ class Contributions:
     """Settings of a contribution study; ``run`` returns a ``ContributionsResult``.
 
     ``step``: the difference step as a fraction of each play's tolerance
-    width. ``case``: the load case (default: the model's loads)."""
+    width. ``case``: the load case (default: the model's loads).
+    ``variance``: when to take the shares of the variance (Sobol' indices,
+    ``sobol.py``) besides the linear shares: ``"auto"`` where a measure is
+    not linear over the ranges (``linearity.py``), ``"always"``, or
+    ``"never"``. ``samples``: the Sobol' study's base sets of parts (it
+    solves samples (2 D + 2)); ``seed``: its random streams and the
+    linearity check's."""
 
     step: float = 1e-3
     case: str | None = None
+    variance: Literal["auto", "always", "never"] = "auto"
+    samples: int = 1024
+    seed: int = 0
 
     def __post_init__(self) -> None:
         if not 0 < self.step <= 0.1:
             raise ValueError("step: a fraction of the tolerance, above 0 and at most 0.1")
+        if self.variance not in ("auto", "always", "never"):
+            raise ValueError("variance: 'auto', 'always' or 'never'")
+        if self.samples < 8:
+            raise ValueError("samples: at least 8 base sets of parts")
 
-    def run(self, model: Model, *, source: str | None = None) -> ContributionsResult:
+    def run(
+        self, model: Model, *, source: str | None = None, workers: int | None = 1
+    ) -> ContributionsResult:
+        """``workers``: local processes for the Sobol' study (None: one per core)."""
         source = source or model.name or "<model>"
         asm = assemble(model)
         pmap = play_map(asm, source)
@@ -172,6 +191,7 @@ class Contributions:
             jump_half > KINK * np.maximum(np.abs(up), np.abs(down)) + 1e-9
         )
         sensitivity = np.where(kink, central_half, slope)
+        per_column = sensitivity
         labels = [v.label for v in variables]
         described = {v.label: v.value.describe() for v in variables}
         groups = [[i] for i in range(len(variables))]
@@ -182,6 +202,29 @@ class Contributions:
         sensitivity, up, down, kink = _grouped(groups, sensitivity, up, down, kink)
         width = np.array([width[g[0]] for g in groups])
         sigma = np.array([sigma[g[0]] for g in groups])
+        from jointplay.studies.linearity import check_linearity
+        from jointplay.studies.parts import Inputs
+
+        half_width = np.sum(np.abs(sensitivity) * width, axis=1) / 2
+        linearity = check_linearity(
+            model,
+            self.case,
+            Inputs(pmap, lmap, dmap),
+            measures,
+            y[:, 0],
+            per_column,
+            half_width,
+            seed=self.seed,
+        )
+        sobol = None
+        if self.variance == "always" or (
+            self.variance == "auto" and not all(c.linear for c in linearity)
+        ):
+            from jointplay.studies.sobol import Sobol
+
+            sobol = Sobol(self.samples, self.seed, case=self.case).run(
+                model, workers=workers, source=source
+            )
         return ContributionsResult(
             self,
             model.name,
@@ -197,6 +240,8 @@ class Contributions:
             sigma,
             float(np.max(batch.feasibility_mm, initial=0.0)),
             float(np.max(batch.equilibrium_residual, initial=0.0)),
+            linearity,
+            sobol,
         )
 
 
@@ -271,6 +316,14 @@ class ContributionsResult:
     sigma: FloatArray  # (nv,) standard deviations
     feasibility_mm: float
     equilibrium_residual: float
+    #: Per measure: whether it is linear over the ranges (``linearity.py``).
+    linearity: tuple[Linearity, ...] = ()
+    #: The shares of the variance (``sobol.py``), where taken.
+    sobol: SobolResult | None = None
+
+    def linear(self, k: int) -> bool:
+        """Whether measure ``k``'s linear shares and RSS hold over the ranges."""
+        return not self.linearity or self.linearity[k].linear
 
     @property
     def worst_case(self) -> FloatArray:
@@ -312,9 +365,21 @@ class ContributionsResult:
                         "worst_case_pct": wc[k, i],
                         "rss_pct": rss[k, i],
                         "kink": bool(kink[k, i]),
+                        "linear": self.linear(k),
+                        **self._variance_row(k, i),
                     }
                 )
         return pd.DataFrame(rows)
+
+    def _variance_row(self, k: int, i: int) -> dict[str, float]:
+        """Measure ``k``'s and input ``i``'s Sobol' indices (NaN: not taken)."""
+        names: tuple[str, ...] = ("sobol_first", "sobol_first_low", "sobol_first_high")
+        names += ("sobol_total", "sobol_total_low", "sobol_total_high")
+        if self.sobol is None:
+            return dict.fromkeys(names, float("nan"))
+        s = self.sobol
+        values = (s.first[k, i], *s.first_interval[k, i], s.total[k, i], *s.total_interval[k, i])
+        return {n: float(v) for n, v in zip(names, values, strict=True)}
 
     def to_dict(self) -> dict[str, Any]:
         wc, rss, kink = self.worst_case, self.rss, self.kink
@@ -328,6 +393,7 @@ class ContributionsResult:
                     "nominal": float(self.nominal[k]),
                     "worst_case_range": float(self.worst_case_range[k]),
                     "rss_sigma": float(self.rss_sigma[k]),
+                    "linearity": self.linearity[k].to_dict() if self.linearity else None,
                     "plays": {
                         play: {
                             "tolerance": float(self.width[i]),
@@ -342,6 +408,7 @@ class ContributionsResult:
                 }
                 for k, measure in enumerate(self.measures)
             },
+            "sobol": None if self.sobol is None else self.sobol.to_dict(),
             "certificate": {
                 "feasibility_mm": self.feasibility_mm,
                 "equilibrium_residual": self.equilibrium_residual,

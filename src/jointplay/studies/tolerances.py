@@ -5,21 +5,26 @@ results side by side"), for each requirement's measure y: |d| of its point
 (one-sided: y <= L), or the component d . u along its direction (two-sided:
 -L <= y <= L).
 
-- *Worst case* (arithmetic stack): y0 -/+ sum_i |s_i| T_i / 2, from the
-  contributions' sensitivities s_i at the nominal plays and the tolerance
-  widths T_i (each play from its mean to either limit). Linear at the
-  nominal: exact while the contacts stay the same; where they change at the
-  nominal (a kink), each side's own slope.
-- *RSS*: sigma = sqrt(sum_i (s_i sigma_i)^2); Cp = (USL - LSL) / (6 sigma)
-  (two-sided only), Cpk = min(USL - y0, y0 - LSL) / (3 sigma) (one-sided:
-  (USL - y0) / (3 sigma)); ppm from the normal law of that mean and sigma.
+- *Worst case*: the bound, y's greatest value over the worst-case
+  envelope (``worstcase.py``: the plays at their upper limits, every
+  combination of the varying loads' limits and mean, the deviation zones),
+  with the configuration that reaches it. Beside it the *linear estimate*
+  (arithmetic stack) y0 -/+ sum_i |s_i| T_i / 2, from the contributions'
+  sensitivities s_i at the nominal and the tolerance widths T_i (where the
+  contacts change at the nominal, each side's own slope): shown only where
+  it agrees with the bound.
+- *RSS*, only where y is linear over the ranges (``linearity.py``: each
+  tolerance at its limits and a small random design against the slopes'
+  prediction): sigma = sqrt(sum_i (s_i sigma_i)^2); Cp = (USL - LSL) / (6
+  sigma) (two-sided only), Cpk = min(USL - y0, y0 - LSL) / (3 sigma)
+  (one-sided: (USL - y0) / (3 sigma)); ppm from the normal law of that mean
+  and sigma. Where y is not linear (the touching contacts change over the
+  ranges), these are NaN and the check says which tolerance bends y: the
+  verdict comes from the bound and the Monte Carlo.
 - *Monte Carlo*: the samples' mean m and standard deviation s; Pp and Ppk as
   Cp and Cpk with m and s; ppm the fraction of samples outside, with its
-  Wilson interval; the samples' range, and how many of them lie beyond the
-  worst case. The linear stack is no bound: where the response bends over the
-  tolerances (a position zone read as a distance, contacts that change) a
-  sample can pass it, and the report says so. ``jointplay envelope`` gives a
-  proven bound.
+  Wilson interval (from 0 when no sample fails); the samples' range, and
+  how many of them pass the bound (none, on every bundled example: a test).
 """
 
 from __future__ import annotations
@@ -33,10 +38,17 @@ import numpy as np
 from jointplay.errors import StudyError
 from jointplay.model.mechanism import Model, Requirement
 from jointplay.studies.contributions import Contributions, ContributionsResult, Measure
+from jointplay.studies.linearity import LINEAR_ERROR_SHARE, ROUND_OFF_MM
 from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
 
 if TYPE_CHECKING:
     import pandas as pd
+
+    from jointplay.studies.worstcase import Reach
+
+#: A sample passes the worst case only by more than this (mm): the
+#: certificates' promise on every answer.
+CERTIFIED_MM = 1e-6
 
 
 def _normal_tail(z: float) -> float:
@@ -76,16 +88,29 @@ def _normal_ppm(low: float | None, high: float, mean: float, sigma: float) -> fl
 
 @dataclass(frozen=True)
 class RequirementTolerances:
-    """One requirement's figures, worst case / RSS / Monte Carlo (mm, ppm)."""
+    """One requirement's figures, worst case / RSS / Monte Carlo (mm, ppm).
+
+    ``worst``: the bound (``worstcase.py``), the greatest value of the
+    requirement's measure, reached at ``worst_at``. ``linear_low`` to
+    ``linear_high``: the linear stack, an estimate, shown where it agrees
+    with the bound. RSS (sigma, Cp, Cpk, ppm) only where the measure is
+    linear over the ranges (``linear``; else NaN, and ``linear_why`` says
+    why)."""
 
     requirement: Requirement
     two_sided: bool  # along a direction: -L <= d . u <= L; else |d| <= L
     nominal: float  # the measure at the nominal (mean) plays
     kink: bool  # the contacts change at the nominal: the linear figures are one-sided slopes
-    worst_low: float
-    worst_high: float
-    rss_sigma: float
-    cp: float  # NaN for a one-sided requirement
+    worst: float  # the bound: the requirement's measure at its greatest (mm)
+    worst_at: str  # the configuration that reaches it
+    worst_over: str  # over which sets of parts and loads
+    worst_signed: float | None  # along a direction: d . u at the worst case
+    linear_low: float  # the linear estimate (the stack at the nominal's slopes)
+    linear_high: float
+    linear: bool  # the measure is linear over the ranges: RSS applies
+    linear_why: str  # why not ('' where linear)
+    rss_sigma: float  # NaN where RSS does not apply
+    cp: float  # NaN for a one-sided requirement, or where RSS does not apply
     cpk: float
     rss_ppm: float
     mc_mean: float
@@ -96,27 +121,40 @@ class RequirementTolerances:
     mc_interval_ppm: tuple[float, float]
     mc_low: float  # the assembled samples' range
     mc_high: float
-    beyond_stack: int  # samples outside the worst case's [worst_low, worst_high]
+    beyond_bound: int  # samples whose measure passes the worst case
 
     @property
     def limits(self) -> tuple[float | None, float]:
         high = self.requirement.max_displacement
         return (-high if self.two_sided else None), high
 
+    @property
+    def linear_agrees(self) -> bool:
+        """Whether the linear estimate's greatest value of the requirement's
+        measure agrees with the bound (within what the linearity check
+        allows the slopes' prediction): only then is it shown."""
+        top = max(abs(self.linear_low), abs(self.linear_high))
+        top = top if self.two_sided else self.linear_high
+        half = (self.linear_high - self.linear_low) / 2
+        return self.linear and abs(top - self.worst) <= LINEAR_ERROR_SHARE * half + ROUND_OFF_MM
+
     def beyond_words(self, samples: int) -> str:
-        """Why the worst case is no bound, when samples pass it ('' if none do)."""
-        if not self.beyond_stack:
+        """What it means when samples pass the bound ('' if none do)."""
+        if not self.beyond_bound:
             return ""
         return (
-            f"{self.beyond_stack:,} of the {samples:,} samples lie beyond the worst case: "
-            "the response is not linear over these tolerances, so the linear stack is no "
-            "bound here; the command 'jointplay envelope' gives a proven one"
+            f"{self.beyond_bound:,} of the {samples:,} samples pass the worst case: the "
+            "bound is taken at the plays' upper limits and the loads' limits and mean, and "
+            "these parts go further between them; the Monte Carlo range is the better guide"
         )
 
     @property
     def worst_case_passes(self) -> bool:
-        low, high = self.limits
-        return self.worst_high <= high and (low is None or self.worst_low >= low)
+        return self.worst <= self.requirement.max_displacement
+
+    @property
+    def rss_applies(self) -> bool:
+        return self.linear
 
     def to_dict(self) -> dict[str, Any]:
         def num(v: float) -> float | None:
@@ -131,15 +169,24 @@ class RequirementTolerances:
             "nominal": self.nominal,
             "kink": self.kink,
             "worst_case": {
-                "low": self.worst_low,
-                "high": self.worst_high,
+                "worst": num(self.worst),
+                "at": self.worst_at,
+                "over": self.worst_over,
+                "signed": self.worst_signed,
                 "passes": self.worst_case_passes,
+                "linear_estimate": {
+                    "low": self.linear_low,
+                    "high": self.linear_high,
+                    "agrees": self.linear_agrees,
+                },
             },
             "rss": {
-                "sigma": self.rss_sigma,
+                "applies": self.linear,
+                "why_not": self.linear_why or None,
+                "sigma": num(self.rss_sigma),
                 "cp": num(self.cp),
                 "cpk": num(self.cpk),
-                "ppm": self.rss_ppm,
+                "ppm": num(self.rss_ppm),
             },
             "monte_carlo": {
                 "mean": num(self.mc_mean),
@@ -150,7 +197,7 @@ class RequirementTolerances:
                 "interval_ppm": list(self.mc_interval_ppm),
                 "low": num(self.mc_low),
                 "high": num(self.mc_high),
-                "beyond_worst_case": self.beyond_stack,
+                "beyond_worst_case": self.beyond_bound,
             },
         }
 
@@ -160,7 +207,9 @@ class Tolerances:
     """Settings of the side-by-side study; ``run`` returns a ``TolerancesResult``.
 
     ``samples``, ``seed``, ``confidence``, ``case``: those of the Monte Carlo
-    study (``MonteCarlo``); the worst case and RSS come from ``Contributions``."""
+    study (``MonteCarlo``); the worst case is the bound over the envelope
+    (``worstcase.py``); the linear estimate, RSS and the linearity check
+    come from ``Contributions``."""
 
     samples: int = 100_000
     seed: int = 0
@@ -178,19 +227,38 @@ class Tolerances:
                 source=source,
                 entry="requirements",
             )
-        linear = Contributions(case=self.case).run(model, source=source)
+        linear = Contributions(case=self.case, variance="never", seed=self.seed).run(
+            model, source=source
+        )
         mc = MonteCarlo(
             samples=self.samples, seed=self.seed, confidence=self.confidence, case=self.case
         ).run(model, workers=workers, source=source)
-        return TolerancesResult(self, model.name, side_by_side(linear, mc), linear, mc)
+        rows = side_by_side(model, linear, mc, source=source)
+        return TolerancesResult(self, model.name, rows, linear, mc)
 
 
 def side_by_side(
-    linear: ContributionsResult, mc: MonteCarloResult
+    model: Model, linear: ContributionsResult, mc: MonteCarloResult, *, source: str
 ) -> tuple[RequirementTolerances, ...]:
     """Each requirement's figures from a contribution study and a Monte Carlo
-    study of the same model and load case (the HTML report has both)."""
-    return tuple(_one(stats.requirement, stats.interval, linear, mc) for stats in mc.requirements)
+    study of the same model and load case (the HTML report has both), and
+    the worst case over the envelope (``worstcase.worst_cases``)."""
+    from jointplay.studies.worstcase import worst_cases
+
+    measures = [_measure_of(stats.requirement) for stats in mc.requirements]
+    reaches = worst_cases(model, measures, mc.settings.case, source=source)
+    return tuple(
+        _one(stats.requirement, stats.interval, linear, mc, reach)
+        for stats, reach in zip(mc.requirements, reaches, strict=True)
+    )
+
+
+def _measure_of(req: Requirement) -> Measure:
+    if req.along is None:
+        return Measure(req.point)
+    u = np.asarray(req.along, dtype=float)
+    u = u / np.linalg.norm(u)
+    return Measure(req.point, (float(u[0]), float(u[1]), float(u[2])))
 
 
 def _one(
@@ -198,14 +266,10 @@ def _one(
     interval: tuple[float, float],
     linear: ContributionsResult,
     mc: MonteCarloResult,
+    reach: Reach,
 ) -> RequirementTolerances:
     two_sided = req.along is not None
-    if two_sided:
-        u = np.asarray(req.along, dtype=float)
-        u = u / np.linalg.norm(u)
-        measure = Measure(req.point, (float(u[0]), float(u[1]), float(u[2])))
-    else:
-        measure = Measure(req.point)
+    measure = _measure_of(req)
     k = linear.measures.index(measure.label)
     y0 = float(linear.nominal[k])
     # each play to either limit: the slope's change there, one-sided where the
@@ -218,8 +282,14 @@ def _one(
     fall = float(np.sum(np.minimum(np.minimum(up, down), 0.0)))
     high = req.max_displacement
     low = -high if two_sided else None
-    sigma = _spread(float(linear.rss_sigma[k]), y0, high)
-    cp, cpk = _capability(low, high, y0, sigma)
+    is_linear = linear.linear(k)
+    why = "" if is_linear else linear.linearity[k].why()
+    if is_linear:
+        sigma = _spread(float(linear.rss_sigma[k]), y0, high)
+        cp, cpk = _capability(low, high, y0, sigma)
+        rss_ppm = _normal_ppm(low, high, y0, sigma)
+    else:
+        sigma = cp = cpk = rss_ppm = math.nan
     y = measure.of(mc.displacement[:, mc.point_names.index(req.point)])
     assembled = ~np.isnan(y)  # parts that cannot be assembled miss the requirement
     mean = float(np.mean(y[assembled]))
@@ -229,18 +299,24 @@ def _one(
     with np.errstate(invalid="ignore"):
         outside = ((np.abs(y) > high) if two_sided else (y > high)) | ~assembled
     sampled = y[assembled]
-    beyond = int(np.sum((sampled < y0 + fall) | (sampled > y0 + rise)))
+    beyond = int(np.sum(np.abs(sampled) > reach.worst + CERTIFIED_MM))
     return RequirementTolerances(
         req,
         two_sided,
         y0,
         bool(np.any(kink)),
+        reach.worst,
+        reach.at,
+        reach.over,
+        reach.signed,
         y0 + fall,
         y0 + rise,
+        is_linear,
+        why,
         sigma,
         cp,
         cpk,
-        _normal_ppm(low, high, y0, sigma),
+        rss_ppm,
         mean,
         spread,
         pp,
@@ -286,9 +362,13 @@ class TolerancesResult:
                 {
                     "requirement": r.requirement.describe(),
                     "nominal": r.nominal,
-                    "worst_low": r.worst_low,
-                    "worst_high": r.worst_high,
+                    "worst_case": r.worst,
                     "worst_case_passes": r.worst_case_passes,
+                    "worst_case_at": r.worst_at,
+                    "linear_low": r.linear_low,
+                    "linear_high": r.linear_high,
+                    "linear_agrees": r.linear_agrees,
+                    "rss_applies": r.linear,
                     "rss_sigma": r.rss_sigma,
                     "cp": r.cp,
                     "cpk": r.cpk,
@@ -302,7 +382,7 @@ class TolerancesResult:
                     "mc_ppm_high": r.mc_interval_ppm[1],
                     "mc_low": r.mc_low,
                     "mc_high": r.mc_high,
-                    "beyond_worst_case": r.beyond_stack,
+                    "beyond_worst_case": r.beyond_bound,
                     "kink": r.kink,
                 }
             )

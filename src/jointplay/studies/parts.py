@@ -1,0 +1,145 @@
+"""Sets of parts given by the values of their varying inputs, solved in batches.
+
+A tolerance study's inputs, one row per set of parts, in the Monte Carlo
+study's order: the toleranced plays (mm, or rad for a backlash), the varying
+load components (N, N*mm), then the deviation zones' components (mm, rad).
+An *input* of the contribution studies is one play, one load component, or
+one whole zone (a disc or ball of 2 or 3 components, drawn together); a
+zone of limits per direction is one input per direction.
+
+``solve_sets`` solves such rows the way the Monte Carlo study solves its
+samples (``montecarlo._solve_chunk``): the batch solver, started from the
+nominal answer, in chunks that may go to worker processes. Every answer is
+a certified equilibrium; a set of parts that cannot be assembled gives NaN.
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from jointplay.assembly import assemble
+from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Model
+from jointplay.solver.workspace import Workspace
+from jointplay.studies.parallel import run_chunks
+from jointplay.studies.variation import (
+    DeviationMap,
+    LoadMap,
+    PlayMap,
+    deviation_map,
+    load_map,
+    play_map,
+)
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from jointplay.studies.contributions import Measure
+
+#: Sets of parts per batch solve (the Monte Carlo study's chunk).
+CHUNK = 10_000
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """The varying inputs of a model in one load case."""
+
+    pmap: PlayMap
+    lmap: LoadMap
+    dmap: DeviationMap
+
+    @property
+    def columns(self) -> int:
+        return len(self.pmap.variables) + len(self.lmap.variables) + len(self.dmap.variables)
+
+    @property
+    def nominal(self) -> FloatArray:
+        """(columns,) the means, which the model holds."""
+        return np.concatenate([self.pmap.nominal, self.lmap.nominal, self.dmap.nominal])
+
+    @property
+    def groups(self) -> list[list[int]]:
+        """The columns of each input: a play, a load component, a zone."""
+        n = len(self.pmap.variables) + len(self.lmap.variables)
+        out = [[i] for i in range(n)]
+        j = 0
+        while j < len(self.dmap.variables):
+            width = len(self.dmap.variables[j].zone.axes)
+            out.append(list(range(n + j, n + j + width)))
+            j += width
+        return out
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Each input's name, as ``ContributionsResult.plays`` has them."""
+        out = [*self.pmap.labels, *self.lmap.labels]
+        n = len(out)
+        for g in self.groups[n:]:
+            var = self.dmap.variables[g[0] - n]
+            out.append(var.label if len(g) == 1 else var.label.rsplit(".", 1)[0])
+        return tuple(out)
+
+    def sample(self, rng: np.random.Generator, n: int) -> FloatArray:
+        """(n, columns) ``n`` sets of parts, drawn as the Monte Carlo study draws them."""
+        return np.hstack(
+            [self.pmap.sample(rng, n), self.lmap.sample(rng, n), self.dmap.sample(rng, n)]
+        )
+
+
+def inputs_of(model: Model, case: str | None, source: str) -> Inputs:
+    asm = assemble(model)
+    return Inputs(play_map(asm, source), load_map(asm, case), deviation_map(asm))
+
+
+def solve_sets(
+    model: Model, case: str | None, values: FloatArray, *, workers: int | None = 1
+) -> FloatArray:
+    """(n, points, 3) mm: each functional point's displacement for each row
+    of ``values`` (n, columns); NaN for a set of parts that cannot be assembled."""
+    run = uuid.uuid4().hex
+    tasks = [(case, values[lo : lo + CHUNK], lo, run) for lo in range(0, len(values), CHUNK)]
+    parts = run_chunks(_solve_rows, model, tasks, workers, None)
+    from jointplay.studies.montecarlo import _PREPARED
+
+    _PREPARED.pop((run, case), None)
+    parts.sort(key=lambda p: p[0])
+    if not parts:
+        return np.zeros((0, len(model.points), 3))
+    return np.concatenate([d for _, d in parts])
+
+
+def _solve_rows(
+    model: Model, case: str | None, values: FloatArray, first: int, run: str
+) -> tuple[int, FloatArray]:
+    from jointplay.studies.montecarlo import _prepared
+
+    prepared = _prepared(model, case, run)
+    pmap, lmap, dmap = prepared.pmap, prepared.lmap, prepared.dmap
+    n_p, n_l = len(pmap.variables), len(lmap.variables)
+    plays, loads, deviations = values[:, :n_p], values[:, n_p : n_p + n_l], values[:, n_p + n_l :]
+    work = lmap.work(loads) if n_l else np.tile(lmap.g0, (len(values), 1))
+    radii, centres = pmap.radii(plays), None
+    if dmap.variables:
+        radii = radii + dmap.radii_shift(deviations)
+        centres = dmap.centres(deviations)
+    batch = Workspace(prepared.asm).solve_batch(
+        work, radii, centres, forces=False, starts=prepared.starts
+    )
+    d = np.zeros((len(values), len(model.points), 3))
+    for p, point in enumerate(model.points):
+        motion = batch.body_displacement(point.body)
+        d[:, p] = motion[:, :3] + np.cross(motion[:, 3:], np.asarray(point.at))
+    d[~batch.assembled] = np.nan
+    return first, d
+
+
+def measured(model: Model, measures: Sequence[Measure], d: FloatArray) -> FloatArray:
+    """(M, n) each measure of (n, points, 3) displacements."""
+    names = [p.name for p in model.points]
+    return np.array([m.of(d[:, names.index(m.point)]) for m in measures]).reshape(
+        len(measures), len(d)
+    )

@@ -1,0 +1,151 @@
+"""The worst case of a requirement's measure over the worst-case envelope.
+
+The size a requirement bounds (a point's |d|, or |d . u| along the
+requirement's direction) over every set of parts the tolerances allow, taken where the
+worst-case envelope (``envelope.py``) takes it:
+
+- the plays at their upper limits (each clearance domain holds the smaller
+  ones);
+- without deviation zones: every combination of the varying load
+  components at their limits and mean (their limits only where three
+  values each would be more than ``MOST_LOAD_SETS``), each solved as the
+  model's own equilibrium, springs and all (one batch, certified answers).
+  The worst case is the largest of those answers, reached at the load set
+  it names: exact for those sets;
+- with deviation zones: the support of every position the plays and the
+  zones allow (the envelope's program over the positions and the
+  deviations together), an upper bound of every set of parts whatever the
+  loads: along u, the larger of ``max u . d`` and ``-min u . d``, exactly;
+  for |d|, the envelope's largest displacement (its climb from the
+  farthest supports).
+
+The linear stack (``tolerances.py``) extrapolates slopes at the nominal;
+where the touching contacts change over the ranges (a load that changes
+side), it can be far off, and this bound is what holds.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from jointplay.assembly import assemble
+from jointplay.errors import OptionError
+from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Model
+from jointplay.studies.contributions import Measure, unit_of
+from jointplay.studies.envelope import MOST_LOAD_SETS
+from jointplay.studies.parts import Inputs, inputs_of, measured, solve_sets
+
+
+@dataclass(frozen=True)
+class Reach:
+    """One requirement measure's worst case: the greatest value ``worst`` (mm)
+    of |d|, or of |d . u| along a direction (the size a requirement bounds),
+    with the configuration that reaches it and, along a direction, the
+    signed component there."""
+
+    measure: str
+    worst: float
+    at: str  # the configuration, in words
+    over: str  # over which load sets (or positions), in words
+    signed: float | None = None  # d . u at the worst case (along a direction)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "measure": self.measure,
+            "worst": self.worst if math.isfinite(self.worst) else None,
+            "at": self.at,
+            "over": self.over,
+            "signed": self.signed,
+        }
+
+
+def worst_cases(
+    model: Model, measures: list[Measure], case: str | None, *, source: str
+) -> tuple[Reach, ...]:
+    """Each measure's worst case over the tolerances (module docstring)."""
+    inputs = inputs_of(model, case, source)
+    if inputs.dmap.variables:
+        return tuple(_over_zones(model, inputs, m, case, source) for m in measures)
+    return _over_load_sets(model, inputs, measures, case, source)
+
+
+def _plays_words(inputs: Inputs) -> str:
+    return "the plays at their upper limits" if inputs.pmap.variables else "the plays as given"
+
+
+def _over_load_sets(
+    model: Model, inputs: Inputs, measures: list[Measure], case: str | None, source: str
+) -> tuple[Reach, ...]:
+    lmap = inputs.lmap
+    nl = len(lmap.variables)
+    levels = 3 if 3**nl <= MOST_LOAD_SETS else 2
+    if levels**nl > MOST_LOAD_SETS:
+        raise OptionError(
+            f"{nl} load components vary: {levels}^{nl} load combinations are more than "
+            f"the worst case's {MOST_LOAD_SETS:,}; fix some of them",
+            source=source,
+        )
+    grids = [np.linspace(v.value.low, v.value.high, levels) for v in lmap.variables]
+    combos = list(itertools.product(*grids))  # one empty combination when none varies
+    loads = np.array(combos, dtype=float).reshape(len(combos), nl)
+    highs = np.array([v.value.high for v in inputs.pmap.variables])
+    rows = np.hstack([np.tile(highs, (len(loads), 1)), loads])
+    y = measured(model, measures, solve_sets(model, case, rows))
+    plays = _plays_words(inputs)
+    each = "both limits" if levels == 2 else "the limits and the mean"
+    over = (
+        f"{len(loads):,} load sets ({each} of each varying load component)"
+        if nl
+        else "the model's loads"
+    )
+
+    def at(j: int) -> str:
+        words = ", ".join(
+            f"{v.label} = {value:g} {unit_of(v.label)}"
+            for v, value in zip(lmap.variables, loads[j], strict=True)
+        )
+        return plays + (f", {words}" if words else "")
+
+    out = []
+    for k, m in enumerate(measures):
+        top = int(np.nanargmax(np.abs(y[k])))
+        signed = None if m.along is None else float(y[k, top])
+        out.append(Reach(m.label, float(abs(y[k, top])), at(top), over, signed))
+    return tuple(out)
+
+
+def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, source: str) -> Reach:
+    from jointplay.solver.workspace import Workspace
+    from jointplay.studies.envelope import Envelope, _point_map, _ZoneProgram
+
+    over = (
+        "every position the plays and the deviation zones allow (the envelope's support, "
+        "whatever the loads)"
+    )
+    words = _plays_words(inputs) + ", the deviations and the position that reach it"
+    if m.along is None:
+        env = Envelope(m.point, plays="max", loads="probes").run(model, source=source)
+        return Reach(m.label, env.largest, words, over)
+    point = next(p for p in model.points if p.name == m.point)
+    asm = assemble(model)
+    if point.body not in asm.body_index:  # the ground does not move
+        return Reach(m.label, 0.0, words, over, 0.0)
+    ws = Workspace(asm)
+    if inputs.pmap.variables:
+        highs = np.array([v.value.high for v in inputs.pmap.variables])
+        ws = ws.with_radii(inputs.pmap.radii(highs)[0])
+    program = _ZoneProgram(ws, inputs.dmap, _point_map(asm, point.body, np.asarray(point.at)))
+    u = np.asarray(m.along)
+    # the greatest and the least d . u: a component unbounded either way has no worst case
+    ends: list[FloatArray | None] = [program.support(u), program.support(-u)]
+    if ends[0] is None or ends[1] is None:
+        return Reach(m.label, math.inf, words, over, math.inf if ends[0] is None else -math.inf)
+    high, low = float(u @ ends[0]), float(u @ ends[1])
+    signed = high if abs(high) >= abs(low) else low
+    return Reach(m.label, abs(signed), words, over, signed)
