@@ -136,6 +136,32 @@ def test_the_command_prints_json_csv_and_the_table(tmp_path: Path) -> None:
     assert "linear estimate" in text.stdout and "at most" in text.stdout
 
 
+def test_the_figure_shows_the_parts_the_limit_and_the_worst_case(tmp_path: Path) -> None:
+    """``tolerances --plot`` (the README says every study takes it): per
+    requirement, the parts' histogram with the limit and the bound drawn
+    where they are, inside the panel."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from jointplay.present.plot import tolerances_figure
+
+    out = tmp_path / "t.png"
+    proc = run("tolerances", str(FITS), "-n", "500", "--plot", str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert out.read_bytes()[:4] == b"\x89PNG"
+    result = Tolerances(samples=500).run(jointplay.load(FITS))
+    (r,) = result.requirements
+    (ax,) = [a for a in tolerances_figure(result).axes if a.get_title()]
+    drawn = {
+        round(float(line.get_xdata()[0]), 9)
+        for line in ax.get_lines()
+        if len(line.get_xdata()) == 2
+    }
+    assert {round(r.requirement.max_displacement, 9), round(r.worst, 9)} <= drawn
+    low, high = ax.get_xlim()
+    assert low <= r.mc_low and r.worst <= high
+
+
 def test_a_model_without_requirements_is_told_what_to_add() -> None:
     proc = run("tolerances", str(ROOT / "examples" / "paper" / "6.1.6.1.yaml"))
     assert proc.returncode == 2

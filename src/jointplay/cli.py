@@ -583,6 +583,7 @@ def tolerances(
         typer.Option("--csv", metavar="FILE", help="Write the table (one row per requirement)."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the study as JSON.")] = False,
+    plot: PlotOption = None,
 ) -> None:
     """Each requirement three ways, side by side: the worst case (linear stack of
     the plays' tolerances), RSS with Cp/Cpk and ppm, and Monte Carlo with Pp/Ppk
@@ -595,7 +596,7 @@ def tolerances(
         source = str(model_path)
         if not 0 < confidence < 1:
             raise OptionError("--confidence: between 0 and 1 (0.95 is 95 %)", source=source)
-        _check_outputs(csv, None)
+        _check_outputs(csv, plot)
         model = load(model_path)
         result = Tolerances(samples, seed, confidence, case).run(
             model, workers=workers, source=source
@@ -603,8 +604,8 @@ def tolerances(
         _finish_study(
             result,
             csv,
-            None,
-            lambda: None,
+            plot,
+            lambda: _plots().tolerances_figure(result),
             as_json,
             lambda: render_tolerances(result, source, _console()),
         )

@@ -49,6 +49,7 @@ if TYPE_CHECKING:
     from jointplay.studies.envelope import EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarloResult
     from jointplay.studies.sweep import SweepResult
+    from jointplay.studies.tolerances import TolerancesResult
 
 INITIAL = "#9a9a9a"
 DOMAIN = "#2f6db5"
@@ -839,3 +840,79 @@ def contributions_figure(result: ContributionsResult) -> Figure:
 
 def _plain_labels(labels: Sequence[str]) -> list[str]:
     return [label if len(label) <= 40 else label[:37] + "..." for label in labels]
+
+
+def tolerances_figure(result: TolerancesResult) -> Figure:
+    """Per requirement, the Monte Carlo parts' measure as a histogram, with
+    its limit, the worst case (the bound no part passes), and, where the
+    measure is linear over the ranges, the linear estimate and RSS's normal law."""
+    mc = result.montecarlo
+    panels = result.requirements
+    cols = min(len(panels), 2) or 1
+    rows = max(math.ceil(len(panels) / cols), 1)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.6 * cols, 4.0 * rows), squeeze=False)
+    for ax, r in zip(axes.flat, panels, strict=False):
+        req = r.requirement
+        d = mc.displacement[:, mc.point_names.index(req.point)]
+        if r.two_sided and req.along is not None:
+            u = np.asarray(req.along, dtype=float) / np.linalg.norm(req.along)
+            every, unit = d @ u, f"d along {list(req.along)} (mm)"
+        else:
+            every, unit = np.linalg.norm(d, axis=1), "|d| (mm)"
+        values = every[~np.isnan(every)]  # the parts that can be assembled
+        ax.hist(
+            values,
+            bins=_bins(values),
+            density=True,
+            color="#6f9fd8",
+            edgecolor="white",
+            linewidth=0.3,
+            label=f"Monte Carlo, {len(values):,} parts",
+        )
+        high = req.max_displacement
+        ends = [high, r.worst, *((values.min(), values.max()) if len(values) else ())]
+        for sign in (1, -1) if r.two_sided else (1,):
+            first = sign == 1
+            ax.axvline(
+                sign * high,
+                color=TOUCHING,
+                linewidth=1.5,
+                label=f"limit {high:g} mm" if first else None,
+            )
+            ax.axvline(
+                sign * r.worst,
+                color="black",
+                linestyle="--",
+                linewidth=1.2,
+                label=f"worst case {r.worst:.4g} mm" if first else None,
+            )
+        if r.linear_agrees:
+            ax.axvspan(r.linear_low, r.linear_high, color=LOAD, alpha=0.12, label="linear estimate")
+        if r.linear and r.rss_sigma > 0:
+            x = np.linspace(min(ends) if r.two_sided else 0.0, max(ends), 200)
+            z = (x - r.nominal) / r.rss_sigma
+            ax.plot(
+                x,
+                np.exp(-0.5 * z * z) / (r.rss_sigma * math.sqrt(2 * math.pi)),
+                color=DOMAIN,
+                linewidth=1.2,
+                label="RSS, normal law",
+            )
+        verdict = (
+            f"Cpk {r.cpk:.3g}, Ppk {r.ppk:.3g}"
+            if r.linear
+            else f"RSS does not apply; Ppk {r.ppk:.3g}"
+        )
+        ax.set_title(f"{req.describe()}\n{verdict}", fontsize=9)
+        ax.set_xlabel(unit)
+        ax.set_ylabel("density of parts (1/mm)")
+        ax.grid(True, linewidth=0.3)
+        ax.legend(fontsize=7, loc="best")
+    for ax in axes.flat[len(panels) :]:
+        ax.set_axis_off()
+    fig.suptitle(
+        f"{result.model_name or 'mechanism'}: tolerances, {mc.samples:,} sets of parts "
+        f"(seed {result.settings.seed})"
+    )
+    fig.tight_layout()
+    return fig
