@@ -288,7 +288,7 @@ def _json_numbers(command: str, doc: dict[str, Any]) -> list[float]:
     ]
 
 
-STUDIES = [
+PIPED_RUNS = [
     ("solve", str(ROOT / "examples" / "gallery" / "located_plate.yaml")),
     ("solve", str(ROOT / "examples" / "studies" / "carriage.yaml")),
     (
@@ -306,7 +306,7 @@ STUDIES = [
 
 
 @pytest.mark.parametrize("columns", ["60", "200"])
-@pytest.mark.parametrize("args", STUDIES, ids=lambda a: f"{a[0]}-{Path(a[1]).stem}")
+@pytest.mark.parametrize("args", PIPED_RUNS, ids=lambda a: f"{a[0]}-{Path(a[1]).stem}")
 def test_piped_text_prints_every_json_number_whole(args: tuple[str, ...], columns: str) -> None:
     """Piped (a CI log, a file), the text is not wrapped at any width: every
     number that --json gives is in the text whole (a |u| of 0.0102892 once

@@ -18,7 +18,7 @@ import jointplay
 PACKAGE = Path(jointplay.__file__).parent
 
 LAYERS = [
-    {"errors", "settings", "units", "geometry", "version"},
+    {"errors", "settings", "units", "geometry", "version", "proven"},
     {"model"},
     {"io"},
     {"numerics"},

@@ -29,8 +29,9 @@ def test_the_resolution_follows_the_certificate() -> None:
     res = Resolution.of(0.1, 200.0, 50.0)
     assert res.length == pytest.approx(DEFAULT.feasibility_tolerance * 0.1)
     assert res.angle == pytest.approx(res.length / 200.0)
-    assert res.force == pytest.approx(DEFAULT.equilibrium_tolerance * 50.0)
+    assert res.force == pytest.approx(DEFAULT.force_resolution * 50.0)
     assert res.moment == pytest.approx(res.force * 200.0)
+    assert res.balance == pytest.approx(DEFAULT.equilibrium_tolerance * 50.0)
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: f"{p.parent.name}/{p.stem}")

@@ -2,8 +2,10 @@
 its certificate tells from zero.
 
 The certificate holds positions to ``feasibility_tolerance`` of the largest
-play and forces to ``equilibrium_tolerance`` of the largest force in the
-balance; a component below that is the solver's round-off, and every result
+play and balances forces to ``equilibrium_tolerance`` of the largest force; a
+length below the first, or a force below ``force_resolution`` of the largest
+(a hundredth of the balance, so that the printed forces still balance), is the
+solver's round-off, and every result
 (and so the text, ``--json``, CSV and the report) gives it as 0. This module
 is the one place where that rule is written.
 """
@@ -29,6 +31,8 @@ class Resolution:
     angle: float
     force: float
     moment: float
+    #: N: how far the certificate lets a body's forces miss their balance.
+    balance: float = 0.0
 
     @classmethod
     def of(
@@ -42,8 +46,9 @@ class Resolution:
         in the balance (N, a moment counting as moment / ``ell_mm``; 0 where
         only positions are read)."""
         length = settings.feasibility_tolerance * play_mm
-        force = settings.equilibrium_tolerance * largest_force
-        return cls(length, length / ell_mm, force, force * ell_mm)
+        force = settings.force_resolution * largest_force
+        balance = settings.equilibrium_tolerance * largest_force
+        return cls(length, length / ell_mm, force, force * ell_mm, balance)
 
 
 #: A resolution that zeroes nothing.

@@ -462,7 +462,14 @@ def build_result(
         proven(torque, res.moment),
         is_turn,
     )
-    reaction = np.c_[proven(reaction[:, :3], res.force), proven(reaction[:, 3:], res.moment)]
+    # the sum of the contacts as printed, so that they add up to it
+    reaction = np.zeros((len(model.joints), 6))
+    np.add.at(
+        reaction,
+        T.joint_of,
+        np.c_[contacts.force, cross(local, contacts.force) + contacts.torque],
+    )
+    reaction[:, 3:] = proven(reaction[:, 3:], res.moment)
 
     taus = (T.tau_map @ x).reshape(-1, 6)
     t_rel, w_rel = proven(taus[:, :3], res.length), proven(taus[:, 3:], res.angle)

@@ -25,6 +25,11 @@ class SolverSettings:
     #: Balance: per body, in newtons, relative to the largest force in the
     #: balance; also how far a force may fall below 0 or outside its cone.
     equilibrium_tolerance: float = 1e-8
+    #: Forces and moments print as 0 below this fraction of the largest force
+    #: (round-off is 1e-12 of it and less): a hundredth of the balance, so that
+    #: zeroing the small components of a body's contacts (up to 50) leaves the
+    #: printed forces balancing it within ``equilibrium_tolerance``.
+    force_resolution: float = 1e-10
     #: A contact counts as touching when it uses this much of its own play:
     #: the certificate's feasibility, with room for a play 10x smaller than
     #: the largest.

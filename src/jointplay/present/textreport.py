@@ -129,7 +129,7 @@ def render(
         header.append(
             f"certificate: holds ({cert.method}): no contact past its play by "
             f"{res.length:.2g} mm or more; the loads and contact forces of every body "
-            f"balance to {res.force:.2g} N ({EQUILIBRIUM_TOLERANCE:g} of the largest force)\n"
+            f"balance to {res.balance:.2g} N ({EQUILIBRIUM_TOLERANCE:g} of the largest force)\n"
         )
     else:
         header.append(
