@@ -1,24 +1,30 @@
 #!/usr/bin/env python
 """Sobol' indices against a Monte Carlo of as many samples (issue 53).
 
-Saltelli's design for D inputs and N base sets of parts is a Monte Carlo of
-N (2 D + 2) sets of parts: it should cost what a Monte Carlo study of as many
-samples costs on the same model, both going through the batch solver. On
-examples/gallery/four_bar.yaml (five inputs: three pin fits, two load
-components), with N = 1,024: 12,288 solves each, side by side.
+SALib's Saltelli design for D inputs and N base sets of parts (first-order
+and total indices) is a Monte Carlo of N (D + 2) sets of parts: it should
+cost what a Monte Carlo study of as many samples costs on the same model,
+both going through the batch solver (the design's mapping to sets of parts
+and SALib's estimators add little). On examples/gallery/four_bar.yaml (five
+inputs: three pin fits, two load components), with N = 1,024: 7,168 solves
+each, side by side.
 
 Printed: each one's seconds and solves per second, and their ratio (Sobol'
 over Monte Carlo), and the four-bar's indices (first order, total, with
-their intervals). Each study is timed once after a warm-up of both.
+their intervals). After a warm-up of both, the two studies take turns
+``--repeat`` times and the medians are compared (the machine's speed drifts
+by tens of percent within a minute).
 
 Run from the repository root: ``python benchmarks/bench_sobol.py``
-(``--samples N`` to change the base sets, ``--workers`` for processes).
+(``--samples N`` to change the base sets, a power of 2; ``--workers`` for
+processes; ``--repeat``).
 Timing is informative: exits 0.
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import time
 from pathlib import Path
 
@@ -36,6 +42,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=BASE_SAMPLES)
     parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     model = jointplay.load(FOUR_BAR)
     sobol = Sobol(samples=args.samples, seed=0)
@@ -43,18 +50,22 @@ def main() -> None:
     Sobol(samples=8, seed=1).run(model)
     MonteCarlo(samples=100, seed=1).run(model)
 
-    start = time.perf_counter()
-    indices = sobol.run(model, workers=args.workers)
-    sobol_s = time.perf_counter() - start
-    solves = indices.solves
-    start = time.perf_counter()
-    mc = MonteCarlo(samples=solves, seed=0).run(model, workers=args.workers)
-    mc_s = time.perf_counter() - start
+    sobol_times, mc_times = [], []
+    for _ in range(args.repeat):
+        start = time.perf_counter()
+        indices = sobol.run(model, workers=args.workers)
+        sobol_times.append(time.perf_counter() - start)
+        solves = indices.solves
+        start = time.perf_counter()
+        mc = MonteCarlo(samples=solves, seed=0).run(model, workers=args.workers)
+        mc_times.append(time.perf_counter() - start)
+    sobol_s, mc_s = statistics.median(sobol_times), statistics.median(mc_times)
 
     print(f"{FOUR_BAR.name}: {len(indices.inputs)} inputs, {args.samples:,} base sets of parts")
+    print(f"medians of {args.repeat} turns each")
     print(f"{'study':<24}{'solves':>10}{'seconds':>10}{'solves/s':>11}")
     for name, n, seconds in (
-        ("Sobol' (Saltelli)", solves, sobol_s),
+        ("Sobol' (SALib)", solves, sobol_s),
         ("Monte Carlo", mc.samples, mc_s),
     ):
         print(f"{name:<24}{n:>10,}{seconds:>10.2f}{n / seconds:>11,.0f}")

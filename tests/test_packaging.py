@@ -20,6 +20,6 @@ def test_the_lowest_versions_ci_tests_are_the_pins_lower_bounds() -> None:
         if line.strip() and not line.startswith("#"):
             name, version = line.split("==")
             pinned[name.lower()] = version
-    assert set(pinned) == {"numpy", "scipy", "clarabel", "threadpoolctl"}
+    assert set(pinned) == {"numpy", "scipy", "clarabel", "threadpoolctl", "salib"}
     for name, version in pinned.items():
         assert lower[name] == version or lower[name] + ".0" == version, name

@@ -1,7 +1,8 @@
 """A command imports only what it uses (issue 19: start-up).
 
 ``jointplay solve`` and ``--help`` must not wait for the studies' and the
-pictures' libraries: pandas, matplotlib, plotly, SciPy's statistics, Dask.
+pictures' libraries: pandas, matplotlib, plotly, SciPy's statistics, Dask,
+SALib.
 Python's own import log (``-X importtime``) says what a process imported.
 How long that takes is measured in benchmarks/bench_startup.py, not here.
 """
@@ -17,7 +18,16 @@ import pytest
 from conftest import PAPER
 
 #: Libraries a solve or the help never needs.
-HEAVY = ("pandas", "matplotlib", "plotly", "scipy.stats", "dask", "distributed", "scipy.spatial")
+HEAVY = (
+    "pandas",
+    "matplotlib",
+    "plotly",
+    "scipy.stats",
+    "dask",
+    "distributed",
+    "scipy.spatial",
+    "SALib",
+)
 #: What a solve needs and the help does not (pydantic is left out: Typer
 #: itself imports it to read a command's options).
 SOLVER = ("numpy", "scipy", "clarabel", "pint", "yaml", "jointplay.solver", "jointplay.model")

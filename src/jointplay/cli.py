@@ -530,7 +530,7 @@ def contributions(
             "--samples",
             "-n",
             min=8,
-            help="Sobol' base sets of parts (it solves samples x (2 x inputs + 2)).",
+            help="Sobol' base sets of parts, a power of 2 (it solves samples x (inputs + 2)).",
         ),
     ] = 1024,
     seed: Annotated[int, typer.Option("--seed", min=0, help="Random seed.")] = 0,

@@ -57,7 +57,7 @@ from jointplay.model.fields import (
     _vector,
     _vector_of,
 )
-from jointplay.model.tolerance import Distribution
+from jointplay.model.tolerance import Distribution, quantile
 from jointplay.settings import DEFAULT
 from jointplay.units import shown, to_base
 
@@ -337,6 +337,35 @@ class Zone:
             out[bad] = rng.normal(0.0, R / 3.0, (int(np.sum(bad)), d))
             bad = np.linalg.norm(out, axis=1) > R
         return out
+
+    def from_unit(self, u: FloatArray, distribution: Distribution) -> FloatArray:
+        """(n, len(axes)) the draws of ``u`` (n, len(axes)) in [0, 1), the law
+        of ``sample`` for independent uniform ``u``: a segment through the
+        inverse of its distribution function; a disc or ball by its radius
+        (``u[:, 0]``, through the inverse of the radius's law: uniform by
+        area or volume, or the truncated normal's chi law) and its direction
+        (the angle, or the height and the angle, spread evenly)."""
+        d, R = len(self.axes), self.radius
+        u = np.asarray(u, dtype=float).reshape(len(u), d)
+        if R == 0.0:
+            return np.zeros((len(u), d))
+        if d == 1:
+            return quantile(u[:, 0], -R, R, distribution)[:, None]
+        if distribution == "uniform":
+            r = R * u[:, 0] ** (1.0 / d)
+        else:  # |x| / sigma follows the chi law of d degrees, cut at R / sigma = 3
+            from scipy.special import gammainc, gammaincinv
+
+            inside = gammainc(d / 2.0, 4.5)  # P(chi^2_d <= 9)
+            r = R / 3.0 * np.sqrt(2.0 * gammaincinv(d / 2.0, u[:, 0] * inside))
+        angle = 2.0 * np.pi * u[:, -1]
+        if d == 2:
+            direction = np.column_stack([np.cos(angle), np.sin(angle)])
+        else:
+            z = 1.0 - 2.0 * u[:, 1]
+            across = np.sqrt(np.maximum(1.0 - z**2, 0.0))
+            direction = np.column_stack([across * np.cos(angle), across * np.sin(angle), z])
+        return np.asarray(r[:, None] * direction)
 
 
 def measured(t: Vec3 | None, w: Vec3 | None) -> Deviation:

@@ -142,6 +142,38 @@ class Toleranced(float):
         shaft = _draw(rng, n, self.shaft[0], self.shaft[1], self.distribution)
         return np.asarray(hole - shaft)
 
+    @property
+    def draws(self) -> int:
+        """How many numbers in [0, 1) make one play (``from_unit``): two for
+        a fit (the hole and the shaft), else one."""
+        return 1 if self.fit is None else 2
+
+    def from_unit(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The plays of ``u`` (n, ``draws``) in [0, 1), through the inverse of
+        each drawn diameter's (or the play's) distribution function:
+        independent uniform ``u`` give the law ``sample`` draws from."""
+        u = np.asarray(u, dtype=float).reshape(len(u), self.draws)
+        if self.fit is None:
+            return quantile(u[:, 0], self.low, self.high, self.distribution)
+        assert self.hole is not None and self.shaft is not None
+        hole = quantile(u[:, 0], self.hole[0], self.hole[1], self.distribution)
+        shaft = quantile(u[:, 1], self.shaft[0], self.shaft[1], self.distribution)
+        return np.asarray(hole - shaft)
+
+
+def quantile(
+    u: NDArray[np.float64], low: float, high: float, distribution: Distribution
+) -> NDArray[np.float64]:
+    """The values at probabilities ``u`` of ``_draw``'s law on [low, high]:
+    uniform, or normal with the limits at +-3 sigma, truncated to them."""
+    if distribution == "uniform":
+        return np.asarray(low + u * (high - low))
+    from scipy.special import ndtr, ndtri
+
+    mean, sigma = (low + high) / 2.0, (high - low) / 6.0
+    below = ndtr(-3.0)  # the normal law's probability below the low limit
+    return np.asarray(mean + sigma * ndtri(below + u * (1.0 - 2.0 * below)))
+
 
 def _draw(
     rng: np.random.Generator, n: int, low: float, high: float, distribution: Distribution

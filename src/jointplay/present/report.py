@@ -149,9 +149,10 @@ class Report:
         page.montecarlo(mc)
         say("contributions")
         # the shares of the variance where a measure is not linear: a Sobol' design
-        # of about as many sets of parts as the Monte Carlo study's
-        inputs = _inputs(model, self.case, source)
-        base = max(8, min(1024, self.samples // (2 * inputs + 2)))
+        # of at most as many sets of parts as the Monte Carlo study's, N (D + 2)
+        # with N a power of 2 from 8 to 1024
+        per_base = self.samples // (_inputs(model, self.case, source) + 2)
+        base = 1 << max(3, min(10, per_base.bit_length() - 1))
         linear = Contributions(case=self.case, samples=base, seed=self.seed).run(
             model, source=source
         )

@@ -97,8 +97,8 @@ class Contributions:
     ``variance``: when to take the shares of the variance (Sobol' indices,
     ``sobol.py``) besides the linear shares: ``"auto"`` where a measure is
     not linear over the ranges (``linearity.py``), ``"always"``, or
-    ``"never"``. ``samples``: the Sobol' study's base sets of parts (it
-    solves samples (2 D + 2)); ``seed``: its random streams and the
+    ``"never"``. ``samples``: the Sobol' study's base sets of parts, a
+    power of 2 (it solves samples (D + 2) for D inputs); ``seed``: its random streams and the
     linearity check's."""
 
     step: float = 1e-3
@@ -112,8 +112,9 @@ class Contributions:
             raise ValueError("step: a fraction of the tolerance, above 0 and at most 0.1")
         if self.variance not in ("auto", "always", "never"):
             raise ValueError("variance: 'auto', 'always' or 'never'")
-        if self.samples < 8:
-            raise ValueError("samples: at least 8 base sets of parts")
+        from jointplay.studies.sobol import check_samples
+
+        check_samples(self.samples)
 
     def run(
         self, model: Model, *, source: str | None = None, workers: int | None = 1

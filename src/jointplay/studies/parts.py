@@ -15,6 +15,7 @@ a certified equilibrium; a set of parts that cannot be assembled gives NaN.
 
 from __future__ import annotations
 
+import itertools
 import uuid
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -24,6 +25,7 @@ import numpy as np
 from jointplay.assembly import assemble
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
+from jointplay.model.tolerance import Toleranced
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import (
@@ -88,6 +90,35 @@ class Inputs:
         return np.hstack(
             [self.pmap.sample(rng, n), self.lmap.sample(rng, n), self.dmap.sample(rng, n)]
         )
+
+    @property
+    def unit_groups(self) -> list[list[int]]:
+        """The columns of each input in a design of numbers in [0, 1)
+        (``from_unit``): two for a fit's play (the hole, the shaft), one per
+        component of a zone, else one."""
+        values = self._values()
+        widths = [v.draws for v in values] + [len(g) for g in self.groups[len(values) :]]
+        starts = [0, *itertools.accumulate(widths)]
+        return [list(range(lo, hi)) for lo, hi in itertools.pairwise(starts)]
+
+    def _values(self) -> list[Toleranced]:
+        """The laws of the plays and the load components, in column order."""
+        return [v.value for v in self.pmap.variables] + [v.value for v in self.lmap.variables]
+
+    def from_unit(self, u: FloatArray) -> FloatArray:
+        """(n, columns) the sets of parts of ``u`` (n, unit columns) in [0, 1),
+        each input through the inverse of its law (``Toleranced.from_unit``,
+        ``Zone.from_unit``): independent uniform ``u`` give the sets of parts
+        ``sample`` draws; a quasi-random ``u``, a quasi-random design."""
+        values = self._values()
+        out = np.tile(self.nominal, (len(u), 1))
+        for i, (cols, units) in enumerate(zip(self.groups, self.unit_groups, strict=True)):
+            if i < len(values):
+                out[:, cols[0]] = values[i].from_unit(u[:, units])
+            else:
+                var = self.dmap.variables[cols[0] - len(values)]
+                out[:, cols] += var.zone.from_unit(u[:, units], var.distribution)
+        return out
 
 
 def inputs_of(model: Model, case: str | None, source: str) -> Inputs:

@@ -10,23 +10,23 @@ For each input i (a play, a load component, a whole deviation zone):
   interaction it takes part in. ``S_Ti - S_i`` is its interactions' share
   (contacts that change with several inputs together).
 
-Saltelli's design: two independent matrices A and B of N sets of parts
-(drawn as the Monte Carlo study draws them), and for each input the
-matrices A_B^i (A with input i from B) and B_A^i: N (2 D + 2) sets of parts
-for D inputs, solved as a Monte Carlo of as many samples
-(``parts.solve_sets``). Estimators (Saltelli et al. 2010, Jansen 1999),
-each taken both ways (A with A_B^i, and B with B_A^i) and averaged:
-
-    S_i  = mean(f(B) (f(A_B^i) - f(A))) / V
-    S_Ti = mean((f(A) - f(A_B^i))^2) / (2 V)
-
-with V the variance of f over A and B together. Their confidence intervals
-come from the bootstrap over the N base rows (``RESAMPLES``). For a linear
-y, S_i = S_Ti = the RSS share (s_i sigma_i)^2 / sum (s sigma)^2.
+SALib computes them. Its design (``SALib.sample.sobol``, Saltelli's scheme
+on a scrambled Sobol' sequence) gives two matrices A and B of N base rows
+and, for each input, A with that input's columns from B: N (D + 2) rows for
+D inputs. Its rows are numbers in [0, 1), one column per independent draw
+of an input (``Inputs.unit_groups``: a fit's hole and shaft, a zone's
+components, taken together as one input); ``Inputs.from_unit`` turns them
+into sets of parts of the Monte Carlo study's laws, and the batch solver
+solves them as a Monte Carlo of as many samples (``parts.solve_sets``).
+``SALib.analyze.sobol`` then gives the indices (Saltelli et al. 2010 for
+the first order, Jansen 1999 for the total) and their confidence intervals
+(the normal interval of ``RESAMPLES`` bootstrap resamples of the base rows).
+For a linear y, S_i = S_Ti = the RSS share (s_i sigma_i)^2 / sum (s sigma)^2.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -41,18 +41,19 @@ from jointplay.studies.parts import inputs_of, measured, solve_sets
 if TYPE_CHECKING:
     import pandas as pd
 
-#: Bootstrap resamples of the base rows for the indices' intervals: the
-#: interval's ends move by about 1 % of its width from one seed to another.
-RESAMPLES = 1000
-BLOCK = 50  # resamples at a time
+#: Bootstrap resamples of the base rows for the indices' intervals (SALib's
+#: ``num_resamples``): the interval's half-width is z times their standard
+#: deviation, known to about 1 / sqrt(2 RESAMPLES) = 5 % of itself.
+RESAMPLES = 200
 
 
 @dataclass(frozen=True)
 class Sobol:
     """Settings of a Sobol' study; ``run`` returns a ``SobolResult``.
 
-    ``samples``: N, the base sets of parts (the study solves N (2 D + 2)).
-    ``confidence``: of the bootstrap intervals. ``case``: the load case."""
+    ``samples``: N, the base sets of parts, a power of 2 (the Sobol'
+    sequence's points are balanced only then); the study solves N (D + 2).
+    ``confidence``: of the intervals. ``case``: the load case."""
 
     samples: int = 1024
     seed: int = 0
@@ -60,100 +61,89 @@ class Sobol:
     case: str | None = None
 
     def __post_init__(self) -> None:
-        if self.samples < 8:
-            raise ValueError("samples: at least 8 base sets of parts")
+        check_samples(self.samples)
         if not 0 < self.confidence < 1:
             raise ValueError("confidence: between 0 and 1 (0.95 is 95 %)")
 
     def run(
         self, model: Model, *, workers: int | None = 1, source: str | None = None
     ) -> SobolResult:
+        from SALib.analyze import sobol as analysis
+        from SALib.sample import sobol as design
+
         source = source or model.name or "<model>"
         check_case(model, self.case, source)
         inputs = inputs_of(model, self.case, source)
-        groups = inputs.groups
-        if not groups:
+        if not inputs.groups:
             raise ModelError(
                 "no play, load or deviation varies, so nothing has a share of the variance",
                 source=source,
                 entry="joints",
             )
         measures = _measures(model, source)
-        n, d = self.samples, len(groups)
-        a = inputs.sample(np.random.default_rng([self.seed, 0]), n)
-        b = inputs.sample(np.random.default_rng([self.seed, 1]), n)
-        blocks = [a, b]
-        for cols in groups:  # A_B^i, then B_A^i
-            ab = a.copy()
-            ab[:, cols] = b[:, cols]
-            blocks.append(ab)
-        for cols in groups:
-            ba = b.copy()
-            ba[:, cols] = a[:, cols]
-            blocks.append(ba)
-        values = np.vstack(blocks)
+        n, d = self.samples, len(inputs.groups)
+        units = inputs.unit_groups
+        width = units[-1][-1] + 1
+        problem = {
+            "num_vars": width,
+            "names": [f"u{j}" for j in range(width)],
+            "bounds": [[0.0, 1.0]] * width,
+            "groups": [f"x{i}" for i, cols in enumerate(units) for _ in cols],
+        }
+        u = design.sample(
+            problem, n, calc_second_order=False, seed=np.random.default_rng([self.seed, 0])
+        )
+        values = inputs.from_unit(u)
         y = measured(model, measures, solve_sets(model, self.case, values, workers=workers))
-        f = y.reshape(len(measures), 2 * d + 2, n)
-        rng = np.random.default_rng([self.seed, 2])
-        first, total, variance = _indices(f, None)
-        resampled = [  # in blocks, to keep the arrays small
-            _indices(f, rng.integers(0, n, size=(min(BLOCK, RESAMPLES - lo), n)))
-            for lo in range(0, RESAMPLES, BLOCK)
-        ]
-        first_b = np.concatenate([r[0] for r in resampled], axis=1)
-        total_b = np.concatenate([r[1] for r in resampled], axis=1)
-        tail = (1 - self.confidence) / 2
-        with np.errstate(invalid="ignore"):
-            first_ci = np.nanquantile(first_b, [tail, 1 - tail], axis=1)  # (2, M, d)
-            total_ci = np.nanquantile(total_b, [tail, 1 - tail], axis=1)
+        # SALib's order: each base row's A, its D rows A_B^i, then B
+        f = y.reshape(len(measures), n, d + 2)
+        keep = ~np.any(np.isnan(f), axis=(0, 2))  # a set of parts not assembled: row left out
+        f = f[:, keep]
+        both = np.concatenate([f[:, :, 0], f[:, :, -1]], axis=1)  # A and B
+        variance = np.var(both, axis=1) if np.any(keep) else np.full(len(measures), np.nan)
+        first = np.full((len(measures), d), np.nan)
+        first_ci = np.full((len(measures), d, 2), np.nan)
+        total, total_ci = first.copy(), first_ci.copy()
+        # SALib draws its resamples from default_rng(seed) only for a seed that is not 0
+        resample_seed = 1 + int(np.random.SeedSequence([self.seed, 2]).generate_state(1)[0])
+        for k in range(len(measures)):
+            if not variance[k] > 0:
+                continue  # a measure that does not vary has no shares
+            with warnings.catch_warnings():
+                # SALib 1.5.1 (the last for numpy 1) hands pandas.unique a list
+                warnings.filterwarnings("ignore", category=FutureWarning, module="SALib")
+                s = analysis.analyze(
+                    problem,
+                    f[k].ravel(),
+                    calc_second_order=False,
+                    num_resamples=RESAMPLES,
+                    conf_level=self.confidence,
+                    seed=resample_seed,
+                )
+            first[k], total[k] = s["S1"], s["ST"]
+            first_ci[k] = np.column_stack([s["S1"] - s["S1_conf"], s["S1"] + s["S1_conf"]])
+            total_ci[k] = np.column_stack([s["ST"] - s["ST_conf"], s["ST"] + s["ST_conf"]])
         return SobolResult(
             self,
             model.name,
             tuple(m.label for m in measures),
             inputs.labels,
             first,
-            np.moveaxis(first_ci, 0, -1),
+            first_ci,
             total,
-            np.moveaxis(total_ci, 0, -1),
+            total_ci,
             variance,
             len(values),
         )
 
 
-def _indices(f: FloatArray, pick: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """First-order and total indices (M, D), and the variance (M,), from the
-    answers f (M, 2 D + 2, N); ``pick`` (R, N): bootstrap rows, giving
-    (M, R, D) indices instead. A base row with any set of parts that cannot
-    be assembled (NaN) is left out."""
-    d = (f.shape[1] - 2) // 2
-    keep = ~np.any(np.isnan(f), axis=(0, 1))
-    # centred: the first-order estimator's spread grows with the mean of f
-    f = np.where(keep, f, 0.0)
-    f = f - np.sum(f[:, :2] * keep, axis=(1, 2), keepdims=True) / max(2 * int(np.sum(keep)), 1)
-    f = np.where(keep, f, 0.0)
-    if pick is not None:
-        f = f[:, :, pick]  # (M, 2D+2, R, N)
-        keep = keep[pick]
-    fa, fb = f[:, 0], f[:, 1]
-    fab, fba = f[:, 2 : 2 + d], f[:, 2 + d :]
-    count = np.sum(keep, axis=-1)
-
-    def mean(x: FloatArray) -> FloatArray:
-        return np.asarray(np.sum(np.where(keep, x, 0.0), axis=-1) / np.maximum(count, 1))
-
-    both_mean = (mean(fa) + mean(fb)) / 2
-    variance = (mean(fa**2) + mean(fb**2)) / 2 - both_mean**2
-    v = np.where(variance > 0, variance, np.nan)
-    # input axis next to the measure's: (M, D, ...) -> indices per input
-    fa_, fb_ = fa[:, None], fb[:, None]
-    first = (mean(fb_ * (fab - fa_)) + mean(fa_ * (fba - fb_))) / 2
-    total = (mean((fa_ - fab) ** 2) + mean((fb_ - fba) ** 2)) / 4
-    with np.errstate(invalid="ignore"):
-        first = first / v[:, None]
-        total = total / v[:, None]
-    if pick is not None:
-        first, total = np.moveaxis(first, 1, 2), np.moveaxis(total, 1, 2)  # (M, R, D)
-    return first, total, variance
+def check_samples(samples: int) -> None:
+    """A Sobol' study's base sets of parts: a power of 2, at least 8."""
+    if samples < 8 or samples & (samples - 1):
+        raise ValueError(
+            f"samples: a power of 2, at least 8 (the Sobol' sequence's points are balanced "
+            f"only then), got {samples}; for instance 256, 1024 or 4096"
+        )
 
 
 @dataclass(frozen=True)
