@@ -15,6 +15,20 @@ MM = 1e-6
 RAD = 1e-8
 
 
+def force_tol(result: jointplay.Result) -> float:
+    """N: what the certificate proves of a force: every body balanced to
+    ``equilibrium_tolerance`` of the largest force in the balance
+    (``Resolution.balance``)."""
+    return result.resolution.balance
+
+
+def moment_tol(result: jointplay.Result) -> float:
+    """N*mm: the same for a moment, which the balance counts over the
+    mechanism's length ``ell`` (``Resolution.moment / Resolution.force``)."""
+    res = result.resolution
+    return res.balance * res.moment / res.force if res.force > 0 else 0.0
+
+
 def assert_same_answer(a: jointplay.Result, b: jointplay.Result) -> None:
     """Two routes to one answer agree to the promise, not to the bit: each
     certified, every body's position to MM and RAD, every contact force to
