@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import jointplay
+from jointplay.settings import DEFAULT
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "examples" / "paper"
@@ -13,6 +14,11 @@ PAPER = ROOT / "examples" / "paper"
 #: Tight tolerances of the project: positions in mm, rotations in rad.
 MM = 1e-6
 RAD = 1e-8
+
+
+#: The certificate's balance, relative to the largest force in the balance
+#: (``SolverSettings.equilibrium_tolerance``).
+BALANCE = DEFAULT.equilibrium_tolerance
 
 
 def force_tol(result: jointplay.Result) -> float:
@@ -33,8 +39,6 @@ def assert_same_answer(a: jointplay.Result, b: jointplay.Result) -> None:
     """Two routes to one answer agree to the promise, not to the bit: each
     certified, every body's position to MM and RAD, every contact force to
     the certificate's balance (``equilibrium_tolerance`` of the largest)."""
-    from jointplay.settings import DEFAULT
-
     a.check()
     b.check()
     for name, body in a.bodies.items():
@@ -47,7 +51,7 @@ def assert_same_answer(a: jointplay.Result, b: jointplay.Result) -> None:
     ]
     top = max([float(np.linalg.norm(d)) for _, d in pairs] + [1.0])
     for c, d in pairs:
-        np.testing.assert_allclose(c, d, rtol=0, atol=DEFAULT.equilibrium_tolerance * top)
+        np.testing.assert_allclose(c, d, rtol=0, atol=BALANCE * top)
 
 
 def solve_file(name: str) -> jointplay.Result:
