@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import jointplay
+from jointplay.settings import DEFAULT
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "examples" / "paper"
@@ -15,12 +16,29 @@ MM = 1e-6
 RAD = 1e-8
 
 
+#: The certificate's balance, relative to the largest force in the balance
+#: (``SolverSettings.equilibrium_tolerance``).
+BALANCE = DEFAULT.equilibrium_tolerance
+
+
+def force_tol(result: jointplay.Result) -> float:
+    """N: what the certificate proves of a force: every body balanced to
+    ``equilibrium_tolerance`` of the largest force in the balance
+    (``Resolution.balance``)."""
+    return result.resolution.balance
+
+
+def moment_tol(result: jointplay.Result) -> float:
+    """N*mm: the same for a moment, which the balance counts over the
+    mechanism's length ``ell`` (``Resolution.moment / Resolution.force``)."""
+    res = result.resolution
+    return res.balance * res.moment / res.force if res.force > 0 else 0.0
+
+
 def assert_same_answer(a: jointplay.Result, b: jointplay.Result) -> None:
     """Two routes to one answer agree to the promise, not to the bit: each
     certified, every body's position to MM and RAD, every contact force to
     the certificate's balance (``equilibrium_tolerance`` of the largest)."""
-    from jointplay.settings import DEFAULT
-
     a.check()
     b.check()
     for name, body in a.bodies.items():
@@ -33,7 +51,7 @@ def assert_same_answer(a: jointplay.Result, b: jointplay.Result) -> None:
     ]
     top = max([float(np.linalg.norm(d)) for _, d in pairs] + [1.0])
     for c, d in pairs:
-        np.testing.assert_allclose(c, d, rtol=0, atol=DEFAULT.equilibrium_tolerance * top)
+        np.testing.assert_allclose(c, d, rtol=0, atol=BALANCE * top)
 
 
 def solve_file(name: str) -> jointplay.Result:

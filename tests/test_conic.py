@@ -8,7 +8,7 @@ import clarabel
 import pytest
 
 import jointplay
-from conftest import PAPER
+from conftest import BALANCE, MM, PAPER
 from jointplay.solver import conic
 
 
@@ -54,7 +54,9 @@ def test_a_kept_solver_answers_each_cost_as_a_new_solver_does(
     new cost with ``update``, where Clarabel allows it, else a new solver
     each time; either way each answer is that of a new solver for its cost,
     to the interior-point tolerance (an updated solver's path differs from a
-    new one's: 3.5e-12 apart on the paper's shaft, not bit for bit)."""
+    new one's: 3.5e-12 apart on the paper's shaft, not bit for bit, and
+    another machine's paths may differ more). So they are compared to the
+    promise: positions to MM, multipliers to the certificate's balance."""
     import numpy as np
 
     from jointplay.solver import Workspace
@@ -69,7 +71,9 @@ def test_a_kept_solver_answers_each_cost_as_a_new_solver_does(
         got = kept.solve(q)
         new = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, prog.settings).solve()
         assert conic.outcome(got) == conic.outcome(new) == "optimal"
-        tol = ws.settings.ipm_tolerance  # both stop at it (unit loads, scaled unknowns)
-        np.testing.assert_allclose(got.x, new.x, rtol=0, atol=tol)
-        np.testing.assert_allclose(got.z, new.z, rtol=0, atol=tol)
+        x_got, x_new = np.asarray(got.x), np.asarray(new.x)
+        assert np.max(np.abs(x_got - x_new)) * ws.asm.s <= MM  # scaled unknowns, in mm
+        z_new = np.asarray(new.z)
+        top = max(1.0, float(np.max(np.abs(z_new))))  # unit loads: forces of size 1
+        np.testing.assert_allclose(got.z, z_new, rtol=0, atol=BALANCE * top)
     assert (kept.kept is not None) == allowed

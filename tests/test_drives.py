@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import jointplay
-from conftest import MM, RAD
+from conftest import MM, RAD, force_tol, moment_tol
 from jointplay import UnboundedMechanismError
 from jointplay.studies.montecarlo import MonteCarlo
 
@@ -58,11 +58,11 @@ def test_an_arm_turns_by_half_its_backlash_and_the_drive_takes_the_torque(force:
     np.testing.assert_allclose(tip, [0.0, sign * (0.01 + ARM * b / 2), 0.0], atol=MM)
     drive = {c.name: c for c in jr.contacts}["drive"]
     assert drive.in_contact and drive.unit == "rad"
-    np.testing.assert_allclose(drive.force, 0.0, atol=1e-12)
+    np.testing.assert_allclose(drive.force, 0.0, atol=force_tol(r))
     # statics: the drive's reaction torque balances F * ARM about the axis (joint x)
-    assert drive.torque[0] == pytest.approx(-force * ARM, rel=1e-12)
-    np.testing.assert_allclose(drive.torque[1:], 0.0, atol=1e-9)
-    assert jr.reaction_moment[0] == pytest.approx(-force * ARM, rel=1e-12)
+    assert drive.torque[0] == pytest.approx(-force * ARM, abs=moment_tol(r))
+    np.testing.assert_allclose(drive.torque[1:], 0.0, atol=moment_tol(r))
+    assert jr.reaction_moment[0] == pytest.approx(-force * ARM, abs=moment_tol(r))
 
 
 def test_a_stiff_drive_turns_past_its_backlash_by_torque_over_stiffness() -> None:
@@ -72,7 +72,7 @@ def test_a_stiff_drive_turns_past_its_backlash_by_torque_over_stiffness() -> Non
     assert jr.rotation[0] == pytest.approx(b / 2 + force * ARM / k, abs=RAD)
     drive = {c.name: c for c in jr.contacts}["drive"]
     assert drive.penetration == pytest.approx(force * ARM / k, abs=RAD)
-    assert drive.torque[0] == pytest.approx(-force * ARM, rel=1e-9)
+    assert drive.torque[0] == pytest.approx(-force * ARM, abs=moment_tol(r))
     # the same stiffness in other units: 2e6 N*mm/rad is 34.9 N*m/deg
     r2 = solved(
         arm({"backlash": "0.2 deg", "torsional_stiffness": f"{k / 1e3 * math.pi / 180} N*m/deg"})
@@ -145,10 +145,11 @@ def test_a_screw_nut_on_a_prismatic_slide_holds_it_within_its_axial_play() -> No
             "loads": [{"body": "table", "at": [0, 0, 0], "force": [-50, 0, 0]}],
         }
     )
-    jr = solved(model).joints["guide"]
+    r = solved(model)
+    jr = r.joints["guide"]
     assert jr.translation[0] == pytest.approx(-0.015, abs=MM)
     axial = {c.name: c for c in jr.contacts}["axial"]
-    assert axial.force[0] == pytest.approx(50.0, rel=1e-12)
+    assert axial.force[0] == pytest.approx(50.0, abs=force_tol(r))
 
 
 def slot(joint: dict[str, object], force: list[float]) -> jointplay.Model:
@@ -176,6 +177,8 @@ def slot(joint: dict[str, object], force: list[float]) -> jointplay.Model:
 def test_a_pin_in_a_slot_has_its_play_across_and_is_free_along() -> None:
     r = solved(slot({}, [0, 5, 0]))
     jr = r.joints["slot"]
+    # the joint's frame is the model's geometry, not the solve's: unit axes
+    # whose cross products are exact in floating point, on any machine
     np.testing.assert_allclose(jr.R_world_joint[:, 1], [1, 0, 0], atol=1e-15)  # y along
     np.testing.assert_allclose(jr.R_world_joint[:, 2], [0, 1, 0], atol=1e-15)  # z = x cross y
     np.testing.assert_allclose(jr.translation, [0, 0, 0.02], atol=MM)
@@ -261,7 +264,7 @@ def test_the_real_mechanisms_solve_and_give_an_envelope_and_a_monte_carlo(
     assert env.largest > 0 and env.not_held == ()
     mc = MonteCarlo(samples=200, seed=1, chunk=100).run(model)
     assert mc.samples == 200 and len(mc.play_labels) >= 2
-    assert mc.feasibility_mm < 1e-9 and mc.equilibrium_residual < 1e-8
+    assert mc.feasibility_mm < 1e-9 and mc.equilibrium_residual <= 1e-8
 
 
 def test_the_spindle_drive_takes_the_cutting_torque() -> None:
@@ -270,7 +273,7 @@ def test_the_spindle_drive_takes_the_cutting_torque() -> None:
     drive = {c.name: c for c in r.joints["rear bearing"].contacts}["drive"]
     # the cut: 300 N along Y and -150 N along Z at 20 mm above the axis X
     cut = np.cross([-80.0, 0.0, 20.0], [-50.0, 300.0, -150.0])
-    assert drive.torque[0] == pytest.approx(-cut[0], rel=1e-10)
+    assert drive.torque[0] == pytest.approx(-cut[0], abs=moment_tol(r))
     # past its backlash by T / k: the belt's 40 N*m/deg
     k = 40e3 / math.radians(1.0)
     b = float(model.joint("rear bearing").backlash)  # type: ignore[attr-defined]
@@ -282,7 +285,8 @@ def test_the_located_plate_stands_on_its_buttons() -> None:
     r = solved(jointplay.load(GALLERY / "located_plate.yaml"))
     pushes = [r.joints[f"button{i}"].contacts[0].force[0] for i in (1, 2, 3)]
     assert all(p > 0 for p in pushes)
-    assert sum(pushes) == pytest.approx(4 * 9.81 + 80.0, rel=1e-12)  # weight and drill
+    # weight and drill, to the certificate's balance of the plate
+    assert sum(pushes) == pytest.approx(4 * 9.81 + 80.0, abs=force_tol(r))
     slot = {c.name: c for c in r.joints["slot pin"].contacts}
     assert set(slot) == {"across-", "across+"}  # free along the slot: no contact there
 
@@ -319,5 +323,5 @@ def test_a_pin_whose_axial_play_no_load_takes_is_batched_as_a_tie() -> None:
     for i in range(0, 300, 50):  # the full solver's least-norm answer, sample by sample
         alone = solved(arm({"backlash": float(b[i])}))
         np.testing.assert_allclose(
-            result.displacement[i, 0], alone.points["tip"].displacement, atol=1e-12
+            result.displacement[i, 0], alone.points["tip"].displacement, atol=MM
         )

@@ -56,7 +56,7 @@ def test_every_sample_is_the_equilibrium_of_its_own_parts() -> None:
         solved.check()
         for p, name in enumerate(result.point_names):
             expected = solved.points[name].displacement
-            assert np.max(np.abs(result.displacement[i, p] - expected)) < 1e-9
+            assert np.max(np.abs(result.displacement[i, p] - expected)) < MM  # two routes
     assert result.feasibility_mm < 1e-9
     assert result.equilibrium_residual < 1e-8
 
@@ -84,7 +84,7 @@ def test_ball_joint_closed_form_and_miss_fraction() -> None:
     play = result.plays[:, 0]
     assert np.all((play >= 0.1) & (play <= 0.3))
     expected = (play / 2)[:, None] * np.array([0.6, -0.8, 0.0])
-    assert np.max(np.abs(result.displacement[:, 0] - expected)) < 1e-9
+    assert np.max(np.abs(result.displacement[:, 0] - expected)) < MM
     [req] = result.requirements
     assert req.outside == int(np.sum(play / 2 > 0.125))
     lo, hi = req.interval
@@ -176,6 +176,7 @@ def test_fit_plays_are_hole_minus_shaft() -> None:
     ball = model.joints[0].clearance
     assert ball.fit == "H8/f7" and ball.diameter == 20  # type: ignore[attr-defined]
     # ISO 286-2 at 20 mm: H8 = +0.033/0, f7 = -0.020/-0.041
+    # the fit's limits are the table's arithmetic, not a solve's: to round-off
     assert ball.low == pytest.approx(0.020, abs=1e-12)  # type: ignore[attr-defined]
     assert ball.high == pytest.approx(0.074, abs=1e-12)  # type: ignore[attr-defined]
     assert float(ball) == pytest.approx(0.047, abs=1e-12)

@@ -190,23 +190,26 @@ def test_6161_printed_constraint_values() -> None:
     assert v - gamma * half == pytest.approx(5.197453e-2, abs=MM)
     assert w + beta * half == pytest.approx(5.197456e-2, abs=MM)
     assert w - beta * half == pytest.approx(7.071069e-2, abs=MM)
-    # (19) = (J2/2)^2 and (20) = 5.402706e-3 mm^2; 1e-9 mm^2 is 1e-6 mm on a 0.07 mm radius.
-    assert (v + gamma * half) ** 2 + (w - beta * half) ** 2 == pytest.approx(0.01, abs=1e-12)
-    assert (v - gamma * half) ** 2 + (w + beta * half) ** 2 == pytest.approx(5.402706e-3, abs=1e-9)
+    # (19) = (J2/2)^2 and (20) = 5.402706e-3 mm^2: a squared radius of up to
+    # 0.1 mm, known to MM, is known to 2 * 0.1 * MM mm^2
+    sq = 2 * 0.1 * MM
+    assert (v + gamma * half) ** 2 + (w - beta * half) ** 2 == pytest.approx(0.01, abs=sq)
+    assert (v - gamma * half) ** 2 + (w + beta * half) ** 2 == pytest.approx(5.402706e-3, abs=sq)
     assert np.linalg.norm(solve_file("6.1.6.1.yaml").joints["l1"].translation) == pytest.approx(
-        0.1, abs=1e-12
+        0.1, abs=MM
     )
 
 
 def test_6162_printed_constraint_values() -> None:
+    sq = 2 * 0.1 * MM  # squared radii below 0.1 mm, each radius known to MM
     jr = solve_file("6.1.6.2-J1_0.3.yaml").joints["l2"]
     _, v, w = jr.translation
     _, beta, gamma = jr.rotation
-    assert (v + gamma * 20) ** 2 + (w - beta * 20) ** 2 == pytest.approx(7.901235e-3, abs=1e-9)
+    assert (v + gamma * 20) ** 2 + (w - beta * 20) ** 2 == pytest.approx(7.901235e-3, abs=sq)
     jr = solve_file("6.1.6.2-J1_0.1.yaml").joints["l2"]
     _, v, w = jr.translation
     _, beta, gamma = jr.rotation
-    assert (v - gamma * 20) ** 2 + (w + beta * 20) ** 2 == pytest.approx(8.264463e-3, abs=1e-9)
+    assert (v - gamma * 20) ** 2 + (w + beta * 20) ** 2 == pytest.approx(8.264463e-3, abs=sq)
 
 
 @pytest.mark.parametrize("name", ["6.3.2.yaml", "6.3.2-J1_0.5.yaml"])

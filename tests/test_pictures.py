@@ -17,7 +17,7 @@ from PIL import Image
 from typer.testing import CliRunner
 
 import jointplay
-from conftest import MM, PAPER, ROOT
+from conftest import MM, PAPER, ROOT, force_tol
 from jointplay.cli import app
 from jointplay.present.plot import (
     clearance_figure,
@@ -112,14 +112,15 @@ def test_contact_points_sit_on_or_inside_their_magnified_domains() -> None:
     # b's axis point is on the circle across the axis (it may slide along it)
     touching = marks["l2 end+"]
     assert touching.role == "touching"
-    np.testing.assert_allclose(np.linalg.norm((touching.at - centre)[1:]), 10.0, atol=1e-9 * m)
+    # (the answer's positions to MM, magnified m times)
+    np.testing.assert_allclose(np.linalg.norm((touching.at - centre)[1:]), 10.0, atol=m * MM)
     assert marks["l2 end-"].role == "free"
     assert np.linalg.norm(marks["l2 end-"].at[1:]) == pytest.approx(
         10.0 * result.joints["l2"].contacts[0].gap_used, abs=1e-9 * m
     )
     # l1's sphere: the ball's centre on its surface, m J1/2 from O
     assert marks["l1 ball"].role == "touching"
-    assert np.linalg.norm(marks["l1 ball"].at) == pytest.approx(10.0, abs=1e-9 * m)
+    assert np.linalg.norm(marks["l1 ball"].at) == pytest.approx(10.0, abs=m * MM)
 
 
 def test_arrows_are_the_forces_at_one_scale() -> None:
@@ -131,7 +132,7 @@ def test_arrows_are_the_forces_at_one_scale() -> None:
     np.testing.assert_allclose(loads[0].vector, scene.force_scale * np.ones(3), atol=MM)
     # the touching contacts' forces, in global axes, balance the load
     total = sum(a.vector for a in forces) / scene.force_scale
-    np.testing.assert_allclose(total + np.ones(3), 0.0, atol=1e-8)
+    np.testing.assert_allclose(total + np.ones(3), 0.0, atol=force_tol(result))
     assert {a.label for a in forces} == {"l1 ball", "l2 end+"}
     biggest = max(np.linalg.norm(a.vector) for a in scene.arrows)
     assert biggest == pytest.approx(0.18 * scene.size)

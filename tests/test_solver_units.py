@@ -15,7 +15,7 @@ import pytest
 import scipy.sparse as sp
 
 import jointplay
-from conftest import assert_same_answer
+from conftest import BALANCE, MM, assert_same_answer
 from jointplay.numerics import linalg
 from jointplay.settings import DEFAULT
 from jointplay.solver import Workspace, conic, faces, newton, pipeline
@@ -82,8 +82,9 @@ def test_a_face_maps_its_resting_contacts_force_rows(carriage: Workspace) -> Non
 
 def test_newton_returns_to_the_optimum_from_a_nearby_start(paper: Workspace) -> None:
     """From a start 1e-3 away (scaled), Newton on the optimum's active set
-    comes back to it to round-off in a few steps, as quadratic convergence
-    does."""
+    comes back in a few steps to the point it finds from the optimum itself,
+    to round-off, as quadratic convergence does; that point is the optimum
+    to the certificate's tolerances (whichever route gave the optimum)."""
     ws = paper
     g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
     point = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
@@ -99,10 +100,18 @@ def test_newton_returns_to_the_optimum_from_a_nearby_start(paper: Workspace) -> 
     x, lam, _, iterations, factors = out
     assert iterations <= 8
     assert factors is not None and factors.regular(DEFAULT.free_motion_rcond)
+    home = newton.newton(
+        None, -g_hat, face.Eq, face.e, face.stack, point.x, point.lam[list(surface)]
+    )
+    assert home is not None
     # a regular face (its LU's pivots 7.8e-3 and up): Newton's quadratic
     # convergence ends at round-off from any nearby start, on every machine
-    assert np.max(np.abs(x - point.x)) * ws.asm.s <= 1e-12  # mm
-    assert np.allclose(lam, point.lam[list(surface)], rtol=1e-10, atol=0)
+    assert np.max(np.abs(x - home[0])) * ws.asm.s <= 1e-12  # mm
+    assert np.allclose(lam, home[1], rtol=1e-10, atol=0)
+    # and that is the optimum, to the certificate's tolerances
+    assert np.max(np.abs(home[0] - point.x)) * ws.asm.s <= MM
+    top = max(1.0, float(np.max(point.lam)))  # the loads have unit norm here
+    assert np.allclose(home[1], point.lam[list(surface)], rtol=0, atol=BALANCE * top)
 
 
 def test_newton_gives_up_where_a_contact_has_no_direction(paper: Workspace) -> None:
@@ -377,6 +386,9 @@ def test_a_closed_loop_s_split_is_its_least_squares() -> None:
     Gd = np.asarray(sp.csr_matrix(G).todense())
     assert np.linalg.matrix_rank(Gd) == Gd.shape[1]
     exact = np.linalg.lstsq(Gd, b, rcond=None)[0]
+    # a unit test of the least squares on this G (full column rank, condition
+    # 9e2): refined until it settles, it ends at round-off times that (7e-14
+    # of the largest measured), far inside 1e-10 on any machine
     assert np.allclose(y, exact, rtol=0, atol=1e-10 * np.max(np.abs(exact)))
 
 
@@ -1054,8 +1066,10 @@ def test_the_pushing_program_balances_with_the_rigid_rows_or_finds_nothing() -> 
     lam = forces._pushing_program(J, Eq, g_hat, DEFAULT)
     assert lam is not None and np.all(lam >= 0)
     nu = g_hat[0] - (J.T @ lam)[0]  # what the rigid row carries
-    np.testing.assert_allclose(J.T @ lam + Eq.T @ [nu], g_hat, rtol=0, atol=1e-11)
-    np.testing.assert_allclose((J.T @ lam)[1], -3.0, rtol=0, atol=1e-11)
+    # what the program accepts (``forces._balancing``): newton_accept of the terms
+    accepted = DEFAULT.newton_accept * max(1.0, float(np.max(np.abs(g_hat))), float(np.max(lam)))
+    np.testing.assert_allclose(J.T @ lam + Eq.T @ [nu], g_hat, rtol=0, atol=accepted)
+    np.testing.assert_allclose((J.T @ lam)[1], -3.0, rtol=0, atol=accepted)
     # without the rigid row the turn alone is held only if the sink balances too
     assert forces._pushing_program(J, sp.csr_matrix((0, 2)), g_hat, DEFAULT) is None
     # a pull up: no pushing forces hold it, whatever the rigid row takes of the sink
@@ -1095,13 +1109,16 @@ def test_forces_that_push_are_found_where_the_least_squares_split_pulls() -> Non
             assert lam is None
             continue
         assert lam is not None and np.all(lam >= 0)
-        np.testing.assert_allclose(stack.B.T @ lam, g_hat, rtol=0, atol=1e-12)
+        # what ``forces.pushing`` accepts (``forces._balancing``): newton_accept of the terms
+        accepted = DEFAULT.newton_accept * max(1.0, float(np.max(np.abs(g_hat))), np.max(lam))
+        np.testing.assert_allclose(stack.B.T @ lam, g_hat, rtol=0, atol=accepted)
     # with a rigid row taking the sink (y = 0 held), only the turn is left to balance
     lam = forces.pushing(
         stack, np.array([[1.0, 0.0]]), x, -W * np.array([1.0, 2.5]), ((), (1, 2)), DEFAULT
     )
     assert lam is not None and np.all(lam >= 0)
-    np.testing.assert_allclose((stack.B[[1, 2]].T @ lam)[1], -W * 2.5, rtol=0, atol=1e-12)
+    accepted = DEFAULT.newton_accept * max(1.0, W * 2.5, float(np.max(lam)))
+    np.testing.assert_allclose((stack.B[[1, 2]].T @ lam)[1], -W * 2.5, rtol=0, atol=accepted)
 
 
 @pytest.mark.parametrize("shafts", [20, 22, 39])
@@ -1291,7 +1308,9 @@ def test_a_large_model_s_verdict_comes_from_a_refined_solve(
     with pytest.raises(jointplay.UnboundedMechanismError, match="plate"):
         jointplay.solve(model_from_dict(data))
     # the first program is unrefined (a setting), the verdict a refined solve's
-    assert solves[0][0] is False and solves[-1] == (True, "DualInfeasible")
+    # (Clarabel's words for it, exact or "almost", are its own)
+    assert solves[0][0] is False and solves[-1][0] is True
+    assert conic.STATUS[solves[-1][1]] == "unbounded"
 
 
 def test_a_preload_the_first_try_cannot_find_takes_the_one_retry() -> None:
