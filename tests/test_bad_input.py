@@ -269,6 +269,70 @@ def test_missing_file_is_exit_2(tmp_path: Path) -> None:
         jointplay.load(tmp_path / "nope.yaml")
 
 
+_SHAFT_TEXT = yaml.safe_dump(spherical_shaft(), sort_keys=False)
+#: 80 kB of comment lines: more than the bytes checked first (HEAD_BYTES).
+_FAR = ("# " + "-" * 77 + "\n") * 1000
+
+NOT_TEXT = [
+    (
+        "a picture",
+        b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + bytes(range(256)) * 1000,
+        "this is a binary file (it holds NUL bytes), not a model file",
+    ),
+    (
+        "UTF-16 without its mark",
+        (_SHAFT_TEXT + _FAR).encode("utf-16-le"),
+        "this is a binary file (it holds NUL bytes), not a model file",
+    ),
+    (
+        "Latin-1",
+        ("name: Tr\xe4ger\n" + _SHAFT_TEXT + _FAR).encode("latin-1"),
+        "not UTF-8 text: byte 0xe4 at line 1, column 9 is not UTF-8; save the file as UTF-8",
+    ),
+    (
+        "a NUL byte far in",
+        (_FAR + _SHAFT_TEXT).encode() + b"name: \x00\n",
+        "holds the control character #x0000, which YAML does not allow",
+    ),
+    (
+        "Latin-1 far in",
+        (_FAR + "name: Tr\xe4ger\n" + _SHAFT_TEXT).encode("latin-1"),
+        "not UTF-8 text: byte 0xe4 at line 1001, column 9",
+    ),
+]
+
+
+@pytest.mark.parametrize(("label", "content", "message"), NOT_TEXT, ids=[c[0] for c in NOT_TEXT])
+def test_a_file_that_is_not_text_is_refused_with_exit_2(
+    tmp_path: Path, label: str, content: bytes, message: str
+) -> None:
+    """Binary content is refused from the first bytes (HEAD_BYTES), before the
+    rest of the file is read; past them, as the text is decoded or parsed.
+    Either way one line naming the file, and exit code 2."""
+    path = tmp_path / "model.yaml"
+    path.write_bytes(content)
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stdout == "" and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith(f"jointplay: invalid model: {path}: "), proc.stderr
+    assert message in proc.stderr and proc.stderr.count("\n") == 1, proc.stderr
+
+
+def test_a_character_across_the_first_bytes_checked_still_reads(tmp_path: Path) -> None:
+    from jointplay.io.modelfile import HEAD_BYTES
+
+    comment = "# " + "x" * (HEAD_BYTES - 3) + "\u00e4\n"  # its two bytes: either side
+    path = tmp_path / "model.yaml"
+    path.write_text(comment + _SHAFT_TEXT, encoding="utf-8")
+    assert path.read_bytes()[HEAD_BYTES - 1 : HEAD_BYTES + 1] == "\u00e4".encode()
+    assert len(jointplay.load(path).bodies) == 2
+
+
 def test_json_and_toml_read_the_same_keys(tmp_path: Path) -> None:
     data = spherical_shaft()
     data["loads"].append({"body": "S1", "torque": [0, 0, "1 N*m"]})
