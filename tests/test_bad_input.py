@@ -588,6 +588,94 @@ def test_problems_across_entries_are_listed_together(tmp_path: Path) -> None:
     assert "no chain of joints" not in str(caught.value)
 
 
+def test_field_problems_and_names_that_point_nowhere_come_in_one_run(tmp_path: Path) -> None:
+    """A negative play, a force in kg and a joint to a body that does not
+    exist: all three at once (pydantic stops at the fields, before the checks
+    across entries; the names are looked up in the file's data as it is)."""
+    path = tmp_path / "model.yaml"
+    path.write_text(
+        """bodies:
+  - {name: S0, ground: true}
+  - {name: S1}
+joints:
+  - {name: l1, type: spherical, between: [S0, S1], at: [0, 0, 0], clearance: -0.2}
+  - {name: l2, type: cylindrical, between: [S0, S2], at: [200, 0, 0], axis: [1, 0, 0],
+     length: 40, clearance: 0.2}
+loads:
+  - {body: S1, at: [300, 0, 0], force: [1, "3 kg", 1]}
+"""
+    )
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert "Traceback" not in proc.stderr
+    first, count, *others = proc.stderr.rstrip("\n").split("\n")
+    assert first == (
+        f"jointplay: invalid model: {path}: joints[0] 'l1': clearance: expected a value >= 0, "
+        "got -0.2"
+    )
+    assert count == "2 more problem(s) in this file:"
+    assert others[0] == (
+        "  joints[1] 'l2': between: unknown body 'S2'; bodies are: S0, S1. Did you mean 'S1'?"
+    )
+    assert others[1].startswith("  loads[0]: force: component y: expected a force, got '3 kg'")
+
+
+def _problem_lines(data: dict[str, Any]) -> list[str]:
+    with pytest.raises(ModelError) as caught:
+        jointplay.model_from_dict(data)
+    first, *others = str(caught.value).split("\n")
+    return [first.removeprefix("<model>: "), *(line.strip() for line in others[1:])]
+
+
+def test_a_name_that_points_nowhere_reads_the_same_beside_a_field_problem() -> None:
+    """Every kind of name that points nowhere, with and without a field's
+    problem beside it: the same lines, so that fixing the field changes
+    nothing else."""
+    data = spherical_shaft(
+        points=[{"name": "tip", "body": "S3", "at": [300, 0, 0]}],
+        requirements=[{"point": "tap", "max_displacement": 0.1}],
+        load_cases={"push": [{"body": "S4", "at": [300, 0, 0], "force": [1, 0, 0]}]},
+        deviations=[
+            {"name": "setup", "body": "S5", "at": [0, 0, 0], "position": {"diameter": "10 um"}}
+        ],
+    )
+    data["joints"][0]["between"] = ["S0", "S2"]  # type: ignore[index]
+    data["joints"][1]["deviation"] = "setpu"  # type: ignore[index]
+    data["loads"][0]["body"] = "S6"  # type: ignore[index]
+    names = _problem_lines(data)
+    assert len(names) == 7 and all("unknown" in line or "no body" in line for line in names)
+    data["joints"][1]["clearance"] = -1  # type: ignore[index]
+    both = _problem_lines(data)
+    assert both[0] == "joints[1] 'l2': clearance: expected a value >= 0, got -1"
+    assert sorted(both[1:]) == sorted(names)
+    # in file order: the entries' sections as the model lists them
+    assert [line.split(":")[0].split("[")[0] for line in both[1:]] == [
+        "joints",
+        "joints",
+        "loads",
+        "load_cases.push",
+        "points",
+        "requirements",
+        "deviations",
+    ]
+
+
+def test_names_are_not_looked_up_where_a_name_does_not_read() -> None:
+    """A body whose 'name' key is misspelt: the bodies' names are not known,
+    so the joints' are not called unknown (they only follow from it)."""
+    data = spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"nmae": "S1"}])
+    data["joints"][0]["clearance"] = -1  # type: ignore[index]
+    text = "\n".join(_problem_lines(data))
+    assert "bodies[1]: nmae: unknown key 'nmae'. Did you mean 'name'?" in text
+    assert "joints[0] 'l1': clearance" in text
+    assert "unknown body" not in text, text
+
+
 def test_a_duplicate_name_does_not_hide_the_other_problems(tmp_path: Path) -> None:
     data = spherical_shaft(
         points=[

@@ -20,11 +20,11 @@ from pathlib import Path
 from typing import Any, cast, get_args
 
 import yaml
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, TypeAdapter, ValidationError
 
 from jointplay.errors import ModelError
 from jointplay.model.deviations import SharedDeviation, mean_components
-from jointplay.model.fields import _vector
+from jointplay.model.fields import Name, _vector
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import (
     Body,
@@ -35,6 +35,10 @@ from jointplay.model.mechanism import (
     Model,
     Requirement,
     suggest,
+    unknown_body,
+    unknown_deviation_body,
+    unknown_point,
+    unknown_shared_deviation,
 )
 from jointplay.units import UnderflowError, read_number, shown
 
@@ -64,15 +68,15 @@ MAX_NODES = 150 * LARGEST_MODEL_BODIES
 #: Deepest nesting of lists and mappings. A model needs 4 (file, section,
 #: entry, vector); the limit stays far below Python's recursion limit.
 MAX_DEPTH = 64
-#: Most entries in a section (bodies, joints, loads, points, load cases, the
-#: loads of one case): 10 per body of the largest model (100,000), for a
+#: Most entries in a section (each of SECTIONS, the load cases, the loads of
+#: one case): 10 per body of the largest model (100,000), for a
 #: mechanism of 10,000 bodies in closed loops has 30,000 joints. Checked
 #: before validation, which walks each entry: a wrong entry may repeat a
 #: hundred thousand times in a generated model before the first one is reported.
 MAX_ENTRIES = 10 * LARGEST_MODEL_BODIES
 
 #: The sections that are lists of entries.
-SECTIONS = ("bodies", "joints", "loads", "points", "requirements")
+SECTIONS = ("bodies", "joints", "loads", "points", "requirements", "deviations")
 
 #: Accepted keys per section, for "did you mean" suggestions.
 _SECTION_KEYS = {
@@ -745,14 +749,26 @@ MOST_PROBLEMS = 20
 
 
 def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> ModelError:
-    """Every problem of the file, the likeliest first (``_first``): its entry
-    and fix in the message's first line, then one line per other problem."""
+    """Every problem of the file, in file order, the likeliest first
+    (``_first``): its entry and fix in the message's first line, then one
+    line per other problem. The names that point nowhere are among them
+    (``_unknown_names``) even where pydantic stopped at a field, before the
+    checks across entries."""
     errors = _consequences_left_out(
         _with_common_joint_problems(exc.errors(include_url=False), data)
     )
+    errors.sort(key=lambda err: _position(err["loc"], data))
     first = _first(errors)
-    ordered = [first, *(e for e in errors if e is not first)]
-    described = [d for err in ordered for d in _described(err, data)]
+    lines = [
+        (_position(err["loc"], data), line)
+        for err in errors
+        if err is not first
+        for line in _described(err, data)
+    ]
+    if all(err["loc"] for err in errors):  # the checks across entries did not run
+        lines += _unknown_names(data)
+    lines.sort(key=lambda item: item[0])  # a field's problem before its entry's names
+    described = [*_described(first, data), *(line for _, line in lines)]
     entry, problem = described[0]
     others = [f"  {where}: {what}" if where else f"  {what}" for where, what in described[1:]]
     if len(others) > MOST_PROBLEMS:
@@ -760,6 +776,104 @@ def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> 
     if others:
         problem += f"\n{len(described) - 1} more problem(s) in this file:\n" + "\n".join(others)
     return ModelError(problem, source=source, entry=entry or None)
+
+
+#: A name as the model reads it (stripped, one line, at most 100 characters).
+_NAME: TypeAdapter[str] = TypeAdapter(Name)
+#: The model's keys in file order: problems are listed in it.
+_FILE_ORDER = [field.alias or name for name, field in Model.model_fields.items()]
+
+
+def _position(loc: Any, data: dict[str, Any]) -> tuple[int, ...]:
+    """Where a pydantic location is in the file, as a key to sort by: its
+    section, then its entry (a load case's by the order of the cases)."""
+    if not loc:
+        return (-1,)
+    section = loc[0]
+    out = [_FILE_ORDER.index(section) if section in _FILE_ORDER else len(_FILE_ORDER)]
+    rest = list(loc[1:3])
+    if section == "load_cases" and rest:
+        cases = data.get("load_cases")
+        names = list(cases) if isinstance(cases, dict) else []
+        out.append(names.index(rest[0]) if rest[0] in names else -1)
+        rest = rest[1:]
+    if rest and isinstance(rest[0], int):
+        out.append(rest[0])
+    return tuple(out)
+
+
+def _unknown_names(data: dict[str, Any]) -> list[tuple[tuple[int, ...], tuple[str, str]]]:
+    """The names that point nowhere, read from the file's data as it is, each
+    as (position, (entry, problem)), in the words of the checks across
+    entries (``Model._check_topology``): a joint's or a load's or a point's
+    body, a requirement's point, a joint's shared deviation, a shared
+    deviation's body. Names are looked up in a section only when each of its
+    entries has a valid name (else a misspelt ``name`` key would make them
+    all unknown); a value that is not a valid name is a field's problem,
+    said apart."""
+
+    def text(value: Any) -> str | None:
+        try:
+            return _NAME.validate_python(value)
+        except ValidationError:  # not a name: a field's problem
+            return None
+
+    def names(section: str, required: bool) -> list[str] | None:
+        items = data.get(section, None if required else [])
+        if not isinstance(items, list) or (required and not items):
+            return None
+        out = []
+        for item in items:
+            name = text(item.get("name") if isinstance(item, dict) else None)
+            if name is None:
+                return None
+            out.append(name)
+        return out
+
+    def entries(section: str) -> list[tuple[tuple[Any, ...], dict[str, Any]]]:
+        items = data.get(section)
+        if section == "load_cases":
+            if not isinstance(items, dict):
+                return []
+            return [
+                ((section, case, i), item)
+                for case, loads in items.items()
+                if isinstance(loads, list)
+                for i, item in enumerate(loads)
+                if isinstance(item, dict)
+            ]
+        if not isinstance(items, list):
+            return []
+        return [((section, i), item) for i, item in enumerate(items) if isinstance(item, dict)]
+
+    bodies = names("bodies", required=True)
+    points = names("points", required=False)
+    shared = names("deviations", required=False)
+    found: list[tuple[tuple[Any, ...], str]] = []
+    for loc, joint in entries("joints"):
+        between = joint.get("between")
+        if bodies is not None and isinstance(between, list):
+            for body in between:
+                if (name := text(body)) is not None and name not in bodies:
+                    found.append((loc, unknown_body("between", name, bodies)))
+        deviation = joint.get("deviation")
+        group = text(deviation.get("shared") if isinstance(deviation, dict) else deviation)
+        if shared is not None and group is not None and group not in shared:
+            found.append((loc, unknown_shared_deviation(group, shared)))
+    for section in ("loads", "load_cases", "points"):
+        for loc, item in entries(section):
+            name = text(item.get("body"))
+            if bodies is not None and name is not None and name not in bodies:
+                found.append((loc, unknown_body("body", name, bodies)))
+    for loc, requirement in entries("requirements"):
+        name = text(requirement.get("point"))
+        if points is not None and name is not None and name not in points:
+            found.append((loc, unknown_point(name, points)))
+    for loc, deviation in entries("deviations"):
+        name = text(deviation.get("body"))
+        if bodies is not None and name is not None and name not in bodies:
+            found.append((loc, unknown_deviation_body(name, bodies)))
+    return [(_position(loc, data), (_entry(list(loc), data)[0], what)) for loc, what in found]
 
 
 class _AnyJoint(Joint):
