@@ -69,8 +69,8 @@ MAX_NODES = 150 * LARGEST_MODEL_BODIES
 #: entry, vector); the limit stays far below Python's recursion limit.
 MAX_DEPTH = 64
 #: Most entries in a section (each of SECTIONS, the load cases, the loads of
-#: one case): 10 per body of the largest model (100,000), for a
-#: mechanism of 10,000 bodies in closed loops has 30,000 joints. Checked
+#: one case): 10 per body of the largest model (100,000; a mechanism of
+#: 10,000 bodies in closed loops has 30,000 joints). Checked
 #: before validation, which walks each entry: a wrong entry may repeat a
 #: hundred thousand times in a generated model before the first one is reported.
 MAX_ENTRIES = 10 * LARGEST_MODEL_BODIES
@@ -210,7 +210,7 @@ def _number(kind: str) -> Any:
             )
         if text[-1:] in _NOT_DECIMAL:  # .inf, .nan
             value = construct(loader, node)
-        else:  # plain decimal: Python reads it as YAML does, and five times faster
+        else:  # plain decimal: Python reads it as YAML does, and faster
             try:
                 value = int(text) if kind == "int" else float(text)
             except ValueError:  # an integer of thousands of digits
@@ -276,8 +276,8 @@ def load(path: str | Path) -> Model:
 def _gc_paused() -> Iterator[None]:
     """Python's garbage collector paused, and set going again after. Reading
     makes a few objects per value of the file and frees none of them, yet the
-    collector walks them all again and again as they pile up: it took three
-    quarters of the time to read a 10,000-body model."""
+    collector walks them all again and again as they pile up: it took more
+    than half the time to read a 10,000-body model."""
     paused = gc.isenabled()
     gc.disable()
     try:
@@ -468,7 +468,7 @@ def _build(loader: Any, root: yaml.Node, source: str) -> Any:
     (an anchor used within it), at most MAX_NODES values with aliases
     expanded. An alias (*name) takes the value built for its anchor, so that
     a "billion laughs" file takes the time of its few lines to be refused.
-    Texts, numbers, lists and mappings are built here, three times faster
+    Texts, numbers, lists and mappings are built here, about three times faster
     than by PyYAML's constructor; other tags (!!binary, !!set, unknown ones)
     go to it."""
     return _Builder(loader, source).value(root)
@@ -809,8 +809,8 @@ def _unknown_names(data: dict[str, Any]) -> list[tuple[tuple[int, ...], tuple[st
     body, a requirement's point, a joint's shared deviation, a shared
     deviation's body. Names are looked up in a section only when each of its
     entries has a valid name (else a misspelt ``name`` key would make them
-    all unknown); a value that is not a valid name is a field's problem,
-    said apart."""
+    all unknown); a value that is not a valid name, or a ``between`` that is
+    not two of them, is a field's problem, said apart."""
 
     def text(value: Any) -> str | None:
         try:
@@ -852,7 +852,7 @@ def _unknown_names(data: dict[str, Any]) -> list[tuple[tuple[int, ...], tuple[st
     found: list[tuple[tuple[Any, ...], str]] = []
     for loc, joint in entries("joints"):
         between = joint.get("between")
-        if bodies is not None and isinstance(between, list):
+        if bodies is not None and isinstance(between, list) and len(between) == 2:
             for body in between:
                 if (name := text(body)) is not None and name not in bodies:
                     found.append((loc, unknown_body("between", name, bodies)))
