@@ -269,6 +269,70 @@ def test_missing_file_is_exit_2(tmp_path: Path) -> None:
         jointplay.load(tmp_path / "nope.yaml")
 
 
+_SHAFT_TEXT = yaml.safe_dump(spherical_shaft(), sort_keys=False)
+#: 80 kB of comment lines: more than the bytes checked first (HEAD_BYTES).
+_FAR = ("# " + "-" * 77 + "\n") * 1000
+
+NOT_TEXT = [
+    (
+        "a picture",
+        b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + bytes(range(256)) * 1000,
+        "this is a binary file (it holds NUL bytes), not a model file",
+    ),
+    (
+        "UTF-16 without its mark",
+        (_SHAFT_TEXT + _FAR).encode("utf-16-le"),
+        "this is a binary file (it holds NUL bytes), not a model file",
+    ),
+    (
+        "Latin-1",
+        ("name: Tr\xe4ger\n" + _SHAFT_TEXT + _FAR).encode("latin-1"),
+        "not UTF-8 text: byte 0xe4 at line 1, column 9 is not UTF-8; save the file as UTF-8",
+    ),
+    (
+        "a NUL byte far in",
+        (_FAR + _SHAFT_TEXT).encode() + b"name: \x00\n",
+        "holds the control character #x0000, which YAML does not allow",
+    ),
+    (
+        "Latin-1 far in",
+        (_FAR + "name: Tr\xe4ger\n" + _SHAFT_TEXT).encode("latin-1"),
+        "not UTF-8 text: byte 0xe4 at line 1001, column 9",
+    ),
+]
+
+
+@pytest.mark.parametrize(("label", "content", "message"), NOT_TEXT, ids=[c[0] for c in NOT_TEXT])
+def test_a_file_that_is_not_text_is_refused_with_exit_2(
+    tmp_path: Path, label: str, content: bytes, message: str
+) -> None:
+    """Binary content is refused from the first bytes (HEAD_BYTES), before the
+    rest of the file is read; past them, as the text is decoded or parsed.
+    Either way one line naming the file, and exit code 2."""
+    path = tmp_path / "model.yaml"
+    path.write_bytes(content)
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stdout == "" and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith(f"jointplay: invalid model: {path}: "), proc.stderr
+    assert message in proc.stderr and proc.stderr.count("\n") == 1, proc.stderr
+
+
+def test_a_character_across_the_first_bytes_checked_still_reads(tmp_path: Path) -> None:
+    from jointplay.io.modelfile import HEAD_BYTES
+
+    comment = "# " + "x" * (HEAD_BYTES - 3) + "\u00e4\n"  # its two bytes: either side
+    path = tmp_path / "model.yaml"
+    path.write_text(comment + _SHAFT_TEXT, encoding="utf-8")
+    assert path.read_bytes()[HEAD_BYTES - 1 : HEAD_BYTES + 1] == "\u00e4".encode()
+    assert len(jointplay.load(path).bodies) == 2
+
+
 def test_json_and_toml_read_the_same_keys(tmp_path: Path) -> None:
     data = spherical_shaft()
     data["loads"].append({"body": "S1", "torque": [0, 0, "1 N*m"]})
@@ -522,6 +586,94 @@ def test_problems_across_entries_are_listed_together(tmp_path: Path) -> None:
         "  requirements[0]",
     ]
     assert "no chain of joints" not in str(caught.value)
+
+
+def test_field_problems_and_names_that_point_nowhere_come_in_one_run(tmp_path: Path) -> None:
+    """A negative play, a force in kg and a joint to a body that does not
+    exist: all three at once (pydantic stops at the fields, before the checks
+    across entries; the names are looked up in the file's data as it is)."""
+    path = tmp_path / "model.yaml"
+    path.write_text(
+        """bodies:
+  - {name: S0, ground: true}
+  - {name: S1}
+joints:
+  - {name: l1, type: spherical, between: [S0, S1], at: [0, 0, 0], clearance: -0.2}
+  - {name: l2, type: cylindrical, between: [S0, S2], at: [200, 0, 0], axis: [1, 0, 0],
+     length: 40, clearance: 0.2}
+loads:
+  - {body: S1, at: [300, 0, 0], force: [1, "3 kg", 1]}
+"""
+    )
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert "Traceback" not in proc.stderr
+    first, count, *others = proc.stderr.rstrip("\n").split("\n")
+    assert first == (
+        f"jointplay: invalid model: {path}: joints[0] 'l1': clearance: expected a value >= 0, "
+        "got -0.2"
+    )
+    assert count == "2 more problem(s) in this file:"
+    assert others[0] == (
+        "  joints[1] 'l2': between: unknown body 'S2'; bodies are: S0, S1. Did you mean 'S1'?"
+    )
+    assert others[1].startswith("  loads[0]: force: component y: expected a force, got '3 kg'")
+
+
+def _problem_lines(data: dict[str, Any]) -> list[str]:
+    with pytest.raises(ModelError) as caught:
+        jointplay.model_from_dict(data)
+    first, *others = str(caught.value).split("\n")
+    return [first.removeprefix("<model>: "), *(line.strip() for line in others[1:])]
+
+
+def test_a_name_that_points_nowhere_reads_the_same_beside_a_field_problem() -> None:
+    """Every kind of name that points nowhere, with and without a field's
+    problem beside it: the same lines, so that fixing the field changes
+    nothing else."""
+    data = spherical_shaft(
+        points=[{"name": "tip", "body": "S3", "at": [300, 0, 0]}],
+        requirements=[{"point": "tap", "max_displacement": 0.1}],
+        load_cases={"push": [{"body": "S4", "at": [300, 0, 0], "force": [1, 0, 0]}]},
+        deviations=[
+            {"name": "setup", "body": "S5", "at": [0, 0, 0], "position": {"diameter": "10 um"}}
+        ],
+    )
+    data["joints"][0]["between"] = ["S0", "S2"]  # type: ignore[index]
+    data["joints"][1]["deviation"] = "setpu"  # type: ignore[index]
+    data["loads"][0]["body"] = "S6"  # type: ignore[index]
+    names = _problem_lines(data)
+    assert len(names) == 7 and all("unknown" in line or "no body" in line for line in names)
+    data["joints"][1]["clearance"] = -1  # type: ignore[index]
+    both = _problem_lines(data)
+    assert both[0] == "joints[1] 'l2': clearance: expected a value >= 0, got -1"
+    assert sorted(both[1:]) == sorted(names)
+    # in file order: the entries' sections as the model lists them
+    assert [line.split(":")[0].split("[")[0] for line in both[1:]] == [
+        "joints",
+        "joints",
+        "loads",
+        "load_cases.push",
+        "points",
+        "requirements",
+        "deviations",
+    ]
+
+
+def test_names_are_not_looked_up_where_a_name_does_not_read() -> None:
+    """A body whose 'name' key is misspelt: the bodies' names are not known,
+    so the joints' are not called unknown (they only follow from it)."""
+    data = spherical_shaft(bodies=[{"name": "S0", "ground": True}, {"nmae": "S1"}])
+    data["joints"][0]["clearance"] = -1  # type: ignore[index]
+    text = "\n".join(_problem_lines(data))
+    assert "bodies[1]: nmae: unknown key 'nmae'. Did you mean 'name'?" in text
+    assert "joints[0] 'l1': clearance" in text
+    assert "unknown body" not in text, text
 
 
 def test_a_duplicate_name_does_not_hide_the_other_problems(tmp_path: Path) -> None:

@@ -26,6 +26,7 @@ from typer.testing import CliRunner
 
 from conftest import ROOT
 from jointplay.cli import app
+from jointplay.io.modelfile import MAX_ENTRIES, MAX_FILE_BYTES, MAX_NODES
 
 CORPUS = Path(__file__).parent / "fuzz_corpus"
 EXPECTED: dict[str, dict[str, Any]] = yaml.safe_load((CORPUS / "expected.yaml").read_text())
@@ -52,12 +53,13 @@ def _make(name: str, case: dict[str, Any], where: Path) -> Path:
     path = where / name
     if kind == "directory":
         path.mkdir()
-    elif kind == "huge":  # over the 1 MB limit, and valid YAML (comments)
-        path.write_text(("# " + "x" * 98 + "\n") * 11_000)
-    elif kind == "many_values":  # under 1 MB, over the limit of values
-        path.write_text("bodies: [" + "1, " * 300_000 + "1]\n")
-    elif kind == "many_entries":  # each entry is a value: the file limit holds first
-        path.write_text("bodies: [{name: a}]\nloads: [" + "{}, " * 100_000 + "{}]\n")
+    elif kind == "huge":  # over the size limit, and valid YAML (comments)
+        line = "# " + "x" * 98 + "\n"
+        path.write_text(line * (MAX_FILE_BYTES // len(line) + 1))
+    elif kind == "many_values":  # under the size limit, over the limit of values
+        path.write_text("bodies: [" + "1, " * MAX_NODES + "1]\n")
+    elif kind == "many_entries":  # under the limit of values, over that of entries
+        path.write_text("bodies: [{name: a}]\nloads: [" + "{}, " * MAX_ENTRIES + "{}]\n")
     else:
         assert kind == "missing", kind
     return path

@@ -3,6 +3,7 @@ strings of hundreds of bodies solve with a certificate."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 import jointplay
 from conftest import MM, RAD, ROOT, force_tol
 from jointplay.io.generate import tube_string, tube_string_dict
-from jointplay.io.modelfile import model_from_dict
+from jointplay.io.modelfile import LARGEST_MODEL_BODIES, model_from_dict
 from jointplay.numerics import linalg
 
 EXAMPLES = sorted((ROOT / "examples").rglob("*.yaml"))
@@ -83,6 +84,30 @@ def test_a_long_string_is_polished(n: int) -> None:
     data = tube_string_dict(n)
     plays = [j["axial_clearance"] / 2 for j in data["joints"] if j["type"] == "revolute"]
     assert result.bodies[f"T{n}"].translation[0] == pytest.approx(sum(plays), abs=MM)
+
+
+@pytest.mark.parametrize("suffix", [".yaml", ".json"])
+def test_a_model_file_of_the_largest_size_is_read(tmp_path: Path, suffix: str) -> None:
+    """The reader takes every model the solver does: the largest, a string of
+    LARGEST_MODEL_BODIES bodies, written as a file (YAML with one entry a
+    line, as the examples are written, or indented JSON), reads back as the
+    model that ``test_a_long_string_is_polished`` certifies."""
+    n = LARGEST_MODEL_BODIES
+    data = tube_string_dict(n)
+    path = tmp_path / f"chain{suffix}"
+    if suffix == ".json":
+        path.write_text(json.dumps(data, indent=2))
+    else:
+        path.write_text(
+            "".join(
+                f"{section}:\n" + "".join(f"  - {json.dumps(entry)}\n" for entry in data[section])
+                for section in ("bodies", "joints", "loads")
+            )
+        )
+    model = jointplay.load(path)
+    assert len(model.bodies) == n + 1 and len(model.moving_bodies) == n
+    assert len(model.joints) == 2 * n
+    assert model == tube_string(n)
 
 
 def test_free_spins_of_a_long_string_come_out_zero(monkeypatch: pytest.MonkeyPatch) -> None:

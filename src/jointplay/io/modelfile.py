@@ -8,19 +8,23 @@ Hostile files are bounded before they are read in full: see ``MAX_FILE_BYTES``,
 
 from __future__ import annotations
 
+import codecs
+import gc
 import json
+import os
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, get_args
+from typing import Any, cast, get_args
 
 import yaml
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, TypeAdapter, ValidationError
 
 from jointplay.errors import ModelError
 from jointplay.model.deviations import SharedDeviation, mean_components
-from jointplay.model.fields import _vector
+from jointplay.model.fields import Name, _vector
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import (
     Body,
@@ -31,32 +35,48 @@ from jointplay.model.mechanism import (
     Model,
     Requirement,
     suggest,
+    unknown_body,
+    unknown_deviation_body,
+    unknown_point,
+    unknown_shared_deviation,
 )
 from jointplay.units import UnderflowError, read_number, shown
 
-#: Largest model file read, in bytes. A hand-written model of a thousand
-#: joints is about 100 kB, and the solver takes minutes long before a model
-#: reaches 1 MB; a larger file is refused before it is parsed.
-MAX_FILE_BYTES = 1_000_000
+#: The largest model the solver is built and tested for: a string of 10,000
+#: bodies, certified in seconds (tests/test_large.py, benchmarks/bench_scaling.py).
+#: The reader's limits below follow from it, so that every model the solver
+#: takes can be read, and a file far larger than any model is refused.
+LARGEST_MODEL_BODIES = 10_000
+#: Largest model file read, in bytes: 5 kB per body of the largest model
+#: (50 MB). The 10,000-body string is 3.6 MB as YAML and 6.5 MB as indented
+#: JSON, 11 MB in closed loops (three joints a body); the rest is room for
+#: comments, outlines and load cases. A larger file is refused before it is read.
+MAX_FILE_BYTES = 5_000 * LARGEST_MODEL_BODIES
+#: Bytes read first, and checked for what is not text (NUL bytes, not UTF-8),
+#: so that a binary file is refused at once; the rest is checked as it is
+#: decoded, once.
+HEAD_BYTES = 65_536
 #: Most YAML values (numbers, texts, lists, mappings) in a file, counted as
-#: they are parsed and again with aliases expanded: a model of 5000 joints
-#: holds about 70 000, and reading 100 000 takes the YAML reader half a second.
+#: they are parsed and again with aliases expanded: 150 per body of the
+#: largest model (1.5 million). The 10,000-body string in closed loops (three
+#: joints a body) holds 830,000; the YAML reader takes about 2.5 s a million,
+#: and that is how long a file of values past the limit takes to be refused.
 #: Aliases (*name) reuse a value without copying it, so a few lines of nested
 #: aliases (a "billion laughs" file) can stand for billions of values, which
 #: validation would then walk one by one.
-MAX_NODES = 100_000
+MAX_NODES = 150 * LARGEST_MODEL_BODIES
 #: Deepest nesting of lists and mappings. A model needs 4 (file, section,
 #: entry, vector); the limit stays far below Python's recursion limit.
 MAX_DEPTH = 64
-#: Most entries in a section (bodies, joints, loads, points, load cases, the
-#: loads of one case), for a model given as a dict (a file meets MAX_NODES
-#: first): each is validated, and a wrong entry may repeat a hundred thousand
-#: times in a generated model before the first one is reported. A mechanism
-#: of 10,000 bodies in closed loops has 20,000 joints.
-MAX_ENTRIES = 100_000
+#: Most entries in a section (each of SECTIONS, the load cases, the loads of
+#: one case): 10 per body of the largest model (100,000; a mechanism of
+#: 10,000 bodies in closed loops has 30,000 joints). Checked
+#: before validation, which walks each entry: a wrong entry may repeat a
+#: hundred thousand times in a generated model before the first one is reported.
+MAX_ENTRIES = 10 * LARGEST_MODEL_BODIES
 
 #: The sections that are lists of entries.
-SECTIONS = ("bodies", "joints", "loads", "points", "requirements")
+SECTIONS = ("bodies", "joints", "loads", "points", "requirements", "deviations")
 
 #: Accepted keys per section, for "did you mean" suggestions.
 _SECTION_KEYS = {
@@ -79,13 +99,23 @@ class _StrictLoader(_YamlBase):  # type: ignore[misc]
     """A YAML loader that refuses duplicate keys instead of keeping the last one,
     and stops after MAX_NODES values."""
 
-    nodes = 0
+    def __init__(self, stream: str):
+        super().__init__(stream)
+        self.nodes = 0
+        #: The tag of each plain text met: a model repeats its keys and numbers,
+        #: and PyYAML's resolver tries its patterns on each (a fifth of the parse).
+        self.tags: dict[str, str] = {}
 
     def resolve(self, kind: Any, value: Any, implicit: Any) -> Any:
         # called once per value as the file is parsed, also by libyaml's parser
         self.nodes += 1
         if self.nodes > MAX_NODES:
             raise _TooManyNodesError
+        if kind is yaml.ScalarNode and implicit[0]:  # plain: its tag follows from its text
+            tag = self.tags.get(value)
+            if tag is None:
+                tag = self.tags[value] = super().resolve(kind, value, implicit)
+            return tag
         return super().resolve(kind, value, implicit)
 
 
@@ -93,6 +123,13 @@ _MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
 def _mapping(loader: Any, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+    return _mapping_of(loader, node, lambda child: loader.construct_object(child, deep=deep))
+
+
+def _mapping_of(
+    loader: Any, node: yaml.MappingNode, construct: Callable[[yaml.Node], Any]
+) -> dict[Any, Any]:
+    """A mapping's value, its keys names given once; ``construct`` builds a key or a value."""
     # merge keys ('<<: *defaults') give defaults that the mapping's own keys override
     own = sum(1 for key_node, _ in node.value if key_node.tag != _MERGE_TAG)
     loader.flatten_mapping(node)
@@ -100,21 +137,24 @@ def _mapping(loader: Any, node: yaml.MappingNode, deep: bool = False) -> dict[An
     out: dict[Any, Any] = {}
     seen: set[Any] = set()
     for index, (key_node, value_node) in enumerate(node.value):
-        key = loader.construct_object(key_node, deep=deep)
-        mark = key_node.start_mark
+        key = construct(key_node)
         try:
             hash(key)
         except TypeError:
             raise yaml.constructor.ConstructorError(
-                None, None, "a list or a mapping cannot be a key; keys are names", mark
+                None,
+                None,
+                "a list or a mapping cannot be a key; keys are names",
+                key_node.start_mark,
             ) from None
         if index >= merged:
             if key in seen:
+                mark = key_node.start_mark
                 raise yaml.constructor.ConstructorError(
                     None, None, f"duplicate key {shown(key)} (line {mark.line + 1})", mark
                 )
             seen.add(key)
-        out[key] = loader.construct_object(value_node, deep=deep)
+        out[key] = construct(value_node)
     return out
 
 
@@ -129,12 +169,16 @@ def _scalar(kind: str) -> Any:
         try:
             return construct(loader, node)
         except (ArithmeticError, LookupError, TypeError, ValueError):
-            what = "a number far too long" if len(str(node.value)) > 1000 else f"not a {kind}"
-            raise yaml.constructor.ConstructorError(
-                None, None, f"{shown(node.value)} is {what}", node.start_mark
-            ) from None
+            raise _unreadable(node, kind) from None
 
     return guarded
+
+
+def _unreadable(node: yaml.ScalarNode, kind: str) -> yaml.YAMLError:
+    what = "a number far too long" if len(str(node.value)) > 1000 else f"not a {kind}"
+    return yaml.constructor.ConstructorError(
+        None, None, f"{shown(node.value)} is {what}", node.start_mark
+    )
 
 
 #: YAML 1.1 reads these as numbers, YAML 1.2 and JSON do not (0x10 is 16, 1_0 is 10,
@@ -143,6 +187,8 @@ _PLAIN_INT = re.compile(r"[-+]?(0|[1-9][0-9]*)")
 _PLAIN_FLOAT = re.compile(
     r"[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?|[-+]?\.(inf|Inf|INF)|\.(nan|NaN|NAN)"
 )
+#: How a plain float that is not decimal ends (.inf, .nan).
+_NOT_DECIMAL = frozenset("fFnN")
 
 
 def _number(kind: str) -> Any:
@@ -162,7 +208,13 @@ def _number(kind: str) -> Any:
                 "plain decimal",
                 node.start_mark,
             )
-        value = construct(loader, node)
+        if text[-1:] in _NOT_DECIMAL:  # .inf, .nan
+            value = construct(loader, node)
+        else:  # plain decimal: Python reads it as YAML does, and faster
+            try:
+                value = int(text) if kind == "int" else float(text)
+            except ValueError:  # an integer of thousands of digits
+                raise _unreadable(node, kind) from None
         if kind == "float" and value == 0.0:
             try:
                 read_number(text)
@@ -215,19 +267,41 @@ def load(path: str | Path) -> Model:
     path = Path(path)
     source = str(path)
     text = _read(path, source)
-    data = parse_text(text, path.suffix.lower(), source)
-    return model_from_dict(data, source=source)
+    with _gc_paused():  # the plain data freed before the collector runs again
+        model = model_from_dict(parse_text(text, path.suffix.lower(), source), source=source)
+    return model
+
+
+@contextmanager
+def _gc_paused() -> Iterator[None]:
+    """Python's garbage collector paused, and set going again after. Reading
+    makes a few objects per value of the file and frees none of them, yet the
+    collector walks them all again and again as they pile up: it took more
+    than half the time to read a 10,000-body model."""
+    paused = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if paused:
+            gc.enable()
 
 
 def _read(path: Path, source: str) -> str:
     folder = "this is a folder, not a model file; give the model file"
     if "\0" in source:
         raise ModelError("the path holds a NUL character; check the path", source=shown(source))
+    raw = b""
     try:
         if path.is_dir():
             raise IsADirectoryError
         with path.open("rb") as stream:
-            raw = stream.read(MAX_FILE_BYTES + 1)
+            size = os.fstat(stream.fileno()).st_size
+            if size <= MAX_FILE_BYTES:
+                head = stream.read(HEAD_BYTES)
+                _check_head(head, source)
+                # a pipe or a device tells no size: read one byte more than the limit
+                raw = head + stream.read(MAX_FILE_BYTES + 1 - len(head))
     except FileNotFoundError:
         raise ModelError("no such file; check the path", source=source) from None
     except IsADirectoryError:
@@ -237,16 +311,18 @@ def _read(path: Path, source: str) -> str:
             f"cannot read the file ({exc.strerror}); check the path and its permissions",
             source=source,
         ) from None
-    if len(raw) > MAX_FILE_BYTES:
+    if max(size, len(raw)) > MAX_FILE_BYTES:
         raise ModelError(
-            f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB, too large for a model "
-            "file; check that this is the model (a model of a thousand joints is about 100 kB)",
+            f"the file is larger than {MAX_FILE_BYTES // 1_000_000} MB, far larger than a "
+            f"model file (a model of {LARGEST_MODEL_BODIES:,} bodies is about 5 MB); check "
+            "that this is the model",
             source=source,
         )
     return _decode(raw, source)
 
 
-def _decode(raw: bytes, source: str) -> str:
+def _check_head(head: bytes, source: str) -> None:
+    """Refuse at once a file whose first bytes are not UTF-8 text."""
     boms = {
         b"\x00\x00\xfe\xff": "UTF-32",
         b"\xff\xfe\x00\x00": "UTF-32",
@@ -254,29 +330,40 @@ def _decode(raw: bytes, source: str) -> str:
         b"\xff\xfe": "UTF-16",
     }
     for bom, name in boms.items():
-        if raw.startswith(bom):
+        if head.startswith(bom):
             raise ModelError(
                 f"the file is {name} text; save it as UTF-8 (most editors offer the encoding "
                 "in 'Save as')",
                 source=source,
             )
-    if b"\x00" in raw:
+    if b"\x00" in head:
         raise ModelError(
             "this is a binary file (it holds NUL bytes), not a model file; give the YAML, "
             "JSON or TOML model",
             source=source,
         )
+    try:  # a character cut at the end of the head is checked with the rest
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=False)
+    except UnicodeDecodeError as exc:
+        raise _not_utf8(head, exc, source) from None
+
+
+def _decode(raw: bytes, source: str) -> str:
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        line = raw[: exc.start].count(b"\n") + 1
-        column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
-        byte = raw[exc.start]
-        raise ModelError(
-            f"not UTF-8 text: byte 0x{byte:02x} at line {line}, column {column} is not "
-            "UTF-8; save the file as UTF-8",
-            source=source,
-        ) from None
+        raise _not_utf8(raw, exc, source) from None
+
+
+def _not_utf8(raw: bytes, exc: UnicodeDecodeError, source: str) -> ModelError:
+    line = raw[: exc.start].count(b"\n") + 1
+    column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+    byte = raw[exc.start]
+    return ModelError(
+        f"not UTF-8 text: byte 0x{byte:02x} at line {line}, column {column} is not "
+        "UTF-8; save the file as UTF-8",
+        source=source,
+    )
 
 
 def parse_text(text: str, suffix: str, source: str) -> Any:
@@ -307,7 +394,8 @@ def parse_text(text: str, suffix: str, source: str) -> Any:
     except _TooManyNodesError:
         raise ModelError(
             f"the file holds more than {MAX_NODES:,} values, far more than a model (a model "
-            "of 5000 joints holds about 70 000); check that this is the model",
+            f"of {LARGEST_MODEL_BODIES:,} bodies holds under a million); check that this is "
+            "the model",
             source=source,
         ) from None
     except yaml.YAMLError as exc:
@@ -365,59 +453,100 @@ def _parse_yaml(text: str, source: str) -> Any:
         node = loader.get_single_node()
         if node is None:
             return None
-        _check_nodes(node, source)
-        return loader.construct_document(node)
+        return _build(loader, node, source)
     finally:
         loader.dispose()
 
 
-def _check_nodes(root: yaml.Node, source: str) -> None:
-    """Refuse alias bombs, aliases that contain themselves and deep nesting,
-    before anything is built from the nodes (iteratively: no recursion)."""
-    size: dict[int, int] = {}  # values below a finished list or mapping, aliases expanded
-    on_path: set[int] = set()  # the lists and mappings being walked: the current path
-    stack: list[tuple[yaml.Node, int, bool]] = [(root, 1, False)]
-    while stack:
-        node, depth, finished = stack.pop()
-        key = id(node)
-        if finished:
-            on_path.discard(key)
-            total = 1 + sum(size.get(id(child), 1) for child in _children(node))
-            if total > MAX_NODES:
-                raise ModelError(
-                    f"the YAML aliases (*name) expand to more than {MAX_NODES:,} values, far "
-                    "more than a model holds (a 'billion laughs' file?); write the values out, "
-                    "or reuse fewer aliases",
-                    source=source,
-                )
-            size[key] = total
-            continue
-        if key in size:
-            continue
-        if depth > MAX_DEPTH:
-            raise ModelError(_too_deep(), source=source)
-        on_path.add(key)
-        stack.append((node, depth, True))
-        for child in _children(node):
-            if isinstance(child, yaml.ScalarNode) or id(child) in size:
-                continue
-            if id(child) in on_path:
-                mark = child.start_mark
-                raise ModelError(
-                    f"the YAML anchor (&name) at line {mark.line + 1}, column {mark.column + 1} "
-                    "is used (*name) inside its own value, so that value never ends; write the "
-                    "values out",
-                    source=source,
-                )
-            stack.append((child, depth + 1, False))
+_TAG = "tag:yaml.org,2002:"
+_STR_TAG, _NULL_TAG, _SEQ_TAG, _MAP_TAG = (_TAG + t for t in ("str", "null", "seq", "map"))
 
 
-def _children(node: yaml.Node) -> list[yaml.Node]:
-    if isinstance(node, yaml.SequenceNode):
-        return list(node.value)
-    if isinstance(node, yaml.MappingNode):
-        return [part for pair in node.value for part in pair]
-    return []
+def _build(loader: Any, root: yaml.Node, source: str) -> Any:
+    """The value of a YAML document's nodes, checked as it is built: no list
+    or mapping nested more than MAX_DEPTH deep, none inside its own value
+    (an anchor used within it), at most MAX_NODES values with aliases
+    expanded. An alias (*name) takes the value built for its anchor, so that
+    a "billion laughs" file takes the time of its few lines to be refused.
+    Texts, numbers, lists and mappings are built here, about three times faster
+    than by PyYAML's constructor; other tags (!!binary, !!set, unknown ones)
+    go to it."""
+    return _Builder(loader, source).value(root)
+
+
+class _Builder:
+    """``_build``'s state (a class, not a closure: a closure that calls
+    itself is a reference cycle, which would keep every value alive until
+    the garbage collector's next full pass)."""
+
+    def __init__(self, loader: Any, source: str):
+        self.loader = loader
+        self.source = source
+        self.scalars = {
+            tag: loader.yaml_constructors[tag]
+            for tag in (_TAG + t for t in ("bool", "int", "float", "timestamp"))
+        }
+        self.built: dict[yaml.Node, Any] = {}  # the lists and mappings built
+        self.size: dict[yaml.Node, int] = {}  # their values, themselves included, aliases expanded
+        self.on_path: list[yaml.Node] = []  # the lists and mappings being built, outermost first
+        self.total = 0  # the values built, aliases expanded
+
+    def value(self, node: yaml.Node) -> Any:
+        if node.__class__ is yaml.ScalarNode:
+            self.total += 1  # bounded by the count as parsed (_StrictLoader)
+            tag = node.tag
+            if tag == _STR_TAG:
+                return node.value
+            if tag in self.scalars:
+                return self.scalars[tag](self.loader, node)
+            if tag == _NULL_TAG:
+                return None
+            return self.loader.construct_object(node, deep=True)
+        if node in self.built:
+            self._count(self.size[node])
+            return self.built[node]
+        self._refuse_inside(node)
+        if len(self.on_path) >= MAX_DEPTH:
+            raise ModelError(_too_deep(), source=self.source)
+        self.on_path.append(node)
+        before = self.total
+        out: Any
+        if node.__class__ is yaml.SequenceNode:
+            out = [self.value(child) for child in node.value]
+        else:
+            for key_node, merged in node.value:  # '<<: *name' merged into its own value
+                if key_node.tag == _MERGE_TAG:
+                    parts = merged.value if merged.__class__ is yaml.SequenceNode else [merged]
+                    for part in parts:
+                        self._refuse_inside(part)
+            out = _mapping_of(self.loader, cast(yaml.MappingNode, node), self.value)
+        if node.tag not in (_SEQ_TAG, _MAP_TAG):  # its values are checked: PyYAML builds it
+            out = self.loader.construct_object(node, deep=True)
+        self._count(1)
+        self.on_path.pop()
+        self.built[node] = out
+        self.size[node] = self.total - before
+        return out
+
+    def _count(self, more: int) -> None:
+        self.total += more
+        if self.total > MAX_NODES:
+            raise ModelError(
+                f"the YAML aliases (*name) expand to more than {MAX_NODES:,} values, far "
+                "more than a model holds (a 'billion laughs' file?); write the values out, "
+                "or reuse fewer aliases",
+                source=self.source,
+            )
+
+    def _refuse_inside(self, node: yaml.Node) -> None:
+        if node in self.on_path:
+            mark = node.start_mark
+            raise ModelError(
+                f"the YAML anchor (&name) at line {mark.line + 1}, column {mark.column + 1} "
+                "is used (*name) inside its own value, so that value never ends; write the "
+                "values out",
+                source=self.source,
+            )
 
 
 def _too_deep() -> str:
@@ -480,7 +609,7 @@ def _check_structure(data: Any, source: str) -> None:
     stack: list[tuple[Any, list[Any]]] = [(data, [])]
     while stack:
         value, loc = stack.pop()
-        if len(loc) > MAX_DEPTH:
+        if len(loc) >= MAX_DEPTH:
             raise ModelError(_too_deep(), source=source)
         if isinstance(value, dict):
             for key, item in value.items():
@@ -493,9 +622,12 @@ def _check_structure(data: Any, source: str) -> None:
                         source=source,
                         entry=where or None,
                     )
-                stack.append((item, [*loc, key]))
+                if isinstance(item, dict | list):
+                    stack.append((item, [*loc, key]))
         elif isinstance(value, list):
-            stack.extend((item, [*loc, i]) for i, item in enumerate(value))
+            stack.extend(
+                (item, [*loc, i]) for i, item in enumerate(value) if isinstance(item, dict | list)
+            )
 
 
 def _quotable(key: Any) -> bool:
@@ -508,7 +640,8 @@ def model_from_dict(data: Any, *, source: str = "<model>") -> Model:
         raise ModelError(_not_a_mapping(data), source=source)
     _check_sizes(data, source)
     try:
-        return Model.model_validate(data)
+        with _gc_paused():
+            return Model.model_validate(data)
     except ValidationError as exc:
         raise _to_model_error(exc, data, source) from None
     except RecursionError:
@@ -616,14 +749,26 @@ MOST_PROBLEMS = 20
 
 
 def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> ModelError:
-    """Every problem of the file, the likeliest first (``_first``): its entry
-    and fix in the message's first line, then one line per other problem."""
+    """Every problem of the file, in file order, the likeliest first
+    (``_first``): its entry and fix in the message's first line, then one
+    line per other problem. The names that point nowhere are among them
+    (``_unknown_names``) even where pydantic stopped at a field, before the
+    checks across entries."""
     errors = _consequences_left_out(
         _with_common_joint_problems(exc.errors(include_url=False), data)
     )
+    errors.sort(key=lambda err: _position(err["loc"], data))
     first = _first(errors)
-    ordered = [first, *(e for e in errors if e is not first)]
-    described = [d for err in ordered for d in _described(err, data)]
+    lines = [
+        (_position(err["loc"], data), line)
+        for err in errors
+        if err is not first
+        for line in _described(err, data)
+    ]
+    if all(err["loc"] for err in errors):  # the checks across entries did not run
+        lines += _unknown_names(data)
+    lines.sort(key=lambda item: item[0])  # a field's problem before its entry's names
+    described = [*_described(first, data), *(line for _, line in lines)]
     entry, problem = described[0]
     others = [f"  {where}: {what}" if where else f"  {what}" for where, what in described[1:]]
     if len(others) > MOST_PROBLEMS:
@@ -631,6 +776,104 @@ def _to_model_error(exc: ValidationError, data: dict[str, Any], source: str) -> 
     if others:
         problem += f"\n{len(described) - 1} more problem(s) in this file:\n" + "\n".join(others)
     return ModelError(problem, source=source, entry=entry or None)
+
+
+#: A name as the model reads it (stripped, one line, at most 100 characters).
+_NAME: TypeAdapter[str] = TypeAdapter(Name)
+#: The model's keys in file order: problems are listed in it.
+_FILE_ORDER = [field.alias or name for name, field in Model.model_fields.items()]
+
+
+def _position(loc: Any, data: dict[str, Any]) -> tuple[int, ...]:
+    """Where a pydantic location is in the file, as a key to sort by: its
+    section, then its entry (a load case's by the order of the cases)."""
+    if not loc:
+        return (-1,)
+    section = loc[0]
+    out = [_FILE_ORDER.index(section) if section in _FILE_ORDER else len(_FILE_ORDER)]
+    rest = list(loc[1:3])
+    if section == "load_cases" and rest:
+        cases = data.get("load_cases")
+        names = list(cases) if isinstance(cases, dict) else []
+        out.append(names.index(rest[0]) if rest[0] in names else -1)
+        rest = rest[1:]
+    if rest and isinstance(rest[0], int):
+        out.append(rest[0])
+    return tuple(out)
+
+
+def _unknown_names(data: dict[str, Any]) -> list[tuple[tuple[int, ...], tuple[str, str]]]:
+    """The names that point nowhere, read from the file's data as it is, each
+    as (position, (entry, problem)), in the words of the checks across
+    entries (``Model._check_topology``): a joint's or a load's or a point's
+    body, a requirement's point, a joint's shared deviation, a shared
+    deviation's body. Names are looked up in a section only when each of its
+    entries has a valid name (else a misspelt ``name`` key would make them
+    all unknown); a value that is not a valid name, or a ``between`` that is
+    not two of them, is a field's problem, said apart."""
+
+    def text(value: Any) -> str | None:
+        try:
+            return _NAME.validate_python(value)
+        except ValidationError:  # not a name: a field's problem
+            return None
+
+    def names(section: str, required: bool) -> list[str] | None:
+        items = data.get(section, None if required else [])
+        if not isinstance(items, list) or (required and not items):
+            return None
+        out = []
+        for item in items:
+            name = text(item.get("name") if isinstance(item, dict) else None)
+            if name is None:
+                return None
+            out.append(name)
+        return out
+
+    def entries(section: str) -> list[tuple[tuple[Any, ...], dict[str, Any]]]:
+        items = data.get(section)
+        if section == "load_cases":
+            if not isinstance(items, dict):
+                return []
+            return [
+                ((section, case, i), item)
+                for case, loads in items.items()
+                if isinstance(loads, list)
+                for i, item in enumerate(loads)
+                if isinstance(item, dict)
+            ]
+        if not isinstance(items, list):
+            return []
+        return [((section, i), item) for i, item in enumerate(items) if isinstance(item, dict)]
+
+    bodies = names("bodies", required=True)
+    points = names("points", required=False)
+    shared = names("deviations", required=False)
+    found: list[tuple[tuple[Any, ...], str]] = []
+    for loc, joint in entries("joints"):
+        between = joint.get("between")
+        if bodies is not None and isinstance(between, list) and len(between) == 2:
+            for body in between:
+                if (name := text(body)) is not None and name not in bodies:
+                    found.append((loc, unknown_body("between", name, bodies)))
+        deviation = joint.get("deviation")
+        group = text(deviation.get("shared") if isinstance(deviation, dict) else deviation)
+        if shared is not None and group is not None and group not in shared:
+            found.append((loc, unknown_shared_deviation(group, shared)))
+    for section in ("loads", "load_cases", "points"):
+        for loc, item in entries(section):
+            name = text(item.get("body"))
+            if bodies is not None and name is not None and name not in bodies:
+                found.append((loc, unknown_body("body", name, bodies)))
+    for loc, requirement in entries("requirements"):
+        name = text(requirement.get("point"))
+        if points is not None and name is not None and name not in points:
+            found.append((loc, unknown_point(name, points)))
+    for loc, deviation in entries("deviations"):
+        name = text(deviation.get("body"))
+        if bodies is not None and name is not None and name not in bodies:
+            found.append((loc, unknown_deviation_body(name, bodies)))
+    return [(_position(loc, data), (_entry(list(loc), data)[0], what)) for loc, what in found]
 
 
 class _AnyJoint(Joint):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING, Annotated, Any, Literal
@@ -88,6 +88,41 @@ def listing(names: Iterable[str], most: int = 10) -> str:
     names = list(names)
     text = ", ".join(names[:most])
     return text + (f", ... (and {len(names) - most} more)" if len(names) > most else "")
+
+
+def unknown_body(field: str, body: str, bodies: Sequence[str]) -> str:
+    """The problem of a ``field`` that names a body the model does not have
+    (the same words whether the rest of the file reads or not)."""
+    return f"{field}: unknown body '{body}'; bodies are: {listing(bodies)}." + suggest(body, bodies)
+
+
+def unknown_point(point: str, points: Sequence[str]) -> str:
+    """The problem of a requirement on a point the model does not have."""
+    known = (
+        f"points are: {listing(points)}"
+        if points
+        else "the model has no 'points' section; add the point there"
+    )
+    return f"point: unknown point '{point}'; {known}." + suggest(point, points)
+
+
+def unknown_shared_deviation(shared: str, names: Sequence[str]) -> str:
+    """The problem of a joint that takes a shared deviation the model does not have."""
+    known = listing(f"'{n}'" for n in names) if names else "none"
+    return (
+        f"deviation: unknown shared deviation '{shared}'; the 'deviations' section has "
+        f"{known}." + suggest(shared, names)
+    )
+
+
+def unknown_deviation_body(body: str, bodies: Sequence[str]) -> str:
+    """The problem of a shared deviation made on a body the model does not have."""
+    return (
+        f"body: there is no body '{body}'; the bodies are "
+        + listing(f"'{b}'" for b in bodies)
+        + "."
+        + suggest(body, bodies)
+    )
 
 
 def _schema_one(value: Any) -> Any:
@@ -248,13 +283,7 @@ class Model(BaseModel):
             for body in (a, b):
                 if body not in body_set:
                     unknown_between = True
-                    found.append(
-                        EntryError(
-                            entry,
-                            f"between: unknown body '{body}'; bodies are: {listing(names)}."
-                            + suggest(body, names),
-                        )
-                    )
+                    found.append(EntryError(entry, unknown_body("between", body, names)))
             if a == b:
                 found.append(
                     EntryError(
@@ -274,13 +303,7 @@ class Model(BaseModel):
             sections += [(f"load_cases.{case}[{i}]", load) for i, load in enumerate(loads)]
         for entry, load in sections:
             if load.body not in body_set:
-                found.append(
-                    EntryError(
-                        entry,
-                        f"body: unknown body '{load.body}'; bodies are: {listing(names)}."
-                        + suggest(load.body, names),
-                    )
-                )
+                found.append(EntryError(entry, unknown_body("body", load.body, names)))
             if load.body in grounds:
                 found.append(
                     EntryError(
@@ -298,25 +321,14 @@ class Model(BaseModel):
             if point.body not in body_set:
                 found.append(
                     EntryError(
-                        f"points[{i}] '{point.name}'",
-                        f"body: unknown body '{point.body}'; bodies are: {listing(names)}."
-                        + suggest(point.body, names),
+                        f"points[{i}] '{point.name}'", unknown_body("body", point.body, names)
                     )
                 )
         point_names = [p.name for p in self.points]
         for i, req in enumerate(self.requirements):
             if req.point not in point_names:
-                known = (
-                    f"points are: {listing(point_names)}"
-                    if point_names
-                    else "the model has no 'points' section; add the point there"
-                )
                 found.append(
-                    EntryError(
-                        f"requirements[{i}]",
-                        f"point: unknown point '{req.point}'; {known}."
-                        + suggest(req.point, point_names),
-                    )
+                    EntryError(f"requirements[{i}]", unknown_point(req.point, point_names))
                 )
         found += _check_smallest_plays(self)
         found += _check_shared_deviations(self)
@@ -495,12 +507,9 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
         if shared is not None:
             used.add(shared)
             if shared not in names:
-                known = listing(f"'{n}'" for n in names) if names else "none"
                 found.append(
                     EntryError(
-                        f"joints[{i}] '{joint.name}'",
-                        f"deviation: unknown shared deviation '{shared}'; the "
-                        f"'deviations' section has {known}." + suggest(shared, names),
+                        f"joints[{i}] '{joint.name}'", unknown_shared_deviation(shared, names)
                     )
                 )
     joints = {joint.name for joint in model.joints}
@@ -519,15 +528,7 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
             )
             continue
         if dev.body not in bodies:
-            found.append(
-                EntryError(
-                    entry,
-                    f"body: there is no body '{dev.body}'; the bodies are "
-                    + listing(f"'{b}'" for b in bodies)
-                    + "."
-                    + suggest(dev.body, bodies),
-                )
-            )
+            found.append(EntryError(entry, unknown_deviation_body(dev.body, bodies)))
             continue
         if dev.name not in used:
             found.append(
