@@ -487,7 +487,7 @@ def _contributions_table(
 
 def render_tolerances(result: TolerancesResult, source: str, console: Console) -> None:
     """The report of ``jointplay tolerances``: per requirement, the worst case
-    (the bound over the envelope, and the linear estimate where it agrees),
+    (the greatest over the tolerances' limits, and the linear estimate where it agrees),
     RSS where the measure is linear, and Monte Carlo, side by side (mm; ppm
     out of the limits)."""
     mc = result.montecarlo
@@ -496,8 +496,10 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
     for play, words in result.linear.plays_described.items():
         head.append(f"  {play}: {words}\n")
     head.append(
-        "worst case: the measure's greatest value over the worst-case envelope (a certified "
-        "equilibrium), with the linear stack y0 -/+ sum |s| T / 2 as an estimate where it "
+        "worst case: the measure's greatest value over every combination of the tolerances' "
+        "limits (each a certified equilibrium; with deviation zones, over every position they "
+        "allow), passed only if no Monte Carlo sample goes past it, with the linear stack "
+        "y0 -/+ sum |s| T / 2 as an estimate where it "
         "agrees; RSS: sigma = sqrt(sum (s sigma)^2), normal law, only where the measure is "
         f"linear over the ranges; Monte Carlo: {mc.samples:,} sets of parts (seed "
         f"{result.settings.seed}), ppm with its {result.settings.confidence:.0%} interval. "
@@ -539,7 +541,7 @@ def _tolerance_table(r: Any, samples: int) -> list[Table | Text]:
     for name in ("", "worst case", "RSS", "Monte Carlo"):
         table.add_column(name, justify="left" if not name else "right")
     verdict = "pass" if r.worst_case_passes else "FAIL"
-    bound = f"within -/+{r.worst:.5g}" if r.two_sided else f"at most {r.worst:.5g}"
+    bound = f"within -/+{r.worst:.5g}" if r.two_sided else f"up to {r.worst:.5g}"
     na = NOT_APPLICABLE
     rss = r.rss_applies
 

@@ -5,14 +5,15 @@ results side by side"), for each requirement's measure y: |d| of its point
 (one-sided: y <= L), or the component d . u along its direction (two-sided:
 -L <= y <= L).
 
-- *Worst case*: the bound, y's greatest value over the worst-case
-  envelope (``worstcase.py``: the plays at their upper limits, every
-  combination of the varying loads' limits and mean, the deviation zones),
-  with the configuration that reaches it. Beside it the *linear estimate*
+- *Worst case*: y's greatest value over the tolerances' limits
+  (``worstcase.py``: every combination of the plays' lower and upper limits
+  and of the varying loads' limits and mean, or the deviation zones'
+  support), with the configuration that reaches it; it passes only if no
+  Monte Carlo sample goes past it. Beside it the *linear estimate*
   (arithmetic stack) y0 -/+ sum_i |s_i| T_i / 2, from the contributions'
   sensitivities s_i at the nominal and the tolerance widths T_i (where the
   contacts change at the nominal, each side's own slope): shown only where
-  it agrees with the bound.
+  it agrees with the worst case.
 - *RSS*, only where y is linear over the ranges (``linearity.py``: each
   tolerance at its limits and a small random design against the slopes'
   prediction): sigma = sqrt(sum_i (s_i sigma_i)^2); Cp = (USL - LSL) / (6
@@ -20,11 +21,11 @@ results side by side"), for each requirement's measure y: |d| of its point
   (one-sided: (USL - y0) / (3 sigma)); ppm from the normal law of that mean
   and sigma. Where y is not linear (the touching contacts change over the
   ranges), these are NaN and the check says which tolerance bends y: the
-  verdict comes from the bound and the Monte Carlo.
+  verdict comes from the worst case and the Monte Carlo.
 - *Monte Carlo*: the samples' mean m and standard deviation s; Pp and Ppk as
   Cp and Cpk with m and s; ppm the fraction of samples outside, with its
   Wilson interval (from 0 when no sample fails); the samples' range, and
-  how many of them pass the bound (none, on every bundled example: a test).
+  how many of them pass the worst case (none, on every bundled example: a test).
 """
 
 from __future__ import annotations
@@ -90,10 +91,10 @@ def _normal_ppm(low: float | None, high: float, mean: float, sigma: float) -> fl
 class RequirementTolerances:
     """One requirement's figures, worst case / RSS / Monte Carlo (mm, ppm).
 
-    ``worst``: the bound (``worstcase.py``), the greatest value of the
+    ``worst``: the worst case (``worstcase.py``), the greatest value of the
     requirement's measure, reached at ``worst_at``. ``linear_low`` to
     ``linear_high``: the linear stack, an estimate, shown where it agrees
-    with the bound. RSS (sigma, Cp, Cpk, ppm) only where the measure is
+    with the worst case. RSS (sigma, Cp, Cpk, ppm) only where the measure is
     linear over the ranges (``linear``; else NaN, and ``linear_why`` says
     why)."""
 
@@ -101,7 +102,7 @@ class RequirementTolerances:
     two_sided: bool  # along a direction: -L <= d . u <= L; else |d| <= L
     nominal: float  # the measure at the nominal (mean) plays
     kink: bool  # the contacts change at the nominal: the linear figures are one-sided slopes
-    worst: float  # the bound: the requirement's measure at its greatest (mm)
+    worst: float  # the requirement's measure at its greatest over the limits (mm)
     worst_at: str  # the configuration that reaches it
     worst_over: str  # over which sets of parts and loads
     worst_signed: float | None  # along a direction: d . u at the worst case
@@ -131,7 +132,7 @@ class RequirementTolerances:
     @property
     def linear_agrees(self) -> bool:
         """Whether the linear estimate's greatest value of the requirement's
-        measure agrees with the bound (within what the linearity check
+        measure agrees with the worst case (within what the linearity check
         allows the slopes' prediction): only then is it shown."""
         top = max(abs(self.linear_low), abs(self.linear_high))
         top = top if self.two_sided else self.linear_high
@@ -139,18 +140,20 @@ class RequirementTolerances:
         return self.linear and abs(top - self.worst) <= LINEAR_ERROR_SHARE * half + ROUND_OFF_MM
 
     def beyond_words(self, samples: int) -> str:
-        """What it means when samples pass the bound ('' if none do)."""
+        """What it means when samples pass the worst case ('' if none do)."""
         if not self.beyond_bound:
             return ""
         return (
-            f"{self.beyond_bound:,} of the {samples:,} samples pass the worst case: the "
-            "bound is taken at the plays' upper limits and the loads' limits and mean, and "
-            "these parts go further between them; the Monte Carlo range is the better guide"
+            f"{self.beyond_bound:,} of the {samples:,} samples pass the worst case (up to "
+            f"{self.mc_high:.6g} mm): it is taken at the tolerances' limits, and these parts "
+            "go further between them; the worst case does not pass, and the Monte Carlo "
+            "range is the better guide"
         )
 
     @property
     def worst_case_passes(self) -> bool:
-        return self.worst <= self.requirement.max_displacement
+        """Only a worst case that no sample passes can pass the requirement."""
+        return self.worst <= self.requirement.max_displacement and not self.beyond_bound
 
     @property
     def rss_applies(self) -> bool:
@@ -207,7 +210,7 @@ class Tolerances:
     """Settings of the side-by-side study; ``run`` returns a ``TolerancesResult``.
 
     ``samples``, ``seed``, ``confidence``, ``case``: those of the Monte Carlo
-    study (``MonteCarlo``); the worst case is the bound over the envelope
+    study (``MonteCarlo``); the worst case is the greatest over the limits
     (``worstcase.py``); the linear estimate, RSS and the linearity check
     come from ``Contributions``."""
 

@@ -1,27 +1,28 @@
-"""The worst case of a requirement's measure over the worst-case envelope.
+"""The worst case of a requirement's measure over the tolerances' limits.
 
 The size a requirement bounds (a point's |d|, or |d . u| along the
-requirement's direction) over every set of parts the tolerances allow, taken where the
-worst-case envelope (``envelope.py``) takes it:
+requirement's direction), taken as tolerance analysts take a worst case,
+at the limits, but on the mechanism's own equilibria:
 
-- the plays at their upper limits (each clearance domain holds the smaller
-  ones);
-- without deviation zones: every combination of the varying load
-  components at their limits and mean (their limits only where three
-  values each would be more than ``MOST_LOAD_SETS``), each solved as the
-  model's own equilibrium, springs and all (one batch, certified answers).
-  The worst case is the largest of those answers, reached at the load set
-  it names: exact for those sets;
+- without deviation zones: every combination of the toleranced plays at
+  their lower and upper limits with the varying load components at their
+  limits and mean (their limits only where three values each would be more
+  than ``MOST_LOAD_SETS``), each solved as the model's own equilibrium,
+  springs and all (one batch, certified answers). The worst case is the
+  largest of those answers, at the combination it names: exact there. A
+  smaller play can push a point further (a gear between two bearings tilts
+  more about a tighter one), so the lower limits count as much as the upper
+  ones; between the limits a part may still go further, and the Monte Carlo
+  beside it says so when one of its samples does (``Tolerances``);
 - with deviation zones: the support of every position the plays and the
   zones allow (the envelope's program over the positions and the
-  deviations together), an upper bound of every set of parts whatever the
-  loads: along u, the larger of ``max u . d`` and ``-min u . d``, exactly;
-  for |d|, the envelope's largest displacement (its climb from the
-  farthest supports).
+  deviations together), whatever the loads: along u, the larger of
+  ``max u . d`` and ``-min u . d``; for |d|, the envelope's largest
+  displacement (its climb from the farthest supports).
 
 The linear stack (``tolerances.py``) extrapolates slopes at the nominal;
 where the touching contacts change over the ranges (a load that changes
-side), it can be far off, and this bound is what holds.
+side), it can be far off, and these equilibria are what holds.
 """
 
 from __future__ import annotations
@@ -82,35 +83,36 @@ def _plays_words(inputs: Inputs) -> str:
 def _over_load_sets(
     model: Model, inputs: Inputs, measures: list[Measure], case: str | None, source: str
 ) -> tuple[Reach, ...]:
-    lmap = inputs.lmap
-    nl = len(lmap.variables)
-    levels = 3 if 3**nl <= MOST_LOAD_SETS else 2
-    if levels**nl > MOST_LOAD_SETS:
+    lmap, plays = inputs.lmap, inputs.pmap.variables
+    nl, corners = len(lmap.variables), 2 ** len(plays)
+    levels = 3 if corners * 3**nl <= MOST_LOAD_SETS else 2
+    if corners * levels**nl > MOST_LOAD_SETS:
         raise OptionError(
-            f"{nl} load components vary: {levels}^{nl} load combinations are more than "
-            f"the worst case's {MOST_LOAD_SETS:,}; fix some of them",
+            f"{len(plays)} plays and {nl} load components vary: {corners * levels**nl:,} "
+            f"combinations of their limits are more than the worst case's "
+            f"{MOST_LOAD_SETS:,}; fix some of them, or run montecarlo",
             source=source,
         )
-    grids = [np.linspace(v.value.low, v.value.high, levels) for v in lmap.variables]
-    combos = list(itertools.product(*grids))  # one empty combination when none varies
-    loads = np.array(combos, dtype=float).reshape(len(combos), nl)
-    highs = np.array([v.value.high for v in inputs.pmap.variables])
-    rows = np.hstack([np.tile(highs, (len(loads), 1)), loads])
+    grids = [(v.value.low, v.value.high) for v in plays]
+    grids += [np.linspace(v.value.low, v.value.high, levels) for v in lmap.variables]
+    rows = np.array(list(itertools.product(*grids)), dtype=float).reshape(-1, len(grids))
     y = measured(model, measures, solve_sets(model, case, rows))
-    plays = _plays_words(inputs)
     each = "both limits" if levels == 2 else "the limits and the mean"
     over = (
-        f"{len(loads):,} load sets ({each} of each varying load component)"
-        if nl
-        else "the model's loads"
+        " and ".join(
+            ([f"both limits of each play ({corners:,} sets)"] if plays else [])
+            + ([f"{each} of each varying load component"] if nl else [])
+        )
+        or "the model's loads"
     )
 
     def at(j: int) -> str:
+        names = [v.label for v in plays] + [v.label for v in lmap.variables]
         words = ", ".join(
-            f"{v.label} = {value:g} {unit_of(v.label)}"
-            for v, value in zip(lmap.variables, loads[j], strict=True)
+            f"{name} = {value:g} {unit_of(name)}"
+            for name, value in zip(names, rows[j], strict=True)
         )
-        return plays + (f", {words}" if words else "")
+        return words or "the plays as given"
 
     out = []
     for k, m in enumerate(measures):
