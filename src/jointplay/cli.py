@@ -869,7 +869,7 @@ def _guarded(run: Any, as_json: bool) -> None:
     except JointplayError as exc:
         if as_json:
             status = {2: "invalid", 3: "unbounded"}.get(exc.exit_code, "error")
-            doc: dict[str, Any] = {"status": status, "message": str(exc)}
+            doc: dict[str, Any] = {"status": status, "kind": exc.label, "message": str(exc)}
             if isinstance(exc, UnboundedMechanismError):
                 doc.update(body=exc.body, motion=exc.motion)
             typer.echo(json.dumps(doc, indent=2))

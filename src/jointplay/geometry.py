@@ -122,6 +122,7 @@ def describe_motion(
     if w * ell <= 1e-9 * v:
         return f"translation along {_axis_words(v_origin, signed)}"
     axis_point = cross(omega, v_origin) / w**2
+    axis_point = np.where(np.abs(axis_point) <= 1e-9 * ell, 0.0, axis_point) + 0.0  # round-off
     pitch = float(omega @ v_origin) / w**2
     if np.linalg.norm(axis_point) <= 1e-9 * ell:
         where = f"rotation about {_axis_words(omega, signed)}"

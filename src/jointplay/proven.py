@@ -33,6 +33,8 @@ class Resolution:
     moment: float
     #: N: how far the certificate lets a body's forces miss their balance.
     balance: float = 0.0
+    #: N*mm: the largest force's work over the smallest length proven.
+    energy: float = 0.0
 
     @classmethod
     def of(
@@ -41,21 +43,23 @@ class Resolution:
         ell_mm: float,
         largest_force: float = 0.0,
         settings: SolverSettings = DEFAULT,
+        at_least: float = 0.0,
     ) -> Resolution:
         """``play_mm``: the largest play; ``largest_force``: the largest force
         in the balance (N, a moment counting as moment / ``ell_mm``; 0 where
-        only positions are read)."""
-        length = settings.feasibility_tolerance * play_mm
+        only positions are read); ``at_least``: a route's own length
+        tolerance (mm) where it certifies positions to less."""
+        length = max(settings.feasibility_tolerance * play_mm, at_least)
         force = settings.force_resolution * largest_force
         balance = settings.equilibrium_tolerance * largest_force
-        return cls(length, length / ell_mm, force, force * ell_mm, balance)
+        return cls(length, length / ell_mm, force, force * ell_mm, balance, length * largest_force)
 
 
 #: A resolution that zeroes nothing.
 EXACT = Resolution(0.0, 0.0, 0.0, 0.0)
 
 
-def proven(values: FloatArray | float, step: float) -> FloatArray:
+def proven(values: FloatArray | float, step: FloatArray | float) -> FloatArray:
     """``values`` with every component smaller than ``step`` given as 0 (and
     no -0)."""
     v = np.asarray(values, dtype=float)

@@ -426,7 +426,7 @@ def build_result(
     )
     wrench[~T.is_ball] = (T.wrench_fixed @ rigid_forces).reshape(-1, 6)
     gap = np.ones(nc)
-    gap[T.is_ball] = used
+    gap[T.is_ball] = proven(used, settings.feasibility_tolerance)
     past = np.zeros(nc)
     past[T.is_ball] = penetration
     is_turn = ~np.isnan(T.turn_lever)
@@ -489,7 +489,7 @@ def build_result(
     joints = Rows(T.joint_name, table.row)
 
     points = points_of(model, bodies, res)
-    energy = -float(g @ x) + 0.0  # no load: 0, not -0
+    energy = float(proven(-float(g @ x), res.energy))  # no load: 0, not -0
     reach_mm = stack.r * asm.s + penetration
     return Result(
         "optimal",

@@ -328,6 +328,14 @@ def _capability(v: float) -> str:
     return "–" if v != v else f"{v:.3g}"  # NaN: not defined for a one-sided limit
 
 
+def _rank(co: ContributionsResult, k: int, i: int) -> float:
+    """The order of the contributions' rows: the worst-case share where the
+    measure is linear, else the total Sobol' index (as the text sorts them)."""
+    if co.sobol is None or co.linear(k):
+        return float(co.worst_case[k, i])
+    return float(co.sobol.total[k, i])
+
+
 def _num(v: float, digits: int = 6) -> str:
     v = float(v)
     if v == 0.0:
@@ -531,12 +539,11 @@ class _Page:
         from jointplay.present.plot import clearance_figure, mechanism_figure
 
         self.section("Solution" if case is None else f"Solution, load case '{case}'")
-        cert = result.certificate
+        from jointplay.present.textreport import certificate_words
+
         self.parts.append(
-            f'<p class="certificate">Status <b>{html.escape(result.status)}</b>; certificate '
-            f"{'holds' if cert.certified else 'FAILS'} ({html.escape(cert.method)}): past "
-            f"clearance {cert.feasibility_mm:.2g} mm, imbalance "
-            f"{result.equilibrium_residual:.2g} of the largest force; potential energy "
+            f'<p class="certificate">Status <b>{html.escape(result.status)}</b>; '
+            f"{html.escape(certificate_words(result))}; potential energy "
             f"{_num(result.potential_energy, 9)} N·mm.</p>"
         )
         for text in result.free_motions:
@@ -714,10 +721,11 @@ class _Page:
         def variance(k: int, i: int) -> tuple[str, str]:
             if sobol is None or co.linear(k):
                 return "", ""
-            f, t = sobol.first_interval[k, i], sobol.total_interval[k, i]
+            from jointplay.present.textreport import sobol_share
+
             return (
-                f"{100 * sobol.first[k, i]:.1f} % [{100 * f[0]:.0f}, {100 * f[1]:.0f}]",
-                f"{100 * sobol.total[k, i]:.1f} % [{100 * t[0]:.0f}, {100 * t[1]:.0f}]",
+                sobol_share(float(sobol.first[k, i]), sobol.first_interval[k, i]),
+                sobol_share(float(sobol.total[k, i]), sobol.total_interval[k, i]),
             )
 
         self.parts.append(
@@ -743,7 +751,7 @@ class _Page:
                         "kink: the contacts change here" if co.kink[k, i] else "",
                     )
                     for k, m in enumerate(co.measures)
-                    for i, p in sorted(enumerate(co.plays), key=lambda ip: -wc[k, ip[0]])
+                    for i, p in sorted(enumerate(co.plays), key=lambda ip: -_rank(co, k, ip[0]))
                 ],
                 "Sensitivities at the nominal, and shares of the stacks (the largest share "
                 "first, as in the Pareto); where a measure is not linear over the ranges the "

@@ -116,26 +116,39 @@ def _xyz_table(title: str, leading: list[str]) -> Table:
     return table
 
 
+def sobol_share(v: float, interval: Any) -> str:
+    """A Sobol' index in percent with its interval, to one decimal each (an
+    estimate's noise can take it below 0 or past 100: printed as it is)."""
+    lo, hi = (100 * float(x) for x in interval)
+    return f"{100 * v:.1f} [{lo:.1f}, {hi:.1f}]"
+
+
+def certificate_words(result: Result) -> str:
+    """The certificate's line: what it proves, not the round-off it measured
+    (the text and the report alike)."""
+    cert, res = result.certificate, result.resolution
+    springs = any(c.penetration > 0 for j in result.joints.values() for c in j.contacts)
+    if cert.certified:
+        return (
+            f"certificate: holds ({cert.method}): no contact past its "
+            f"{'reach (its play, and its spring under its force)' if springs else 'play'} by "
+            f"{res.length:.2g} mm or more; the loads and contact forces of every body "
+            f"balance to {res.balance:.2g} N ({EQUILIBRIUM_TOLERANCE:g} of the largest force)"
+        )
+    return (
+        f"certificate: FAILED ({cert.method}): past clearance {cert.feasibility_mm:.1e} "
+        f"mm, imbalance {result.equilibrium_residual:.1e} of the largest force"
+    )
+
+
 def render(
     model: Model, result: Result, source: str, console: Console, case: str | None = None
 ) -> None:
-    cert = result.certificate
     title = model.name or source
     header = Text()
     header.append(f"{title}" + (f" - load case '{case}'" if case else "") + "\n", style="bold")
     header.append(f"status: {result.status}\n")
-    res = result.resolution
-    if cert.certified:  # what it proves, not the round-off it measured
-        header.append(
-            f"certificate: holds ({cert.method}): no contact past its play by "
-            f"{res.length:.2g} mm or more; the loads and contact forces of every body "
-            f"balance to {res.balance:.2g} N ({EQUILIBRIUM_TOLERANCE:g} of the largest force)\n"
-        )
-    else:
-        header.append(
-            f"certificate: FAILED ({cert.method}): past clearance {cert.feasibility_mm:.1e} "
-            f"mm, imbalance {result.equilibrium_residual:.1e} of the largest force\n"
-        )
+    header.append(certificate_words(result) + "\n")
     energy = result.potential_energy + 0.0  # no "-0" when nothing moves
     header.append(f"potential energy of the loads: {energy:.9g} N*mm\n")
     header.append(
@@ -608,17 +621,13 @@ def _variance_table(
             min_width=widest if name == "variable" and whole_names else None,
         )
 
-    def share(v: float, interval: Any) -> str:
-        lo, hi = (100 * float(x) for x in interval)
-        return f"{100 * v:.1f} [{lo:.0f}, {hi:.0f}]"
-
     for i in order:
         total = float(sobol.total[k, i])
         row = [
             result.plays[i],
             f"{result.width[i]:.6g}",
-            share(float(sobol.first[k, i]), sobol.first_interval[k, i]),
-            share(total, sobol.total_interval[k, i]),
+            sobol_share(float(sobol.first[k, i]), sobol.first_interval[k, i]),
+            sobol_share(total, sobol.total_interval[k, i]),
             f"{100 * float(sobol.interactions[k, i]):.1f}",
         ]
         table.add_row(*row, *([_bar(min(max(100 * total, 0.0), 100.0))] if bars else []))

@@ -342,7 +342,10 @@ def _build(
         [np.r_[jr.reaction_force, jr.reaction_moment] for jr in joints.values()]
     ).reshape(-1, 6)
     residual = equilibrium_residual(asm, reactions, loads, place)
-    res = Resolution.of(asm.s, asm.ell, largest_force(asm, reactions, loads), st)
+    # positions to what this route certifies them (exact_tolerance_mm)
+    res = Resolution.of(
+        asm.s, asm.ell, largest_force(asm, reactions, loads), st, at_least=st.exact_tolerance_mm
+    )
     bodies = {
         n: replace(
             b, translation=proven(b.translation, res.length), rotation=proven(b.rotation, res.angle)
@@ -376,14 +379,21 @@ def _build(
 def _proven_joint(jr: JointResult, res: Resolution) -> JointResult:
     """``jr`` to what the answer proves (``proven``)."""
     contacts = tuple(
-        replace(c, force=proven(c.force, res.force), torque=proven(c.torque, res.moment))
+        replace(
+            c,
+            force=proven(c.force, res.force),
+            torque=proven(c.torque, res.moment),
+            point=proven(c.point, res.length),
+        )
         for c in jr.contacts
     )
+    # the sum of the contacts as printed (a weld has none: its own reaction)
+    force = sum((c.force for c in contacts), np.zeros(3)) if contacts else jr.reaction_force
     return replace(
         jr,
         translation=proven(jr.translation, res.length),
         rotation=proven(jr.rotation, res.angle),
         contacts=contacts,
-        reaction_force=proven(jr.reaction_force, res.force),
+        reaction_force=proven(force, res.force) if not contacts else force,
         reaction_moment=proven(jr.reaction_moment, res.moment),
     )

@@ -45,6 +45,7 @@ from jointplay.assembly import assemble
 from jointplay.errors import StudyError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
+from jointplay.proven import Resolution, proven
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.variation import (
     DeviationMap,
@@ -203,6 +204,10 @@ class Contributions:
         sensitivity, up, down, kink = _grouped(groups, sensitivity, up, down, kink)
         width = np.array([width[g[0]] for g in groups])
         sigma = np.array([sigma[g[0]] for g in groups])
+        # a slope whose effect over its whole tolerance is below the length the
+        # positions prove is their round-off: 0 (jointplay.proven)
+        step = Resolution.of(asm.s, asm.ell).length / np.where(width > 0, width, 1.0)
+        sensitivity, up, down = (proven(v, step) for v in (sensitivity, up, down))
         from jointplay.studies.linearity import check_linearity
         from jointplay.studies.parts import Inputs
 

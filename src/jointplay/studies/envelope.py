@@ -73,7 +73,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 #: The directions always taken first: +-X, +-Y, +-Z (the exact extents).
-AXES = np.vstack([np.eye(3), -np.eye(3)])
+AXES = np.vstack([np.eye(3), -np.eye(3)]) + 0.0  # + 0.0: no -0 in the output
 #: Steps of the climb from a support point to the largest displacement.
 CLIMB_STEPS = 30
 #: Smallest probe force (N): a smaller one vanishes against the weights' round-off.

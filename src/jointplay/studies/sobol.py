@@ -32,11 +32,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from jointplay.errors import ModelError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
 from jointplay.studies.contributions import _measures
 from jointplay.studies.parts import inputs_of, measured, solve_sets
+from jointplay.studies.variation import nothing_varies
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -75,11 +75,7 @@ class Sobol:
         check_case(model, self.case, source)
         inputs = inputs_of(model, self.case, source)
         if not inputs.groups:
-            raise ModelError(
-                "no play, load or deviation varies, so nothing has a share of the variance",
-                source=source,
-                entry="joints",
-            )
+            raise nothing_varies("nothing has a share of the variance", source)
         measures = _measures(model, source)
         n, d = self.samples, len(inputs.groups)
         units = inputs.unit_groups

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from jointplay.errors import JointplayError, ModelError, UnboundedMechanismError
+from jointplay.errors import JointplayError, ModelError, OptionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model, check_case
@@ -224,10 +224,10 @@ class Sweep:
             try:
                 _locate(base, v.path)
             except ValueError as exc:
-                raise ModelError(str(exc), source=source, entry=f"--vary {v.path}") from None
+                raise OptionError(str(exc), source=source, entry=f"--vary {v.path}") from None
         if self.rotate is not None and not 0 <= self.rotate.load < len(model.loads):
             n = len(model.loads)
-            raise ModelError(
+            raise OptionError(
                 f"--rotate-load {self.rotate.load}: the model has {n} load"
                 f"{'s' if n != 1 else ''} in 'loads' (counted from 0)"
                 + (f"; give 0 to {n - 1}" if n > 1 else "; give 0" if n else "; add one to turn"),

@@ -93,7 +93,7 @@ def _over_load_sets(
             f"{MOST_LOAD_SETS:,}; fix some of them, or run montecarlo",
             source=source,
         )
-    grids = [(v.value.low, v.value.high) for v in plays]
+    grids: list[Any] = [(v.value.low, v.value.high) for v in plays]
     grids += [np.linspace(v.value.low, v.value.high, levels) for v in lmap.variables]
     rows = np.array(list(itertools.product(*grids)), dtype=float).reshape(-1, len(grids))
     y = measured(model, measures, solve_sets(model, case, rows))
