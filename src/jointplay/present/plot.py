@@ -74,9 +74,22 @@ LABEL_OFFSETS = tuple(
 )
 #: Pixels kept between two labels, and between a label and its panel's frame.
 LABEL_GAP = 3.0
+#: A mark's size (pixels) that the other marks' labels keep clear of.
+MARK_SIZE = 6.0
 #: In the 3D panel a direction spans at least this share of the longest (its
 #: ticks need room); the 2D views keep true scale.
 THIN_3D = 0.3
+#: A 2D view's shorter side spans at least this share of its longer one (true
+#: scale kept): a long shaft's side view gets room above and below, not a strip.
+STRIP = 0.3
+#: The 3D panel's box shrinks (matplotlib's zoom) until its tick and axis
+#: labels lie inside its slot, in at most this many tries.
+FIT_3D_TRIES = 4
+#: An arrow seen nearly end on in a view, shorter there than this share of its
+#: length, is left out of that view (it would be a dot with a head).
+END_ON = 0.05
+#: The arrows' shaft width in the views (inches): the same in every panel.
+ARROW_WIDTH = 0.022
 #: Joint views under the mechanism figure, and in the joints figure, at most:
 #: a larger mechanism shows its most loaded joints.
 JOINT_VIEWS_SHOWN = 8
@@ -86,6 +99,9 @@ LEGEND_BODIES = 6
 ARROW = r"$\rightarrow$"  # a legend marker
 #: Characters per line of a joint panel's note (a panel is about this wide).
 NOTE_WIDTH = 34
+#: A title's characters are about this share of its font size wide, on
+#: average: a figure's title is broken into lines as wide as the figure.
+TITLE_CHAR_WIDTH = 0.55
 
 
 def save(fig: Figure, path: Path | str) -> Path:
@@ -119,15 +135,18 @@ def mechanism_figure(
     chosen = most_loaded_joints(model, result, JOINT_VIEWS_SHOWN) if joints else []
     views = [joint_view(model.joint(name), result.joints[name]) for name in chosen]
     joint_rows = math.ceil(len(views) / JOINTS_PER_ROW)
-    lo, hi = _padded_bounds(scene)
-    span = hi - lo
     shown = shown_views(scene)
+
+    def tall(h: int, v: int) -> float:  # a view's height over its width
+        (x0, x1), (y0, y1) = view_limits(scene, h, v)
+        return (y1 - y0) / (x1 - x0)
+
     if len(shown) == 3:
         # the XY and XZ views share a row: as tall as the taller needs at half the width
-        heights = [4.6, float(np.clip(6.2 * max(span[1], span[2]) / span[0], 1.6, 6.0))]
+        heights = [4.6, float(np.clip(6.2 * max(tall(0, 1), tall(0, 2)), 1.6, 6.0))]
     else:  # a planar mechanism: the 3D panel and its plane, side by side
         _, h, v = shown[0]
-        heights = [float(np.clip(6.2 * span[v] / span[h], 3.0, 6.0))]
+        heights = [float(np.clip(6.2 * tall(h, v), 3.0, 6.0))]
     heights += [3.2] * joint_rows
     # room between the panels: the 3D panel's axis labels stand out of its box
     layout = ConstrainedLayoutEngine(w_pad=0.1, wspace=0.05)
@@ -155,7 +174,8 @@ def mechanism_figure(
         what += f", case '{case}'"
     if len(chosen) < len(with_play(model)) and joints:
         what += f" (the views of the {len(chosen)} most loaded of {len(with_play(model))} joints)"
-    fig.suptitle(
+    _suptitle(
+        fig,
         f"{what}: displacements and plays ×{scene.magnify:g} "
         f"(largest {scene.largest_displacement:.4g} mm); force arrows to the scale of the "
         "black one"
@@ -164,7 +184,8 @@ def mechanism_figure(
         fontsize=12,
     )
     fig.legend(handles=_legend_handles(scene), loc="outside lower center", ncols=7, fontsize=9)
-    numbered = place_point_labels(fig, model)
+    fit_3d_panel(fig, ax3d, scene)
+    numbered = place_point_labels(fig, model, drawn=True)
     if numbered:  # the points named only by number, named in the legend
         fig.legends[0].remove()
         tags = [
@@ -173,7 +194,8 @@ def mechanism_figure(
         ]
         handles = _legend_handles(scene) + tags
         fig.legend(handles=handles, loc="outside lower center", ncols=7, fontsize=9)
-        place_point_labels(fig, model)  # the legend took room: again, at the final size
+        fit_3d_panel(fig, ax3d, scene)  # the legend took room: again, at the final size
+        place_point_labels(fig, model, drawn=True)
     return fig
 
 
@@ -218,7 +240,9 @@ def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None 
         return fig
     cols = min(len(views), JOINTS_PER_ROW)
     rows = math.ceil(len(views) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.6 * rows), squeeze=False)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(3.6 * cols, 3.6 * rows), squeeze=False, layout="constrained"
+    )
     reach = _common_reach(views)
     for ax, view in zip(axes.flat, views, strict=False):
         draw_joint_view(ax, view, reach)
@@ -226,11 +250,17 @@ def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None 
         ax.set_axis_off()
     played = with_play(model)
     some = "" if len(chosen) == len(played) else f" ({len(chosen)} of {len(played)} with play)"
-    fig.suptitle(
-        f"{model.name or 'mechanism'}: each joint at true size (mm), b relative to a{some}"
+    _suptitle(
+        fig, f"{model.name or 'mechanism'}: each joint at true size (mm), b relative to a{some}"
     )
-    fig.tight_layout()
+    place_point_labels(fig)
     return fig
+
+
+def _suptitle(fig: Figure, text: str, fontsize: float = 12.0) -> None:
+    """The figure's title, broken into lines as wide as the figure."""
+    per_line = int(fig.get_figwidth() * 72 / (TITLE_CHAR_WIDTH * fontsize))
+    fig.suptitle("\n".join(textwrap.wrap(text, per_line)), fontsize=fontsize)
 
 
 def _body_colours(scene: Scene) -> dict[str, str]:
@@ -298,22 +328,67 @@ def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
     # three views beside it are at true scale)
     span = hi - lo
     ax.set_box_aspect(tuple(np.maximum(span, THIN_3D * float(np.max(span)))))
-    # the points' labels in the projection's plane (fixed by the limits and
-    # the view), so that place_point_labels can move them as in the 2D views
-    from mpl_toolkits.mplot3d import proj3d
-
+    # the points' labels in the projection's plane (fixed by the limits, the
+    # box and the view), so that place_point_labels can move them as in the
+    # 2D views
     for k, mk in enumerate(_points(scene), start=1):
-        x, y, _ = proj3d.proj_transform(*mk.at, ax.get_proj())
-        _point_label(ax, mk.label, (float(x), float(y)), k)
+        _point_label(ax, mk.label, (0.0, 0.0), k)
+    _project_labels(ax, scene)
     from matplotlib.ticker import MaxNLocator
 
     for axis, span_i in zip((ax.xaxis, ax.yaxis, ax.zaxis), span, strict=True):
         axis.set_major_locator(MaxNLocator(5 if span_i >= 0.5 * np.max(span) else 3))
-    ax.set_xlabel("X (mm)", labelpad=8)
-    ax.set_ylabel("Y (mm)", labelpad=8)
-    ax.set_zlabel("Z (mm)", labelpad=6)
+    ax.set_xlabel("X (mm)", labelpad=12)
+    ax.set_ylabel("Y (mm)", labelpad=12)
+    ax.set_zlabel("Z (mm)", labelpad=8)
     ax.tick_params(labelsize=7)
-    ax.set_title("3D", loc="left", fontsize=10)
+    ax.set_label("3D")  # named, not titled: a title would float above a flat box
+
+
+def _project_labels(ax: Axes3D, scene: Scene) -> None:
+    """Each point's label at its mark's place in the 3D panel's projection."""
+    from mpl_toolkits.mplot3d import proj3d
+
+    marks = _points(scene)
+    for text in ax.texts:
+        gid = text.get_gid() or ""
+        if gid.startswith("point ") and isinstance(text, Annotation):
+            x, y, _ = proj3d.proj_transform(*marks[int(gid.split()[1]) - 1].at, ax.get_proj())
+            text.xy = (float(x), float(y))
+
+
+def fit_3d_panel(fig: Figure, ax: Axes3D, scene: Scene) -> None:
+    """Shrink the 3D panel's box until its tick and axis labels lie inside the
+    panel's slot: matplotlib's layout leaves them out of a 3D panel's size,
+    and they ran into the next panel ('Z (mm)' over the YZ view, 'X (mm)'
+    over the XY view's reference arrow). Leaves the figure drawn as it stands."""
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    aspect = ax.get_box_aspect()
+    zoom = 1.0
+    for _ in range(FIT_3D_TRIES):
+        fig.canvas.draw()
+        # the slot the layout gave the panel (its drawn box is a square in it)
+        slot = ax.get_position(original=True).transformed(fig.transFigure).padded(-LABEL_GAP)
+        drawn = _decorations_3d(ax, renderer)
+        if _inside(drawn, slot):
+            return
+        # the box's share that fits, with a margin: the labels do not shrink with it
+        share = min(
+            (slot.x1 - slot.x0) / max(drawn.x1 - drawn.x0, 1.0),
+            (slot.y1 - slot.y0) / max(drawn.y1 - drawn.y0, 1.0),
+        )
+        zoom *= max(0.5, 0.95 * min(share, 0.97))
+        ax.set_box_aspect(aspect, zoom=zoom)
+        _project_labels(ax, scene)
+    fig.canvas.draw()
+
+
+def _decorations_3d(ax: Axes3D, renderer: Any) -> Bbox:
+    """The box of the 3D panel's axes, ticks and axis labels (not its texts:
+    the points' labels are placed inside it afterwards)."""
+    boxes = [axis.get_tightbbox(renderer) for axis in (ax.xaxis, ax.yaxis, ax.zaxis)]
+    drawn = [box for box in boxes if box is not None]
+    return Bbox.union(drawn) if drawn else ax.get_window_extent(renderer)
 
 
 def draw_scene_view(
@@ -331,31 +406,35 @@ def draw_scene_view(
         if marks:
             P = np.array([m.at for m in marks])
             ax.scatter(P[:, h], P[:, v], **_marker_style(role))
-    lo, hi = _padded_bounds(scene)
     for k, mk in enumerate(_points(scene), start=1):
         _point_label(ax, mk.label, (mk.at[h], mk.at[v]), k)
     for start, vector, colour in _arrow_groups(scene):
+        seen = np.hypot(vector[:, h], vector[:, v]) > END_ON * np.linalg.norm(vector, axis=1)
+        if not np.any(seen):
+            continue
         ax.quiver(
-            start[:, h],
-            start[:, v],
-            vector[:, h],
-            vector[:, v],
+            start[seen, h],
+            start[seen, v],
+            vector[seen, h],
+            vector[seen, v],
             color=colour,
             angles="xy",
             scale_units="xy",
             scale=1.0,
-            width=0.004,
+            units="inches",
+            width=ARROW_WIDTH,
             zorder=6,
         )
-    ax.set_xlim(lo[h], hi[h])
-    ax.set_ylim(lo[v], hi[v])
+    across, up = view_limits(scene, h, v)
+    ax.set_xlim(*across)
+    ax.set_ylim(*up)
     ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel(f"{'XYZ'[h]} (mm)")
     ax.set_ylabel(f"{'XYZ'[v]} (mm)")
     ax.set_title(title)
     ax.grid(True, linewidth=0.3)
     if reference and scene.force_scale > 0:
-        _reference_arrow(ax, scene.force_scale, lo[h], hi[h] - lo[h])
+        _reference_arrow(ax, scene.force_scale, across[0], across[1] - across[0])
 
 
 def _points(scene: Scene) -> list[Marker]:
@@ -369,21 +448,31 @@ def _point_label(ax: Axes, label: str, at: tuple[float, float], number: int) -> 
     text.set_gid(f"point {number}")
 
 
-def place_point_labels(fig: Figure, model: Model) -> set[int]:
+def place_point_labels(fig: Figure, model: Model | None = None, drawn: bool = False) -> set[int]:
     """Move each point's label to the first place around its mark where it
     lies inside its panel and clear of the labels placed before it; a label
     that fits nowhere gives way to the point's number. Returns the numbers
-    written (for the legend, which names them)."""
-    fig.canvas.draw()  # the layout: where every panel and text sits
+    written (for the legend, which names them). The contacts' labels of the
+    joint panels the same way, clear of the panel's note; one that fits
+    nowhere joins the nearest ('end+, end-'). ``drawn``: the figure was just
+    drawn as it stands (else it is drawn first: where every panel sits)."""
+    if not drawn:
+        fig.canvas.draw()
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     numbered: set[int] = set()
     for ax in fig.axes:
-        placed: list[Bbox] = []
+        _place_contact_labels(ax, renderer)
+        if model is None:
+            continue
+        labels = [
+            t
+            for t in ax.texts
+            if (t.get_gid() or "").startswith("point ") and isinstance(t, Annotation)
+        ]
+        placed = _marks(ax, labels)  # a label covers no other mark
         tags: list[Annotation] = []  # the labels that are numbers
-        for text in ax.texts:
+        for text in labels:
             gid = text.get_gid() or ""
-            if not gid.startswith("point ") or not isinstance(text, Annotation):
-                continue
             number = int(gid.split()[1])
             if not text.get_text():  # its number joined another's
                 continue
@@ -405,11 +494,48 @@ def place_point_labels(fig: Figure, model: Model) -> set[int]:
     return numbered
 
 
-def _place(text: Annotation, ax: Axes, placed: list[Bbox], renderer: Any) -> bool:
-    """Try ``text`` at each of ``LABEL_OFFSETS``; False (and left at the
-    first) if it fits at none."""
+def _place_contact_labels(ax: Axes, renderer: Any) -> None:
+    """A joint panel's contact labels around their marks, clear of each other
+    and of the panel's note; one with no room joins the nearest placed one."""
+    labels = [t for t in ax.texts if t.get_gid() == "contact" and isinstance(t, Annotation)]
+    notes = [t.get_window_extent(renderer) for t in ax.texts if t.get_gid() == "note"]
+    notes += _marks(ax, labels)  # a label covers no other mark
+    done: list[Annotation] = []
+    for text in labels:
+        first = text.xyann
+        boxes = notes + [t.get_window_extent(renderer) for t in done]
+        if _place(text, ax, boxes, renderer, first=first) or not done:
+            done.append(text)
+            continue
+        near = min(done, key=lambda t: math.dist(t.xy, text.xy))
+        near.set_text(f"{near.get_text()}, {text.get_text()}")
+        text.set_text("")
+        others = notes + [t.get_window_extent(renderer) for t in done if t is not near]
+        _place(near, ax, others, renderer, first=near.xyann)
+
+
+def _marks(ax: Axes, labels: Sequence[Annotation]) -> list[Bbox]:
+    """A small box (pixels) about each labelled mark."""
+    half = MARK_SIZE / 2
+    out = []
+    for text in labels:
+        x, y = ax.transData.transform(text.xy)
+        out.append(Bbox.from_extents(x - half, y - half, x + half, y + half))
+    return out
+
+
+def _place(
+    text: Annotation,
+    ax: Axes,
+    placed: list[Bbox],
+    renderer: Any,
+    first: tuple[float, float] | None = None,
+) -> bool:
+    """Try ``text`` at ``first``, then at each of ``LABEL_OFFSETS``; False
+    (and left at the first) if it fits at none."""
     frame = ax.get_window_extent(renderer).padded(-LABEL_GAP)
-    for dx, dy in (*LABEL_OFFSETS, LABEL_OFFSETS[0]):
+    start = first or LABEL_OFFSETS[0]
+    for dx, dy in (start, *LABEL_OFFSETS, start):
         text.xyann = (dx, dy)
         text.set_horizontalalignment("left" if dx > 0 else "right" if dx < 0 else "center")
         text.set_verticalalignment("bottom" if dy > 0 else "top" if dy < 0 else "center")
@@ -459,6 +585,16 @@ def _reference_arrow(ax: Axes, mm_per_n: float, left: float, width: float) -> No
 
 
 _small: dict[str, Any] = {"textcoords": "offset points", "fontsize": 8}
+
+
+def view_limits(scene: Scene, h: int, v: int) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The limits (across, up) of the view on global axes ``h`` and ``v``: the
+    scene's padded bounds, the shorter side widened to ``STRIP`` of the longer."""
+    lo, hi = _padded_bounds(scene)
+    mid, half = (lo + hi) / 2, (hi - lo) / 2
+    a = max(float(half[h]), STRIP * float(half[v]))
+    b = max(float(half[v]), STRIP * float(half[h]))
+    return (mid[h] - a, mid[h] + a), (mid[v] - b, mid[v] + b)
 
 
 def _padded_bounds(scene: Scene) -> tuple[FloatArray, FloatArray]:
@@ -537,6 +673,8 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
         ax.set_xlim(-reach, reach)
         ax.set_ylim(-reach, reach)
         ax.set_aspect("equal")
+        for axis in (ax.xaxis, ax.yaxis):  # a narrow panel: labels such as -0.004 need room
+            axis.set_major_locator(MaxNLocator(4, symmetric=True))
         ax.set_xlabel(f"y (mm): {view.axes[1]}", fontsize=8)
         ax.set_ylabel(f"z (mm): {view.axes[2]}", fontsize=8)
     else:
@@ -559,14 +697,15 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
     for p in view.points:
         style = _marker_style("touching" if p.touching else "free")
         ax.scatter(*p.at, **style)
-        # written toward the middle, so that it stays inside the panel
+        # written toward the middle, so that it stays inside the panel;
+        # place_point_labels moves it where it clears the others
         inward = p.at[0] > 0 if view.plane == "yz" else p.at[0] > 0.5 * reach
-        side = {"xytext": (-4, 4), "ha": "right"} if inward else {"xytext": (4, 4), "ha": "left"}
-        ax.annotate(p.label, p.at, **side, **_small)
+        side = {"xytext": (-5, 4), "ha": "right"} if inward else {"xytext": (5, 4), "ha": "left"}
+        ax.annotate(p.label, p.at, **side, **_small).set_gid("contact")
     ax.tick_params(labelsize=7)
     if view.note:
         note = "\n".join(textwrap.wrap(view.note, NOTE_WIDTH))
-        ax.text(0.02, 0.02, note, transform=ax.transAxes, fontsize=7, va="bottom")
+        ax.text(0.02, 0.02, note, transform=ax.transAxes, fontsize=7, va="bottom").set_gid("note")
 
 
 # -- the studies ---------------------------------------------------------------------
