@@ -29,6 +29,7 @@ from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, FancyArrowPatch, Polygon, Rectangle
 from matplotlib.text import Annotation
+from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox
 
 from jointplay.errors import OptionError
@@ -96,12 +97,65 @@ JOINT_VIEWS_SHOWN = 8
 JOINT_PANELS_MOST = 48
 #: Bodies named in the legend, at most.
 LEGEND_BODIES = 6
+#: Contacts drawn in a sweep's contact-force panel, at most (those that carry
+#: the largest forces): more would make a legend taller than the figure.
+LEGEND_CONTACTS = 12
 ARROW = r"$\rightarrow$"  # a legend marker
+#: A histogram as one filled outline: bars with white edges turned to stripes
+#: where the parts spread over a small share of the axis (a limit far off).
+HISTOGRAM: dict[str, Any] = {
+    "histtype": "stepfilled",
+    "facecolor": "#6f9fd8",
+    "edgecolor": "#2f5f9f",
+    "linewidth": 0.8,
+}
 #: Characters per line of a joint panel's note (a panel is about this wide).
 NOTE_WIDTH = 34
 #: A title's characters are about this share of its font size wide, on
 #: average: a figure's title is broken into lines as wide as the figure.
 TITLE_CHAR_WIDTH = 0.55
+#: A tick label's characters are at most this share of its font size wide
+#: (digits and the minus sign).
+TICK_CHAR_WIDTH = 0.65
+
+
+class RoomyLocator(MaxNLocator):
+    """Ticks at steps of 1, 2 or 5 x 10^k, as many as the axis holds at its
+    labels' width: matplotlib's own estimate gives a label three font sizes,
+    and '-0.0025' takes more, so that labels ran into each other."""
+
+    def __init__(self, most: int = 9, symmetric: bool = False) -> None:
+        super().__init__(nbins=most, steps=[1, 2, 5, 10], symmetric=symmetric)
+        self.most = most
+
+    def tick_values(self, vmin: float, vmax: float) -> Any:
+        axis = self.axis
+        if axis is None or not axis.get_major_ticks(1):
+            return super().tick_values(vmin, vmax)
+        box = Bbox.unit().transformed(axis.axes.transAxes - axis.axes.figure.dpi_scale_trans)
+        room = box.width * 72  # points
+        size = axis.get_major_ticks(1)[0].label1.get_size()
+        low, high = sorted((vmin, vmax))
+        for nbins in range(self.most, 0, -1):
+            self.set_params(nbins=nbins)
+            locs = super().tick_values(vmin, vmax)
+            seen = [x for x in locs if low <= x <= high]
+            labels = axis.get_major_formatter().format_ticks(seen)
+            width = max((len(t) for t in labels), default=0) * TICK_CHAR_WIDTH * size + size
+            if len(seen) * width <= room:
+                break
+        self.set_params(nbins=self.most)
+        return locs
+
+
+def roomy_ticks(fig: Figure) -> None:
+    """Every 2D panel's x ticks left to matplotlib no closer than their
+    labels' width (``RoomyLocator``)."""
+    from matplotlib.ticker import AutoLocator
+
+    for ax in fig.axes:
+        if ax.name == "rectilinear" and type(ax.xaxis.get_major_locator()) is AutoLocator:
+            ax.xaxis.set_major_locator(RoomyLocator())
 
 
 def save(fig: Figure, path: Path | str) -> Path:
@@ -183,6 +237,7 @@ def mechanism_figure(
         else f"{what}: displacements and plays ×{scene.magnify:g}",
         fontsize=12,
     )
+    roomy_ticks(fig)
     fig.legend(handles=_legend_handles(scene), loc="outside lower center", ncols=7, fontsize=9)
     fit_3d_panel(fig, ax3d, scene)
     numbered = place_point_labels(fig, model, drawn=True)
@@ -253,6 +308,7 @@ def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None 
     _suptitle(
         fig, f"{model.name or 'mechanism'}: each joint at true size (mm), b relative to a{some}"
     )
+    roomy_ticks(fig)
     place_point_labels(fig)
     return fig
 
@@ -334,8 +390,6 @@ def draw_scene_3d(ax: Axes3D, scene: Scene) -> None:
     for k, mk in enumerate(_points(scene), start=1):
         _point_label(ax, mk.label, (0.0, 0.0), k)
     _project_labels(ax, scene)
-    from matplotlib.ticker import MaxNLocator
-
     for axis, span_i in zip((ax.xaxis, ax.yaxis, ax.zaxis), span, strict=True):
         axis.set_major_locator(MaxNLocator(5 if span_i >= 0.5 * np.max(span) else 3))
     ax.set_xlabel("X (mm)", labelpad=12)
@@ -357,7 +411,7 @@ def _project_labels(ax: Axes3D, scene: Scene) -> None:
             text.xy = (float(x), float(y))
 
 
-def fit_3d_panel(fig: Figure, ax: Axes3D, scene: Scene) -> None:
+def fit_3d_panel(fig: Figure, ax: Axes3D, scene: Scene | None = None) -> None:
     """Shrink the 3D panel's box until its tick and axis labels lie inside the
     panel's slot: matplotlib's layout leaves them out of a 3D panel's size,
     and they ran into the next panel ('Z (mm)' over the YZ view, 'X (mm)'
@@ -379,7 +433,8 @@ def fit_3d_panel(fig: Figure, ax: Axes3D, scene: Scene) -> None:
         )
         zoom *= max(0.5, 0.95 * min(share, 0.97))
         ax.set_box_aspect(aspect, zoom=zoom)
-        _project_labels(ax, scene)
+        if scene is not None:
+            _project_labels(ax, scene)
     fig.canvas.draw()
 
 
@@ -637,8 +692,6 @@ def _common_reach(views: Sequence[JointView]) -> float:
 def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> None:
     """One joint at true size: seen along its axis (y, z of the joint frame),
     or across it for a face or a plane (x the normal)."""
-    from matplotlib.ticker import MaxNLocator
-
     ax.set_title(f"{view.joint} ({view.type})", fontsize=10)
     if view.plane == "none":
         ax.text(0.5, 0.5, view.note, ha="center", va="center", transform=ax.transAxes)
@@ -673,8 +726,8 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
         ax.set_xlim(-reach, reach)
         ax.set_ylim(-reach, reach)
         ax.set_aspect("equal")
-        for axis in (ax.xaxis, ax.yaxis):  # a narrow panel: labels such as -0.004 need room
-            axis.set_major_locator(MaxNLocator(4, symmetric=True))
+        ax.xaxis.set_major_locator(RoomyLocator(symmetric=True))  # a narrow panel
+        ax.yaxis.set_major_locator(MaxNLocator(4, symmetric=True))
         ax.set_xlabel(f"y (mm): {view.axes[1]}", fontsize=8)
         ax.set_ylabel(f"z (mm): {view.axes[2]}", fontsize=8)
     else:
@@ -689,7 +742,7 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
         if max(across, default=0.0) > 0.0:  # room for the end points and their labels
             ax.set_ylim(-1.2 * max(across), 1.2 * max(across))
         ax.set_xlim(-reach, reach)
-        ax.xaxis.set_major_locator(MaxNLocator(4, symmetric=True))  # a narrow panel
+        ax.xaxis.set_major_locator(RoomyLocator(symmetric=True))  # a narrow panel
         ax.set_xlabel(f"x, the normal (mm): {view.axes[0]}", fontsize=8)
         ax.set_ylabel("across the face (mm)", fontsize=8)
     ax.axhline(0, color=INITIAL, linewidth=0.4)
@@ -711,19 +764,27 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
 # -- the studies ---------------------------------------------------------------------
 def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | None = None) -> Figure:
     """Each functional point's trajectory over the sweep in the three views,
-    inside the projection of its worst-case envelope when given; then the
-    contact forces along the sweep."""
+    inside the projection of its worst-case envelope when given (a view along
+    a plane that the trajectory and the envelope lie in is left out, said in
+    its place); then the contact forces along the sweep (the
+    ``LEGEND_CONTACTS`` that carry the most), the points' |d| and the
+    potential energy. The legends stand under their panels, off the curves."""
     envelopes = envelopes or {}
     rows = len(result.point_names) + 1
     fig, axes = plt.subplots(rows, 3, figsize=(13, 4.2 * rows), squeeze=False, layout="constrained")
     steps = np.arange(result.steps)
     x, xlabel = (result.values[:, -1], result.labels[-1]) if result.labels else (steps, "step")
+    enveloped = False
     for r, name in enumerate(result.point_names):
         d = result.point(name)
         env = envelopes.get(name)
-        for ax, (title, h, v) in zip(axes[r], VIEWS, strict=True):
+        cloud = d if env is None else np.vstack([d, env.hull])
+        extent = np.column_stack([cloud.min(axis=0), cloud.max(axis=0)])
+        shown = thick_views(extent)
+        for ax, (title, h, v) in zip(axes[r], shown, strict=False):
             if env is not None:
                 _hull_patch(ax, env.hull[:, [h, v]], "worst-case envelope")
+                enveloped = True
             ax.plot(d[:, h], d[:, v], color=BODY_COLOURS[0], linewidth=1.0)
             dots = ax.scatter(d[:, h], d[:, v], c=x, cmap="viridis", s=14, zorder=4)
             ax.set_aspect("equal", adjustable="datalim")
@@ -731,19 +792,38 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
             ax.set_xlabel(f"d{'xyz'[h]} (mm)")
             ax.set_ylabel(f"d{'xyz'[v]} (mm)")
             ax.grid(True, linewidth=0.3)
+        if len(shown) < len(VIEWS):
+            _, h, v = shown[0]
+            left_out = " and ".join(view[0].split()[0] for view in VIEWS if view not in shown)
+            where = "at every step" + (" and over its envelope" if env is not None else "")
+            note = (
+                f"{name}: {_flat_note(extent, h, v)} {where}; "
+                f"the {left_out} views, edge on, are left out"
+            )
+            for ax in axes[r][len(shown) :]:
+                ax.set_axis_off()
+            axes[r][len(shown)].text(
+                0.0,
+                0.5,
+                "\n".join(textwrap.wrap(note, 40)),
+                transform=axes[r][len(shown)].transAxes,
+                fontsize=9,
+                va="center",
+            )
         fig.colorbar(dots, ax=list(axes[r]), label=xlabel, shrink=0.85)
-        if env is not None:
-            axes[r][0].legend(fontsize=8, loc="upper left")
     ax = axes[-1][0]
-    for c, (joint, contact) in enumerate(result.contact_names):
-        if np.any(result.force[:, c] > 0):
-            ax.plot(x, result.force[:, c], label=f"{joint} {contact}")
+    carried = [c for c in range(len(result.contact_names)) if np.any(result.force[:, c] > 0)]
+    most = sorted(carried, key=lambda c: -float(np.max(result.force[:, c])))[:LEGEND_CONTACTS]
+    for c in sorted(most):
+        joint, contact = result.contact_names[c]
+        ax.plot(x, result.force[:, c], label=f"{joint} {contact}")
     ax.set_xlabel(xlabel)
     ax.set_ylabel("contact force (N)")
-    ax.set_title("contact forces", fontsize=10)
+    some = f" (the {len(most)} largest of {len(carried)})" if len(most) < len(carried) else ""
+    ax.set_title(f"contact forces{some}", fontsize=10)
     ax.grid(True, linewidth=0.3)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7)
+    if most:
+        _legend_below(ax, ncols=2)
     ax = axes[-1][1]
     for p, name in enumerate(result.point_names):
         ax.plot(x, np.linalg.norm(result.points[:, p], axis=1), label=name)
@@ -752,15 +832,37 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
     ax.set_title("points' displacement", fontsize=10)
     ax.grid(True, linewidth=0.3)
     if result.point_names:
-        ax.legend(fontsize=8)
+        _legend_below(ax, ncols=2)
     ax = axes[-1][2]
     ax.plot(x, result.potential_energy, color=POINT)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("potential energy (N·mm)")
     ax.set_title("potential energy", fontsize=10)
     ax.grid(True, linewidth=0.3)
-    fig.suptitle(f"{result.model_name or 'mechanism'}: sweep of {', '.join(result.labels)}")
+    if enveloped:
+        handles = [
+            Rectangle(
+                (0, 0), 1, 1, facecolor="#dbe7f5", edgecolor=DOMAIN, label="worst-case envelope"
+            ),
+            Line2D(
+                [], [], color=BODY_COLOURS[0], marker="o", ms=4, label="the point over the sweep"
+            ),
+        ]
+        fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=9)
+    _suptitle(fig, f"{result.model_name or 'mechanism'}: sweep of {', '.join(result.labels)}")
+    roomy_ticks(fig)
     return fig
+
+
+def _legend_below(ax: Axes, ncols: int = 1, fontsize: float = 8) -> None:
+    """The panel's legend under its frame and x label: it covers no curve."""
+    ax.legend(
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.16),
+        ncols=ncols,
+        fontsize=fontsize,
+        frameon=False,
+    )
 
 
 def _hull_patch(ax: Axes, points: FloatArray, label: str) -> None:
@@ -782,24 +884,83 @@ def _hull_patch(ax: Axes, points: FloatArray, label: str) -> None:
     ax.autoscale_view()
 
 
+def thick_views(extent: FloatArray) -> list[tuple[str, int, int]]:
+    """The views of a cloud of displacements with ``extent`` (3, 2) (mm) that
+    show an area: a view along a plane the cloud lies in (it spans less than
+    ``FLAT`` of its largest extent along one of the view's axes) is a line and
+    is left out; at least the view of the widest extent stays."""
+    span = extent[:, 1] - extent[:, 0]
+    thick = span >= FLAT * max(float(np.max(span)), 1e-300)
+    shown = [view for view in VIEWS if thick[view[1]] and thick[view[2]]]
+    return shown or [max(VIEWS, key=lambda view: min(span[view[1]], span[view[2]]))]
+
+
+def _flat_note(extent: FloatArray, h: int, v: int) -> str:
+    """The displacement along the axis a view looks along, when the cloud is
+    flat that way: 'dz -0.015 mm' (or its small range); '' when not flat."""
+    depth = ({0, 1, 2} - {h, v}).pop()
+    low, high = (float(x) for x in extent[depth])
+    span = extent[:, 1] - extent[:, 0]
+    if high - low >= FLAT * max(float(np.max(span)), 1e-300):
+        return ""
+    name = f"d{'xyz'[depth]}"
+    if f"{low:.4g}" == f"{high:.4g}":
+        return f"{name} {low:.4g} mm"
+    return f"{name} from {low:.4g} to {high:.4g} mm"
+
+
+def _flat_polygon(H: FloatArray) -> FloatArray | None:
+    """The outline (m, 3) of points ``H`` that lie in a plane (or on a line),
+    in order; None when they span a volume."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    centre = H.mean(axis=0)
+    _, sizes, axes = np.linalg.svd(H - centre, full_matrices=False)
+    if len(sizes) < 3 or sizes[2] >= FLAT * max(float(sizes[0]), 1e-300):
+        return None
+    flat = (H - centre) @ axes[:2].T
+    try:
+        ring = flat[ConvexHull(flat).vertices]
+    except (QhullError, ValueError):  # on a line: its two ends
+        along = flat[:, 0]
+        ring = flat[[int(np.argmin(along)), int(np.argmax(along))]]
+    return np.asarray(centre + ring @ axes[:2])
+
+
 def envelope_figure(result: EnvelopeResult) -> Figure:
-    """The worst-case envelope of a point: its hull in 3D, its three
-    projections with the extent along each axis, and the largest displacement."""
+    """The worst-case envelope of a point: its hull in 3D, its projections
+    with the extent along each axis, and the largest displacement. A flat
+    envelope (a point that moves in a plane) is drawn as its outline in 3D,
+    and only its view across that plane, titled with the displacement
+    along the plane's normal."""
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
     from scipy.spatial import ConvexHull, QhullError
 
-    fig = plt.figure(figsize=(13, 10), layout="constrained")
-    grid = fig.add_gridspec(2, 2)
-    ax3d: Axes3D = fig.add_subplot(grid[0, 0], projection="3d")
     H = result.hull
-    try:
-        hull = ConvexHull(H)
-        faces = [H[s] for s in hull.simplices]
-        ax3d.add_collection3d(
-            Poly3DCollection(faces, facecolor="#9fc0e8", edgecolor=DOMAIN, linewidth=0.2, alpha=0.5)
-        )
-    except (QhullError, ValueError):  # a flat envelope (a point that moves in a plane)
-        pass
+    ext = result.extent
+    shown = thick_views(ext)
+    if len(shown) == 3:
+        fig = plt.figure(figsize=(13, 10), layout="constrained")
+        grid = fig.add_gridspec(2, 2)
+        slots = [grid[0, 1], grid[1, 0], grid[1, 1]]
+    else:  # flat: the 3D panel and the view across the plane, side by side
+        fig = plt.figure(figsize=(13, 5.6), layout="constrained")
+        grid = fig.add_gridspec(1, 2)
+        slots = [grid[0, 1]]
+    ax3d: Axes3D = fig.add_subplot(grid[0, 0], projection="3d")
+    ring = _flat_polygon(H) if len(H) >= 3 else None
+    style = {"facecolor": "#9fc0e8", "edgecolor": DOMAIN, "alpha": 0.5}
+    if ring is not None and len(ring) >= 3:
+        ax3d.add_collection3d(Poly3DCollection([ring], linewidth=0.8, **style))
+    elif ring is not None:
+        ax3d.plot(ring[:, 0], ring[:, 1], ring[:, 2], color=DOMAIN, linewidth=1.2)
+    else:
+        try:
+            hull = ConvexHull(H)
+            faces = [H[s] for s in hull.simplices]
+            ax3d.add_collection3d(Poly3DCollection(faces, linewidth=0.2, **style))
+        except (QhullError, ValueError):  # too few points for a hull: the points alone
+            pass
     ax3d.scatter(H[:, 0], H[:, 1], H[:, 2], color=DOMAIN, s=4)
     L = result.largest_vector
     ax3d.quiver(0, 0, 0, *L, color=TOUCHING, arrow_length_ratio=0.1)
@@ -807,8 +968,6 @@ def envelope_figure(result: EnvelopeResult) -> Figure:
     for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
         setter(-reach, reach)
     ax3d.set_box_aspect((1, 1, 1))
-    from matplotlib.ticker import MaxNLocator
-
     for axis in (ax3d.xaxis, ax3d.yaxis, ax3d.zaxis):  # long labels such as -0.025
         axis.set_major_locator(MaxNLocator(4))
     ax3d.tick_params(labelsize=8)
@@ -816,9 +975,7 @@ def envelope_figure(result: EnvelopeResult) -> Figure:
     ax3d.set_ylabel("dy (mm)", labelpad=10)
     ax3d.set_zlabel("dz (mm)", labelpad=10)
     ax3d.set_title("envelope (3D)")
-    slots = (grid[0, 1], grid[1, 0], grid[1, 1])
-    ext = result.extent
-    for slot, (title, h, v) in zip(slots, VIEWS, strict=True):
+    for slot, (title, h, v) in zip(slots, shown, strict=True):
         ax = fig.add_subplot(slot)
         # the arrow from the rest position, which may lie outside the envelope:
         # both its ends in the view, and the arrow clipped to it like the rest
@@ -836,13 +993,17 @@ def envelope_figure(result: EnvelopeResult) -> Figure:
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(f"d{'xyz'[h]} (mm)")
         ax.set_ylabel(f"d{'xyz'[v]} (mm)")
-        ax.set_title(title)
+        note = _flat_note(ext, h, v)
+        ax.set_title(f"{title}: {note} throughout" if note else title)
         ax.grid(True, linewidth=0.3)
-    fig.suptitle(
+    _suptitle(
+        fig,
         f"worst-case envelope of point '{result.settings.point}' (plays at their "
         f"{result.settings.plays}): largest {result.largest:.5g} mm along "
-        f"[{', '.join(f'{c:.3g}' for c in L / max(result.largest, 1e-300))}]"
+        f"[{', '.join(f'{c:.3g}' for c in L / max(result.largest, 1e-300))}]",
     )
+    roomy_ticks(fig)
+    fit_3d_panel(fig, ax3d)
     return fig
 
 
@@ -872,15 +1033,17 @@ def montecarlo_figure(result: MonteCarloResult) -> Figure:
         panels.append((title, measure, req.max_displacement, unit))
     cols = min(len(panels), 3) or 1
     rows = max(math.ceil(len(panels) / cols), 1)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False, layout="constrained"
+    )
     for ax, (title, every, limit, unit) in zip(axes.flat, panels, strict=False):
         values = every[~np.isnan(every)]  # the parts that can be assembled
-        ax.hist(values, bins=_bins(values), color="#6f9fd8", edgecolor="white", linewidth=0.3)
+        ax.hist(values, bins=_bins(values), **HISTOGRAM)
         if limit is not None:
             ax.axvline(limit, color=TOUCHING, linewidth=1.5, label=f"limit {limit:g} mm")
             if np.min(values) < 0:
                 ax.axvline(-limit, color=TOUCHING, linewidth=1.5)
-            ax.legend(fontsize=8)
+            _legend_below(ax)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel(unit)
         ax.set_ylabel("parts")
@@ -889,11 +1052,12 @@ def montecarlo_figure(result: MonteCarloResult) -> Figure:
         ax.set_axis_off()
     if not panels:
         axes.flat[0].text(0.5, 0.5, "no functional points", ha="center", va="center")
-    fig.suptitle(
+    _suptitle(
+        fig,
         f"{result.model_name or 'mechanism'}: Monte Carlo, {result.samples} sets of parts "
-        f"(seed {result.settings.seed})"
+        f"(seed {result.settings.seed})",
     )
-    fig.tight_layout()
+    roomy_ticks(fig)
     return fig
 
 
@@ -963,17 +1127,27 @@ def contributions_figure(result: ContributionsResult) -> Figure:
         Rectangle((0, 0), 1, 1, color="#2f6db5", label="worst case"),
         Rectangle((0, 0), 1, 1, color="#f28e2b", label="RSS"),
         Rectangle((0, 0), 1, 1, facecolor="white", edgecolor="black", hatch="//", label="kink"),
-        Line2D(
-            [0], [0], color="black", marker="o", markersize=3, lw=0.8, label="cumulative worst case"
-        ),
     ]
+    if not all(both):  # a linear panel draws the cumulative share
+        handles.append(
+            Line2D(
+                [0],
+                [0],
+                color="black",
+                marker="o",
+                markersize=3,
+                lw=0.8,
+                label="cumulative worst case",
+            )
+        )
     if any(both):
         handles += [
             Rectangle((0, 0), 1, 1, color="#59a14f", label="Sobol' first order"),
             Rectangle((0, 0), 1, 1, color="#b07aa1", label="Sobol' total"),
         ]
     fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8)
-    fig.suptitle(f"{result.model_name or 'mechanism'}: contributions")
+    _suptitle(fig, f"{result.model_name or 'mechanism'}: contributions")
+    roomy_ticks(fig)
     return fig
 
 
@@ -989,7 +1163,9 @@ def tolerances_figure(result: TolerancesResult) -> Figure:
     panels = result.requirements
     cols = min(len(panels), 2) or 1
     rows = max(math.ceil(len(panels) / cols), 1)
-    fig, axes = plt.subplots(rows, cols, figsize=(5.6 * cols, 4.0 * rows), squeeze=False)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(5.6 * cols, 4.4 * rows), squeeze=False, layout="constrained"
+    )
     for ax, r in zip(axes.flat, panels, strict=False):
         req = r.requirement
         d = mc.displacement[:, mc.point_names.index(req.point)]
@@ -1003,9 +1179,7 @@ def tolerances_figure(result: TolerancesResult) -> Figure:
             values,
             bins=_bins(values),
             density=True,
-            color="#6f9fd8",
-            edgecolor="white",
-            linewidth=0.3,
+            **HISTOGRAM,
             label=f"Monte Carlo, {len(values):,} parts",
         )
         high = req.max_displacement
@@ -1046,12 +1220,13 @@ def tolerances_figure(result: TolerancesResult) -> Figure:
         ax.set_xlabel(unit)
         ax.set_ylabel("density of parts (1/mm)")
         ax.grid(True, linewidth=0.3)
-        ax.legend(fontsize=7, loc="best")
+        _legend_below(ax, ncols=2, fontsize=7)
     for ax in axes.flat[len(panels) :]:
         ax.set_axis_off()
-    fig.suptitle(
+    _suptitle(
+        fig,
         f"{result.model_name or 'mechanism'}: tolerances, {mc.samples:,} sets of parts "
-        f"(seed {result.settings.seed})"
+        f"(seed {result.settings.seed})",
     )
-    fig.tight_layout()
+    roomy_ticks(fig)
     return fig
