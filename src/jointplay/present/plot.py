@@ -780,7 +780,7 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
         env = envelopes.get(name)
         cloud = d if env is None else np.vstack([d, env.hull])
         extent = np.column_stack([cloud.min(axis=0), cloud.max(axis=0)])
-        shown = thick_views(extent)
+        shown = thick_views(cloud)
         for ax, (title, h, v) in zip(axes[r], shown, strict=False):
             if env is not None:
                 _hull_patch(ax, env.hull[:, [h, v]], "worst-case envelope")
@@ -793,13 +793,16 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
             ax.set_ylabel(f"d{'xyz'[v]} (mm)")
             ax.grid(True, linewidth=0.3)
         if len(shown) < len(VIEWS):
-            _, h, v = shown[0]
-            left_out = " and ".join(view[0].split()[0] for view in VIEWS if view not in shown)
-            where = "at every step" + (" and over its envelope" if env is not None else "")
+            out = [view[0].split()[0] for view in VIEWS if view not in shown]
+            what = "its path and its envelope lie" if env is not None else "its path lies"
             note = (
-                f"{name}: {_flat_note(extent, h, v)} {where}; "
-                f"the {left_out} views, edge on, are left out"
+                f"{name}: the {' and '.join(out)} view{'s' if len(out) > 1 else ''} left out: "
+                f"{what} on a line there"
             )
+            flat = sorted({_flat_note(extent, h, v) for _, h, v in shown} - {""})
+            if flat:
+                where = "at every step" + (" and over the envelope" if env is not None else "")
+                note += f" ({', '.join(flat)} {where})"
             for ax in axes[r][len(shown) :]:
                 ax.set_axis_off()
             axes[r][len(shown)].text(
@@ -884,15 +887,25 @@ def _hull_patch(ax: Axes, points: FloatArray, label: str) -> None:
     ax.autoscale_view()
 
 
-def thick_views(extent: FloatArray) -> list[tuple[str, int, int]]:
-    """The views of a cloud of displacements with ``extent`` (3, 2) (mm) that
-    show an area: a view along a plane the cloud lies in (it spans less than
-    ``FLAT`` of its largest extent along one of the view's axes) is a line and
-    is left out; at least the view of the widest extent stays."""
-    span = extent[:, 1] - extent[:, 0]
-    thick = span >= FLAT * max(float(np.max(span)), 1e-300)
-    shown = [view for view in VIEWS if thick[view[1]] and thick[view[2]]]
-    return shown or [max(VIEWS, key=lambda view: min(span[view[1]], span[view[2]]))]
+def _widths(P: FloatArray) -> FloatArray:
+    """The extents of 2D points ``P`` (n, 2) along their principal directions,
+    the larger first (mm)."""
+    if len(P) < 2:
+        return np.zeros(2)
+    centred = P - P.mean(axis=0)
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    spans = np.ptp(centred @ axes.T, axis=0)
+    return np.asarray(np.pad(spans, (0, 2 - len(spans))))
+
+
+def thick_views(points: FloatArray) -> list[tuple[str, int, int]]:
+    """The views of a cloud of displacements ``points`` (n, 3) (mm) that show
+    an area: a view in which the cloud is a line (thinner than ``FLAT`` of its
+    length, along any direction: a plane seen edge on) is left out; at least
+    the view of the longest line stays."""
+    widths = {view: _widths(points[:, [view[1], view[2]]]) for view in VIEWS}
+    shown = [view for view in VIEWS if widths[view][1] >= FLAT * max(widths[view][0], 1e-300)]
+    return shown or [max(VIEWS, key=lambda view: float(widths[view][0]))]
 
 
 def _flat_note(extent: FloatArray, h: int, v: int) -> str:
@@ -930,23 +943,23 @@ def _flat_polygon(H: FloatArray) -> FloatArray | None:
 def envelope_figure(result: EnvelopeResult) -> Figure:
     """The worst-case envelope of a point: its hull in 3D, its projections
     with the extent along each axis, and the largest displacement. A flat
-    envelope (a point that moves in a plane) is drawn as its outline in 3D,
-    and only its view across that plane, titled with the displacement
-    along the plane's normal."""
+    envelope (a point that moves in a plane) is drawn as its outline in 3D;
+    a view that sees it edge on (a line) is left out, and a view across a
+    plane normal to an axis is titled with the displacement along it."""
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
     from scipy.spatial import ConvexHull, QhullError
 
     H = result.hull
     ext = result.extent
-    shown = thick_views(ext)
+    shown = thick_views(H)
     if len(shown) == 3:
         fig = plt.figure(figsize=(13, 10), layout="constrained")
         grid = fig.add_gridspec(2, 2)
         slots = [grid[0, 1], grid[1, 0], grid[1, 1]]
-    else:  # flat: the 3D panel and the view across the plane, side by side
-        fig = plt.figure(figsize=(13, 5.6), layout="constrained")
-        grid = fig.add_gridspec(1, 2)
-        slots = [grid[0, 1]]
+    else:  # flat: the 3D panel and the views that are not edge on, side by side
+        fig = plt.figure(figsize=(13, 5.6 if len(shown) == 1 else 4.8), layout="constrained")
+        grid = fig.add_gridspec(1, 1 + len(shown))
+        slots = [grid[0, 1 + k] for k in range(len(shown))]
     ax3d: Axes3D = fig.add_subplot(grid[0, 0], projection="3d")
     ring = _flat_polygon(H) if len(H) >= 3 else None
     style = {"facecolor": "#9fc0e8", "edgecolor": DOMAIN, "alpha": 0.5}
