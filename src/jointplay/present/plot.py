@@ -1007,7 +1007,7 @@ def envelope_figure(result: EnvelopeResult) -> Figure:
         ax.set_xlabel(f"d{'xyz'[h]} (mm)")
         ax.set_ylabel(f"d{'xyz'[v]} (mm)")
         note = _flat_note(ext, h, v)
-        ax.set_title(f"{title}: {note} throughout" if note else title)
+        ax.set_title(f"{title}\n{note} throughout" if note else title)
         ax.grid(True, linewidth=0.3)
     _suptitle(
         fig,
