@@ -316,7 +316,9 @@ def clearance_figure(model: Model, result: Result, joints: Sequence[str] | None 
 def _suptitle(fig: Figure, text: str, fontsize: float = 12.0) -> None:
     """The figure's title, broken into lines as wide as the figure."""
     per_line = int(fig.get_figwidth() * 72 / (TITLE_CHAR_WIDTH * fontsize))
-    fig.suptitle("\n".join(textwrap.wrap(text, per_line)), fontsize=fontsize)
+    lines = len(textwrap.wrap(text, per_line))
+    even = math.ceil(len(text) / lines) + 8  # lines of about one length: no lone word
+    fig.suptitle("\n".join(textwrap.wrap(text, min(even, per_line))), fontsize=fontsize)
 
 
 def _body_colours(scene: Scene) -> dict[str, str]:
