@@ -8,9 +8,11 @@ the API and from the command line.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
@@ -54,6 +56,13 @@ GALLERY = ROOT / "examples" / "gallery"
 EVERY_EXAMPLE = (
     sorted(PAPER.glob("*.yaml")) + sorted(STUDIES.glob("*.yaml")) + sorted(GALLERY.glob("*.yaml"))
 )
+
+
+@pytest.fixture(autouse=True)
+def _close_figures() -> Iterator[None]:
+    """Each test's figures closed after it (a figure left open holds its memory)."""
+    yield
+    plt.close("all")
 
 
 def _paper() -> tuple[jointplay.Model, jointplay.Result]:
@@ -649,7 +658,7 @@ def test_the_envelope_arrow_stays_inside_its_view() -> None:
                 assert patch.get_clip_on() and patch.get_clip_box() is not None
                 assert _within(frame, patch.get_window_extent(renderer)), ax.get_title()
                 arrows += 1
-    assert arrows == 3
+    assert arrows == len(fig.axes) - 1 >= 1  # one in each view (here the XY view: it is flat)
 
 
 def test_panels_do_not_overlap() -> None:

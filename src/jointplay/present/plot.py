@@ -23,6 +23,7 @@ matplotlib.use("Agg")  # files only: no screen on a server or in CI
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine
@@ -64,7 +65,9 @@ BODY_COLOURS = ("#1f4e79", "#8c564b", "#9467bd", "#17becf", "#bcbd22", "#e377c2"
 VIEWS = (("XY (along Z)", 0, 1), ("XZ (along -Y)", 0, 2), ("YZ (along X)", 1, 2))
 JOINTS_PER_ROW = 4
 #: A view is edge-on when the bodies and points extend less than this share of
-#: the mechanism's size along one of its axes (a planar mechanism seen from the side).
+#: the mechanism's size along one of its axes (a planar mechanism seen from the
+#: side), or when a study's cloud of displacements is thinner than this share
+#: of its length across its principal direction in that view (a line).
 FLAT = 0.02
 #: Where a label may sit around its mark (points across, up), tried in order:
 #: the eight ways beside it, then the same farther out (marks close together).
@@ -129,12 +132,15 @@ class RoomyLocator(MaxNLocator):
         self.most = most
 
     def tick_values(self, vmin: float, vmax: float) -> Any:
+        from matplotlib.axis import Axis
+
         axis = self.axis
-        if axis is None or not axis.get_major_ticks(1):
+        fig = axis.axes.get_figure(root=True) if isinstance(axis, Axis) else None
+        if not isinstance(axis, Axis) or fig is None or not axis.get_major_ticks(1):
             return super().tick_values(vmin, vmax)
-        box = Bbox.unit().transformed(axis.axes.transAxes - axis.axes.figure.dpi_scale_trans)
-        room = box.width * 72  # points
-        size = axis.get_major_ticks(1)[0].label1.get_size()
+        inches = axis.axes.transAxes - fig.dpi_scale_trans
+        room = Bbox.unit().transformed(inches).width * 72  # points
+        size = float(axis.get_major_ticks(1)[0].label1.get_fontsize())
         low, high = sorted((vmin, vmax))
         for nbins in range(self.most, 0, -1):
             self.set_params(nbins=nbins)
@@ -755,7 +761,9 @@ def draw_joint_view(ax: Axes, view: JointView, fallback_reach: float = 1.0) -> N
         # written toward the middle, so that it stays inside the panel;
         # place_point_labels moves it where it clears the others
         inward = p.at[0] > 0 if view.plane == "yz" else p.at[0] > 0.5 * reach
-        side = {"xytext": (-5, 4), "ha": "right"} if inward else {"xytext": (5, 4), "ha": "left"}
+        side: dict[str, Any] = (
+            {"xytext": (-5, 4), "ha": "right"} if inward else {"xytext": (5, 4), "ha": "left"}
+        )
         ax.annotate(p.label, p.at, **side, **_small).set_gid("contact")
     ax.tick_params(labelsize=7)
     if view.note:
@@ -1138,7 +1146,7 @@ def contributions_figure(result: ContributionsResult) -> Figure:
         ax.set_xlabel("contribution (%)")
         ax.set_title(title, fontsize=10)
         ax.grid(True, axis="x", linewidth=0.3)
-    handles = [
+    handles: list[Artist] = [
         Rectangle((0, 0), 1, 1, color="#2f6db5", label="worst case"),
         Rectangle((0, 0), 1, 1, color="#f28e2b", label="RSS"),
         Rectangle((0, 0), 1, 1, facecolor="white", edgecolor="black", hatch="//", label="kink"),
