@@ -8,11 +8,17 @@ the API and from the command line.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch
+from matplotlib.text import Text
+from matplotlib.transforms import Bbox
 from PIL import Image
 from typer.testing import CliRunner
 
@@ -20,6 +26,7 @@ import jointplay
 from conftest import MM, PAPER, ROOT, force_tol
 from jointplay.cli import app
 from jointplay.present.plot import (
+    STRIP,
     clearance_figure,
     contributions_figure,
     envelope_figure,
@@ -28,6 +35,7 @@ from jointplay.present.plot import (
     most_loaded_joints,
     save,
     sweep_figure,
+    tolerances_figure,
     with_play,
 )
 from jointplay.present.scene import (
@@ -41,6 +49,7 @@ from jointplay.studies.contributions import Contributions
 from jointplay.studies.envelope import Envelope
 from jointplay.studies.montecarlo import MonteCarlo
 from jointplay.studies.sweep import RotateLoad, Sweep
+from jointplay.studies.tolerances import Tolerances
 
 STUDIES = ROOT / "examples" / "studies"
 GALLERY = ROOT / "examples" / "gallery"
@@ -49,9 +58,86 @@ EVERY_EXAMPLE = (
 )
 
 
+@pytest.fixture(autouse=True)
+def _close_figures() -> Iterator[None]:
+    """Each test's figures closed after it (a figure left open holds its memory)."""
+    yield
+    plt.close("all")
+
+
 def _paper() -> tuple[jointplay.Model, jointplay.Result]:
     model = jointplay.load(PAPER / "6.1.6.1.yaml")
     return model, jointplay.solve(model)
+
+
+#: Pixels by which two texts' boxes may meet up and down: a box holds the
+#: font's blank ascent and descent, so lines this close do not touch; across,
+#: a box is as wide as its letters, and one pixel is anti-aliasing.
+TEXT_SLACK = 3.0
+SIDE_SLACK = 1.0
+
+
+def _drawn_texts(fig: Figure) -> list[tuple[Text, Bbox]]:
+    """Every text the renderer draws (not the tick labels matplotlib keeps
+    beyond the axis limits), with its box in pixels."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    drawn: list[Text] = []
+    draw_text = renderer.draw_text
+
+    def record(*args: Any, **kwargs: Any) -> Any:
+        text = kwargs.get("mtext")
+        if isinstance(text, Text) and text.get_text().strip() and text not in drawn:
+            drawn.append(text)
+        return draw_text(*args, **kwargs)
+
+    renderer.draw_text = record
+    try:
+        fig.draw(renderer)
+    finally:
+        del renderer.draw_text
+    return [(t, t.get_window_extent(renderer)) for t in drawn]
+
+
+def _meet(a: Bbox, b: Bbox, up: float = TEXT_SLACK, side: float = SIDE_SLACK) -> bool:
+    return min(a.x1, b.x1) - max(a.x0, b.x0) > side and min(a.y1, b.y1) - max(a.y0, b.y0) > up
+
+
+def layout_faults(fig: Figure) -> list[str]:
+    """What a reader would see run together: a text outside the figure; two
+    texts over each other (a slanted 3D axis label's box is wider than its
+    letters: it is held clear of the other panels' texts only); a panel's
+    text over another panel; a legend over a panel; a view at true scale
+    thinner than ``STRIP`` of its width."""
+    texts = _drawn_texts(fig)
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    owner = {id(t): ax for ax in fig.axes for t in ax.findobj(Text)}
+    frames = [(ax, ax.get_window_extent(renderer)) for ax in fig.axes]
+    faults = []
+    for text, box in texts:
+        if not _within(fig.bbox, box, slack=1.0):
+            faults.append(f"outside the figure: {text.get_text()!r}")
+        for ax, frame in frames:
+            if owner.get(id(text)) not in (ax, None) and _meet(box, frame):
+                faults.append(f"{text.get_text()!r} over the panel {ax.get_title()!r}")
+    for i, (a, box_a) in enumerate(texts):
+        for b, box_b in texts[i + 1 :]:
+            slanted = a.get_rotation() % 90 or b.get_rotation() % 90
+            if slanted and owner.get(id(a)) is owner.get(id(b)):
+                continue  # a 3D axis label's box is wider than its letters
+            if _meet(box_a, box_b):
+                faults.append(f"{a.get_text()!r} over {b.get_text()!r}")
+    legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]
+    for legend in legends:
+        box = legend.get_window_extent(renderer)
+        faults += [
+            f"a legend over {ax.get_title()!r}" for ax, f in frames if _meet(box, f, 1.0, 1.0)
+        ]
+    for ax, frame in frames:
+        thin = min(frame.width, frame.height) < STRIP * max(frame.width, frame.height) - 1
+        if ax.name == "rectilinear" and ax.get_aspect() == 1.0 and thin:
+            faults.append(f"the view {ax.get_title()!r} is a strip")
+    return faults
 
 
 def _not_blank(path: Path) -> None:
@@ -195,9 +281,12 @@ def test_the_mechanism_figure_of_every_example(path: Path, tmp_path: Path) -> No
     cases = list(model.case_names) or [None]
     for case in cases:
         result = jointplay.solve(model, case=case)
-        out = save(mechanism_figure(model, result, case=case), tmp_path / "m.png")
-        _not_blank(out)
-        _not_blank(save(clearance_figure(model, result), tmp_path / "j.png"))
+        figure = mechanism_figure(model, result, case=case)
+        assert layout_faults(figure) == [], case
+        _not_blank(save(figure, tmp_path / "m.png"))
+        joints = clearance_figure(model, result)
+        assert layout_faults(joints) == [], case
+        _not_blank(save(joints, tmp_path / "j.png"))
 
 
 @pytest.mark.parametrize("suffix", [".png", ".svg", ".pdf"])
@@ -570,7 +659,7 @@ def test_the_envelope_arrow_stays_inside_its_view() -> None:
                 assert patch.get_clip_on() and patch.get_clip_box() is not None
                 assert _within(frame, patch.get_window_extent(renderer)), ax.get_title()
                 arrows += 1
-    assert arrows == 3
+    assert arrows == len(fig.axes) - 1 >= 1  # one in each view (here the XY view: it is flat)
 
 
 def test_panels_do_not_overlap() -> None:
@@ -616,3 +705,114 @@ def test_a_shaft_without_outline_is_drawn_along_its_axis() -> None:
     off = stub[0] - axis[0]
     assert np.linalg.norm(off - (off @ u) * u) < MM  # from a point on it
     assert len(initial) == 2  # the axis and the stub: the points on the axis need none
+
+
+# -- every study figure: texts apart, legends off the panels, no edge-on view -----------------
+def _sweep_with_envelopes(path: Path) -> Figure:
+    from jointplay.studies.envelope import point_envelopes
+
+    model = jointplay.load(path)
+    sweep = Sweep(rotate=RotateLoad(0, (0.0, 0.0, 1.0), 12)).run(model)
+    envelopes, _ = point_envelopes(model, "mean")
+    return sweep_figure(sweep, envelopes)
+
+
+@pytest.mark.parametrize(
+    "draw",
+    [
+        lambda: envelope_figure(
+            Envelope("fingertip").run(jointplay.load(GALLERY / "four_bar.yaml"))
+        ),
+        lambda: envelope_figure(Envelope("tool").run(jointplay.load(STUDIES / "carriage.yaml"))),
+        lambda: envelope_figure(
+            Envelope("probe").run(jointplay.load(STUDIES / "wobbly_table.yaml"))
+        ),
+        lambda: _sweep_with_envelopes(STUDIES / "carriage.yaml"),
+        lambda: _sweep_with_envelopes(GALLERY / "located_plate.yaml"),
+        lambda: montecarlo_figure(
+            MonteCarlo(samples=300, seed=0).run(jointplay.load(GALLERY / "spindle.yaml"))
+        ),
+        lambda: tolerances_figure(Tolerances(300, 0).run(jointplay.load(GALLERY / "spindle.yaml"))),
+        lambda: tolerances_figure(
+            Tolerances(300, 0).run(jointplay.load(GALLERY / "located_plate.yaml"))
+        ),
+        lambda: contributions_figure(
+            Contributions().run(jointplay.load(GALLERY / "four_bar.yaml"))
+        ),
+    ],
+    ids=[
+        "envelope-four-bar",
+        "envelope-carriage",
+        "envelope-table",
+        "sweep-carriage",
+        "sweep-plate",
+        "montecarlo-spindle",
+        "tolerances-spindle",
+        "tolerances-plate",
+        "contributions-four-bar",
+    ],
+)
+def test_study_figures_keep_texts_apart_and_legends_off_the_panels(draw: Any) -> None:
+    """No text outside the figure or over another, no legend over a curve's
+    panel (the sweep's contact forces, the tolerances' five entries used to
+    cover the curves), no view at true scale a strip."""
+    figure = draw()
+    assert layout_faults(figure) == []
+
+
+def _views(fig: Figure) -> list[str]:
+    """The titles' first lines of a figure's 2D views."""
+    return [ax.get_title().split("\n")[0] for ax in fig.axes if ax.name == "rectilinear"]
+
+
+def test_a_flat_envelope_is_its_outline_in_its_plane() -> None:
+    """The carriage's tool moves in a plane normal to Z (the guide's vertical
+    play is taken up by the weight): its XZ and YZ views would be lines and
+    are left out; the 3D panel draws the envelope as one polygon of its own
+    points, in that plane."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    from jointplay.present.plot import _flat_polygon
+
+    env = Envelope("tool", directions=24).run(jointplay.load(STUDIES / "carriage.yaml"))
+    low, high = env.extent[2]
+    assert high - low < 1e-3 * (env.extent[0, 1] - env.extent[0, 0])  # flat, as said
+    fig = envelope_figure(env)
+    assert _views(fig) == ["XY (along Z)"]
+    assert "dz" in fig.axes[1].get_title()  # the displacement along the normal, said
+    assert len([c for c in fig.axes[0].collections if isinstance(c, Poly3DCollection)]) == 1
+    ring = _flat_polygon(env.hull)  # that polygon's corners
+    assert ring is not None and len(ring) >= 3
+    for corner in ring:
+        assert np.min(np.linalg.norm(env.hull - corner, axis=1)) < MM  # one of its points
+        assert low - MM <= corner[2] <= high + MM
+
+
+def test_an_envelope_long_along_one_axis_keeps_its_views_across() -> None:
+    """The four-bar's fingertip moves 0.8 mm along Z (the push across the
+    linkage) and hundredths in X and Y: the XZ view, where it is a line, is
+    left out; the XY view, where it has an area, is kept."""
+    env = Envelope("fingertip").run(jointplay.load(GALLERY / "four_bar.yaml"))
+    views = _views(envelope_figure(env))
+    assert "XY (along Z)" in views and "XZ (along -Y)" not in views
+
+
+def test_a_planar_sweep_draws_only_the_view_of_its_plane() -> None:
+    """The plate's hole moves in XY at every step, and so does its envelope:
+    its row shows the XY view, and says why XZ and YZ are not drawn."""
+    fig = _sweep_with_envelopes(GALLERY / "located_plate.yaml")
+    views = [v for v in _views(fig) if v.startswith("drilled hole:")]
+    assert views == ["drilled hole: XY (along Z)"]
+    notes = [t.get_text() for ax in fig.axes for t in ax.texts]
+    assert any("XZ and YZ views" in " ".join(n.split()) for n in notes)
+
+
+def test_a_carriage_without_outline_is_drawn_along_its_guide() -> None:
+    """The carriage's joints' centres (guide and nut) sit on a vertical line,
+    but the guide reaches 150 mm either way along X: the carriage is drawn
+    through the guide's ends, its nut and its tool, not as a vertical stick."""
+    model = jointplay.load(STUDIES / "carriage.yaml")
+    scene = mechanism_scene(model, jointplay.solve(model))
+    initial = np.vstack([ln.points for ln in scene.lines if ln.role == "initial"])
+    assert abs(initial[:, 0].min() + 150.0) < MM and abs(initial[:, 0].max() - 150.0) < MM
+    assert np.min(np.linalg.norm(initial - [80.0, 0.0, 150.0], axis=1)) < MM  # the tool

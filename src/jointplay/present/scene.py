@@ -40,6 +40,12 @@ SHOWN_FRACTION = 0.08
 ARROW_FRACTION = 0.18
 #: Points on a drawn circle.
 CIRCLE_POINTS = 73
+#: A body without outline is drawn along the line of its joints' centres (a
+#: shaft, a link between two pins) when its joints' engagement ends lie within
+#: this share of the line's length off it (a pin's ends across a link); a body
+#: whose joints reach farther off (a carriage on a long guide, over its nut) is
+#: drawn as the tree of its joints and points.
+ACROSS_SHARE = 0.25
 
 LineRole = Literal["initial", "displaced", "domain"]
 MarkerRole = Literal["touching", "free", "point", "load point"]
@@ -247,8 +253,9 @@ def _body_paths(model: Model, loads: tuple[Load, ...], body: Body) -> list[Float
     two pins), that line through them, with a stub square to it out to each
     point off it (a gear's mesh point, a lever's load): the centre line and
     arms a designer sketches, where a tree through the points would draw a
-    shaft as a V. Else (a plate on joints all about) the shortest tree
-    through its joints and points."""
+    shaft as a V. Else (a plate on joints all about, a carriage whose guide
+    reaches far off the line of its joints' centres: ``ACROSS_SHARE``) the
+    shortest tree through its joints and points."""
     if body.outline is not None:
         corners = np.array(body.outline, dtype=float)
         return [np.vstack([corners, corners[:1]]) if len(corners) > 2 else corners]
@@ -264,7 +271,12 @@ def _body_paths(model: Model, loads: tuple[Load, ...], body: Body) -> list[Float
     def foot(P: FloatArray) -> FloatArray:
         return np.asarray(origin + float((P - origin) @ u) * u)
 
-    # a pin's engagement ends lie across a link's line: the link is the line
+    # a pin's engagement ends lie across a link's line: the link is the line;
+    # a guide's ends far off the line of the centres are not a line's
+    ends = [float((P - origin) @ u) for P in joints]
+    across = max(float(np.linalg.norm(P - foot(P))) for P in joints)
+    if across > ACROSS_SHARE * (max(ends) - min(ends)) + tol:
+        return [np.vstack([every[i], every[k]]) for i, k in _tree_edges(every)]
     on_line = [P for P in joints if np.linalg.norm(P - foot(P)) <= tol]
     arms = [(foot(P), P) for P in attached if np.linalg.norm(P - foot(P)) > tol]
     along = [float((P - origin) @ u) for P in on_line + [f for f, _ in arms] + attached]
