@@ -27,8 +27,9 @@ class SolverSettings:
     equilibrium_tolerance: float = 1e-8
     #: Forces and moments print as 0 below this fraction of the largest force
     #: (round-off is 1e-12 of it and less): a hundredth of the balance, so that
-    #: zeroing the small components of a body's contacts (up to 50) leaves the
-    #: printed forces balancing it within ``equilibrium_tolerance``.
+    #: the components it zeroes change a body's balance by a small part of what
+    #: ``equilibrium_tolerance`` allows (zeroing at the balance itself can unbalance
+    #: a body past it).
     force_resolution: float = 1e-10
     #: A contact counts as touching when it uses this much of its own play:
     #: the certificate's feasibility, with room for a play 10x smaller than

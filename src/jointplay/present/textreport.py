@@ -468,6 +468,10 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         parts.append(table)
         if notes:
             parts.append(notes)
+        if result.sobol is not None and not by_variance:  # asked for (--variance always)
+            parts.append(Text("the shares of its variance (Sobol' indices):"))
+            by_total = np.argsort(-result.sobol.total[k], kind="stable")
+            parts.append(_variance_table(result, k, by_total, False, True))
     console.print(_fit(console, *parts))
 
 
