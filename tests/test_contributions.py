@@ -165,3 +165,29 @@ def test_without_toleranced_plays_or_points_the_message_says_what_to_add(
     out = CliRunner().invoke(app, ["contributions", str(FITS), "--step", "2"])
     assert out.exit_code == 2
     assert "step" in out.output
+
+
+def test_a_slope_below_what_the_positions_prove_is_zero() -> None:
+    """The four-bar's out-of-plane force sits on a kink at its nominal 0 N: the
+    mean of its one-sided slopes is round-off (it printed 5.2e-15 mm/N), and
+    its effect over the whole 8 N range is below the length the positions
+    prove, so it is 0 and its linear shares are 0."""
+    from jointplay.assembly import assemble
+    from jointplay.proven import Resolution
+
+    model = jointplay.load(ROOT / "examples" / "gallery" / "four_bar.yaml")
+    co = Contributions(variance="never").run(model)
+    asm = assemble(model)
+    length = Resolution.of(asm.s, asm.ell).length
+    effect = np.abs(co.sensitivity) * co.width
+    assert np.all((effect == 0) | (effect >= length))
+    i = co.plays.index("loads[0].force[2]")
+    assert co.sensitivity[0, i] == 0.0 and co.kink[0, i]
+
+
+def test_variance_always_prints_the_sobol_shares_on_a_linear_measure() -> None:
+    fits = ROOT / "examples" / "studies" / "shaft_fits.yaml"
+    out = CliRunner().invoke(app, ["contributions", str(fits), "--variance", "always", "-n", "64"])
+    assert out.exit_code == 0, out.output
+    assert "RSS" in out.output and "the shares of its variance (Sobol' indices):" in out.output
+    assert "first order %" in out.output
