@@ -345,7 +345,9 @@ def envelope(
     point: Annotated[
         str | None,
         typer.Option(
-            "--point", metavar="NAME", help="The functional point to bound (without it: a list)."
+            "--point",
+            metavar="NAME",
+            help="The functional point to bound (without it, the model's points are listed).",
         ),
     ] = None,
     directions: Annotated[
@@ -585,9 +587,10 @@ def tolerances(
     as_json: Annotated[bool, typer.Option("--json", help="Print the study as JSON.")] = False,
     plot: PlotOption = None,
 ) -> None:
-    """Each requirement three ways, side by side: the worst case (linear stack of
-    the plays' tolerances), RSS with Cp/Cpk and ppm, and Monte Carlo with Pp/Ppk
-    and ppm (docs/conventions.md, "Tolerance results side by side")."""
+    """Each requirement three ways, side by side: the worst case (the greatest
+    over every combination of the tolerances' limits, each a certified
+    equilibrium), RSS with Cp/Cpk and ppm where the measure is linear, and Monte
+    Carlo with Pp/Ppk and ppm (docs/tolerancing.md says which holds when)."""
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render_tolerances
     from jointplay.studies.tolerances import Tolerances

@@ -343,14 +343,15 @@ def _domain_glyph(
     if cone.kind == "fixed":
         return []
     if cone.offset is not None:  # a face (disc rim) or a one-sided plane
+        # offset @ tau <= radius: the wall is where the motion along the offset reaches the play
         normal = R @ cone.offset[:3]
         n = normal / np.linalg.norm(normal) if np.linalg.norm(normal) > 0 else R[:, 0]
         u, v = R[:, 1], R[:, 2]
         if cone.lever is not None:  # a disc face: its rim, at the play from the centre
             rim = float(cone.lever[1, 0])
-            return [circle(at - n * m * cone.radius, u, v, rim)]
+            return [circle(at + n * m * cone.radius, u, v, rim)]
         half = 0.06 * size  # a plane: a square the point may not go through
-        c = at - n * m * cone.radius
+        c = at + n * m * cone.radius
         corners = [c + half * (su * u + sv * v) for su, sv in ((1, 1), (-1, 1), (-1, -1), (1, -1))]
         return [np.vstack([*corners, corners[0]])]
     if cone.turn_lever is not None:  # a drive limits a spin, no point's position

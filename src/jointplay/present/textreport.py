@@ -264,7 +264,8 @@ def render_montecarlo(result: MonteCarloResult, source: str, console: Console) -
         f"{result.samples:,} sets of parts, seed {mc.seed}"
         + (f", load case '{mc.case}'" if mc.case else "")
         + f"; every sample certified ({result.batched:,} by batched Newton, "
-        f"{result.full_solves} full solves): {CERTIFIED}\n"
+        f"{result.full_solves:,} full solve{'' if result.full_solves == 1 else 's'}): "
+        f"{CERTIFIED}\n"
     )
     if result.unassembled:
         head.append(
@@ -396,7 +397,7 @@ def render_sweep(
     tail = Text()
     if len(shown_rows) < result.steps:
         where = f"written to {csv}" if csv else "--csv FILE writes them"
-        tail.append(f"(every {shown_rows.step}th of {result.steps} steps shown; all {where})\n")
+        tail.append(f"(one step in {shown_rows.step} of {result.steps} shown; all {where})\n")
     for p, name in enumerate(result.point_names):
         top = float(np.max(sizes[:, p]))
         s = int(np.flatnonzero(sizes[:, p] >= top * (1 - 1e-12))[0])  # ties: the first
