@@ -783,7 +783,10 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
     rows = len(result.point_names) + 1
     fig, axes = plt.subplots(rows, 3, figsize=(13, 4.2 * rows), squeeze=False, layout="constrained")
     steps = np.arange(result.steps)
-    x, xlabel = (result.values[:, -1], result.labels[-1]) if result.labels else (steps, "step")
+    # one varied value along the x axis; a grid of several goes back and forth in
+    # each of them, so it is drawn against the step
+    one = len(result.labels) == 1
+    x, xlabel = (result.values[:, -1], result.labels[-1]) if one else (steps, "step")
     enveloped = False
     for r, name in enumerate(result.point_names):
         d = result.point(name)
@@ -855,7 +858,12 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
     if enveloped:
         handles = [
             Rectangle(
-                (0, 0), 1, 1, facecolor="#dbe7f5", edgecolor=DOMAIN, label="worst-case envelope"
+                (0, 0),
+                1,
+                1,
+                facecolor="#dbe7f5",
+                edgecolor=DOMAIN,
+                label="worst-case envelope of the model as written (its plays and loads)",
             ),
             Line2D(
                 [], [], color=BODY_COLOURS[0], marker="o", ms=4, label="the point over the sweep"
