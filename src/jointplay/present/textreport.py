@@ -424,13 +424,14 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
     head.append(f"{result.model_name or source}: contributions\n", style="bold")
     for play, words in result.plays_described.items():
         head.append(f"  {play}: {words}\n")
-    head.append(
-        "sensitivity s: mm of the measure per mm of play (per rad of a backlash, per N or "
-        "N*mm of a load; for a deviation zone the size of the gradient, per mm or rad "
-        "in its worst direction, T its diameter), at "
-        "the nominal (mean) values; worst case: |s| T of the stack sum |s| T, T the "
-        "tolerance; RSS: (s sigma)^2 of sum (s sigma)^2"
-    )
+    if any(result.linear(k) for k in range(len(result.measures))):  # the linear columns
+        head.append(
+            "sensitivity s: mm of the measure per mm of play (per rad of a backlash, per N or "
+            "N*mm of a load; for a deviation zone the size of the gradient, per mm or rad "
+            "in its worst direction, T its diameter), at "
+            "the nominal (mean) values; worst case: |s| T of the stack sum |s| T, T the "
+            "tolerance; RSS: (s sigma)^2 of sum (s sigma)^2"
+        )
     parts: list[Table | Text] = [head]
     rss = result.rss
     for k, measure in enumerate(result.measures):
@@ -462,9 +463,9 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         for i in order:
             if result.kink[k, i]:
                 notes.append(
-                    f"  {result.plays[i]}: the contacts change at the nominal play; the slope is "
+                    f"  {result.plays[i]}: the contacts change at its nominal value; the slope is "
                     f"{result.slope_down[k, i]:.6g} below it and {result.slope_up[k, i]:.6g} "
-                    "above (the mean of the two is used)\n"
+                    "above" + ("" if by_variance else " (the mean of the two is used)") + "\n"
                 )
         parts.append(table)
         if notes:
