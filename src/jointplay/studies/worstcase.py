@@ -56,15 +56,6 @@ class Reach:
     over: str  # over which load sets (or positions), in words
     signed: float | None = None  # d . u at the worst case (along a direction)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "measure": self.measure,
-            "worst": self.worst if math.isfinite(self.worst) else None,
-            "at": self.at,
-            "over": self.over,
-            "signed": self.signed,
-        }
-
 
 def worst_cases(
     model: Model, measures: list[Measure], case: str | None, *, source: str
