@@ -16,6 +16,7 @@ import yaml
 import jointplay
 from conftest import spherical_shaft
 from jointplay import ModelError
+from test_cli import run
 
 
 def write(tmp_path: Path, data: Any, name: str = "model.yaml") -> Path:
@@ -251,12 +252,7 @@ def test_cli_exits_2_with_the_message_and_no_traceback(
     tmp_path: Path, label: str, data: Any, message: str
 ) -> None:
     path = write(tmp_path, data)
-    proc = subprocess.run(
-        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    proc = run("solve", str(path))
     assert proc.returncode == 2
     assert proc.stdout == ""
     assert "Traceback" not in proc.stderr
@@ -311,12 +307,7 @@ def test_a_file_that_is_not_text_is_refused_with_exit_2(
     Either way one line naming the file, and exit code 2."""
     path = tmp_path / "model.yaml"
     path.write_bytes(content)
-    proc = subprocess.run(
-        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    proc = run("solve", str(path))
     assert proc.returncode == 2, proc.stderr
     assert proc.stdout == "" and "Traceback" not in proc.stderr
     assert proc.stderr.startswith(f"jointplay: invalid model: {path}: "), proc.stderr
@@ -428,12 +419,7 @@ def test_numbers_that_read_otherwise_are_refused(tmp_path: Path, play: str, mess
     number is expected, naming the entry, with exit 2."""
     path = tmp_path / "model.yaml"
     path.write_text(_SHAFT_YAML.format(play=play))
-    proc = subprocess.run(
-        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    proc = run("solve", str(path))
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.startswith(f"jointplay: invalid model: {path}: ")
     assert message in proc.stderr and "Traceback" not in proc.stderr
@@ -605,12 +591,7 @@ loads:
   - {body: S1, at: [300, 0, 0], force: [1, "3 kg", 1]}
 """
     )
-    proc = subprocess.run(
-        [sys.executable, "-m", "jointplay.cli", "solve", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    proc = run("solve", str(path))
     assert proc.returncode == 2 and proc.stdout == ""
     assert "Traceback" not in proc.stderr
     first, count, *others = proc.stderr.rstrip("\n").split("\n")
