@@ -388,12 +388,16 @@ def _proven_joint(jr: JointResult, res: Resolution) -> JointResult:
         for c in jr.contacts
     )
     # the sum of the contacts as printed (a weld has none: its own reaction)
-    force = sum((c.force for c in contacts), np.zeros(3)) if contacts else jr.reaction_force
+    force = (
+        sum((c.force for c in contacts), np.zeros(3))
+        if contacts
+        else proven(jr.reaction_force, res.force)
+    )
     return replace(
         jr,
         translation=proven(jr.translation, res.length),
         rotation=proven(jr.rotation, res.angle),
         contacts=contacts,
-        reaction_force=proven(force, res.force) if not contacts else force,
+        reaction_force=force,
         reaction_moment=proven(jr.reaction_moment, res.moment),
     )
