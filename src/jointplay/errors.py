@@ -90,3 +90,30 @@ class SolverError(JointplayError):
     """The cone solver failed, or its answer could not be certified."""
 
     exit_code = 1
+
+
+class MotionError(ModelError):
+    """The mechanism cannot be driven through its ``motion``: at ``step``
+    (the drive at ``value``, in its own unit) its ideal joints ``joints``
+    cannot close (``kind`` "unreachable": no pose closes them at that drive
+    value) or the drive no longer decides the pose (``kind`` "dead point": the
+    linkage at a toggle, which the drive cannot pass). Exit code 2: the
+    model's motion asks for what its linkage cannot do; the fix is its range."""
+
+    label = "cannot move"
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        kind: str,
+        step: int,
+        value: float,
+        joints: tuple[str, ...],
+        source: str | None = None,
+    ):
+        self.kind = kind
+        self.step = step
+        self.value = value
+        self.joints = joints
+        super().__init__(message, source=source, entry="motion")

@@ -255,3 +255,38 @@ GRAM_CERTAIN = sys.float_info.epsilon**0.5
 #: ... and above ``rcond`` squared by this factor (singular values above
 #: twice ``rcond``): the bar when ``rcond`` is coarse.
 GRAM_MARGIN = 4.0
+
+
+@dataclass(frozen=True)
+class MotionSettings:
+    """Tolerances of the nominal kinematics (``jointplay.studies.kinematics``).
+    Lengths are relative to the mechanism's size ``ell`` (the diagonal of the
+    box around its joints); a rotation's equation is written as the length it
+    moves a point ``ell`` away, so that every equation is a length."""
+
+    #: A pose closes its loops when no ideal equation is off by more than this
+    #: (times ``ell``): double precision resolves a closed loop to about 1e-15
+    #: of its size, and a closed-form pose is met to well below 1e-9 mm on a
+    #: 1 m linkage; a pose off by more than this has no solution there (the
+    #: drive's value is out of the linkage's reach).
+    closure: float = 1e-10
+    #: Least squares stop when a step changes the pose or the residual by less
+    #: than this (relative): a little above double precision's round-off, so
+    #: that a pose that closes is closed to round-off, not to a looser stop.
+    solve_tolerance: float = 1e-15
+    #: At most this many evaluations of the equations per step (a pose that
+    #: closes takes a few; Levenberg-Marquardt's own default is 100 per unknown).
+    evaluations: int = 2000
+    #: The drive no longer decides the pose (a dead point) when the smallest
+    #: singular value of the equations' Jacobian, drive included, falls below
+    #: this fraction of the largest. At a toggle it goes as the square root of
+    #: the distance to it: the round-off of a closed pose (1e-15) leaves about
+    #: 3e-8, and a pose 1e-12 of the range short of the toggle is ``1e-6``.
+    dead_point: float = 1e-6
+    #: A motion of the bodies that moves no ideal equation by more than this
+    #: fraction of the largest singular value is free (the drive leaves it
+    #: undecided): the rank test of the solver's free motions.
+    mobility_rcond: float = 1e-9
+
+
+MOTION = MotionSettings()

@@ -44,6 +44,8 @@ from jointplay.model.fields import (
     TorqueVector,
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
+from jointplay.model.joints.base import Coordinate
+from jointplay.model.motion import MotionSection, coordinate_of, range_of
 from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced, play_unit
 from jointplay.units import shown
 
@@ -224,6 +226,10 @@ class Load(BaseModel):
     #: A load that always acts, as the weights do (a preload: a spring, a clamp):
     #: an envelope's probes push against it. Every solve takes every load alike.
     standing: bool = False
+    #: Through a motion (``motion``), the load's point moves with its body; its
+    #: force and torque keep their global directions ("global"), or turn with
+    #: the body ("body").
+    follows: Literal["global", "body"] = "global"
 
     @model_validator(mode="after")
     def _check(self) -> Load:
@@ -251,6 +257,8 @@ class Model(BaseModel):
     requirements: tuple[Requirement, ...] = ()
     #: Deviations shared by several joints' features (``deviations.SharedDeviation``).
     deviations: tuple[SharedDeviation, ...] = ()
+    #: The large motion the mechanism is driven through (``jointplay motion``).
+    motion: MotionSection | None = None
 
     @field_serializer("gravity")
     def _gravity_with_its_unit(self, gravity: tuple[float, float, float] | None) -> Any:
@@ -332,6 +340,7 @@ class Model(BaseModel):
                 )
         found += _check_smallest_plays(self)
         found += _check_shared_deviations(self)
+        found += _check_motion(self)
         # with no ground, or a joint to an unknown body, it would only repeat those
         unreached = (
             _unreached_from_ground(names, grounds, [j.between for j in self.joints])
@@ -456,6 +465,15 @@ class Model(BaseModel):
             out.append(DeviationSource(name, dev, dev.R, at, joints, signs, dev.axis is None))
         return tuple(out)
 
+    def motion_drive(self) -> tuple[Joint, Coordinate, float, float]:
+        """The motion's drive: its joint, its coordinate and its range (rad or
+        mm); ``KeyError`` if the model has no ``motion`` section."""
+        if self.motion is None:
+            raise KeyError("motion")
+        joint = self.joint(self.motion.drive)
+        kind = coordinate_of(joint, *self.motion.range)
+        return (joint, kind, *range_of(self.motion, kind))
+
     def body(self, name: str) -> Body:
         for b in self.bodies:
             if b.name == name:
@@ -574,6 +592,36 @@ def _check_shared_deviations(model: Model) -> list[EntryError]:
             )
         found += [EntryError(entry, problem) for problem in problems[:1]]
     return found
+
+
+def _check_motion(model: Model) -> list[EntryError]:
+    """The ``motion`` section: its drive is a joint with a spin or a slide,
+    its range in that coordinate's unit."""
+    motion = model.motion
+    if motion is None:
+        return []
+    names = [j.name for j in model.joints]
+    if motion.drive not in names:
+        return [
+            EntryError(
+                "motion",
+                f"drive: unknown joint '{motion.drive}'; joints are: {listing(names)}."
+                + suggest(motion.drive, names),
+            )
+        ]
+    try:
+        model.motion_drive()
+    except ValueError as exc:
+        return [EntryError("motion", str(exc))]
+    if model.deviations:
+        return [
+            EntryError(
+                "motion",
+                "the model has shared deviations ('deviations'), whose frames a motion does "
+                "not carry yet; give each joint its own deviation, or remove 'motion'",
+            )
+        ]
+    return []
 
 
 def check_case(model: Model, case: str | None, source: str) -> None:

@@ -37,6 +37,37 @@ Parts = tuple[FloatArray, float]
 
 IntArray = NDArray[np.intp]
 
+#: A drive's coordinate (``model.motion``): the spin about the axis, or the slide along it.
+Coordinate = Literal["spin", "slide"]
+
+
+@dataclass(frozen=True)
+class Ideal:
+    """One scalar equation of a joint's ideal (play-free) constraint, exact in
+    finite rotations, on the placement of b relative to a in a's joint frame
+    (the frame and centre carried by a, ``u_a[k]``; the centre carried by b,
+    ``c_b``):
+
+    - ``Ideal("offset", k)``: ``u_a[k] . (c_b - c_a) = 0``, the centre's
+      offset along the joint's axis k stays 0;
+    - ``Ideal("axes", j, k)``: ``u_a[j] . u_b[k] = 0``, b's axis k keeps no
+      component along a's axis j (``R_rel[j, k] = 0``).
+
+    At the pose written in the file every one is 0; ``jointplay.motion``
+    closes them through the motion."""
+
+    kind: Literal["offset", "axes"]
+    k: int
+    j: int = 0
+
+
+#: The ideal equations of common joints (``Joint.ideal``).
+CENTRES_MEET = (Ideal("offset", 0), Ideal("offset", 1), Ideal("offset", 2))
+#: b's axis x keeps no component across a's (R_rel[1, 0] = R_rel[2, 0] = 0).
+AXES_PARALLEL = (Ideal("axes", k=0, j=1), Ideal("axes", k=0, j=2))
+#: With the axes parallel, b's y axis keeps off a's z (R_rel[2, 1] = 0): no spin.
+NO_SPIN = (Ideal("axes", k=1, j=2),)
+
 #: Registered joint classes by their ``type`` name, filled by subclassing.
 JOINT_TYPES: dict[str, type[Joint]] = {}
 
@@ -200,6 +231,8 @@ class Joint(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     type_name: ClassVar[str] = ""
+    #: The coordinates a motion may drive (``model.motion``): none by default.
+    drivable: ClassVar[tuple[Coordinate, ...]] = ()
 
     name: Name
     between: tuple[Name, Name]
@@ -317,6 +350,13 @@ class Joint(BaseModel):
         return np.array(self.at, dtype=float)
 
     def contacts(self) -> tuple[Contact, ...]:
+        raise NotImplementedError
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The joint's ideal constraint in exact rotations (``Ideal``), what
+        its contacts keep when the play is 0: what a motion closes. A
+        coordinate that its contacts hold (a drive's spin, an axial play's
+        slide) is held, unless it is the motion's ``driven`` one."""
         raise NotImplementedError
 
     @classmethod

@@ -18,13 +18,21 @@ within +-b/2 (``drive.py``): contact ``drive``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal, Self
+from typing import TYPE_CHECKING, ClassVar, Literal, Self
 
 import numpy as np
 from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
-from jointplay.model.joints.base import Contact, point_rows, point_rows_of
+from jointplay.model.joints.base import (
+    AXES_PARALLEL,
+    NO_SPIN,
+    Contact,
+    Coordinate,
+    Ideal,
+    point_rows,
+    point_rows_of,
+)
 from jointplay.model.joints.drive import Driven
 
 if TYPE_CHECKING:
@@ -108,6 +116,7 @@ def bore_contacts_of(joints: Sequence[Cylindrical | Revolute]) -> list[tuple[Con
 
 class Cylindrical(Driven):
     type: Literal["cylindrical"] = "cylindrical"
+    drivable: ClassVar[tuple[Coordinate, ...]] = ("spin", "slide")
     length: PositiveLength
     #: Total play along the axis; None: the slide is free.
     axial_clearance: Play | None = None
@@ -116,6 +125,20 @@ class Cylindrical(Driven):
     def _check_length(self) -> Self:
         check_engagement(self.length, self.clearance)
         return self
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The shaft's centre stays on the bore's axis and the axes stay
+        parallel; it slides and spins, unless an ``axial_clearance`` holds the
+        slide or a drive (``backlash``) the spin, and that is not the one driven."""
+        slide = (Ideal("offset", 0),) if self.axial_clearance is not None else ()
+        spin = NO_SPIN if self.backlash is not None else ()
+        return (
+            *(slide if driven != "slide" else ()),
+            Ideal("offset", 1),
+            Ideal("offset", 2),
+            *AXES_PARALLEL,
+            *(spin if driven != "spin" else ()),
+        )
 
     def contacts(self) -> tuple[Contact, ...]:
         return (

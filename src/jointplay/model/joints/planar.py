@@ -30,7 +30,16 @@ from pydantic import model_validator
 
 from jointplay.geometry import FloatArray
 from jointplay.model.fields import PositiveLength
-from jointplay.model.joints.base import Contact, Joint, Parts, point_rows, point_rows_of
+from jointplay.model.joints.base import (
+    AXES_PARALLEL,
+    Contact,
+    Coordinate,
+    Ideal,
+    Joint,
+    Parts,
+    point_rows,
+    point_rows_of,
+)
 
 
 @dataclass(frozen=True)
@@ -103,6 +112,11 @@ class Planar(Joint):
                 "rectangle, or 'diameter' (mm) for a disc"
             )
         return self
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The faces stay in their plane: no offset along the normal, the
+        normals parallel; the plate slides and spins in the plane."""
+        return (Ideal("offset", 0), *AXES_PARALLEL)
 
     def contacts(self) -> tuple[Contact, ...]:
         if self.diameter is not None:

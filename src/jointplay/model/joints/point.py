@@ -23,7 +23,7 @@ import numpy as np
 from pydantic import field_validator
 
 from jointplay.model.fields import Play
-from jointplay.model.joints.base import Contact, Joint
+from jointplay.model.joints.base import Contact, Coordinate, Ideal, Joint
 
 
 class PointOnPlane(Joint):
@@ -44,3 +44,10 @@ class PointOnPlane(Joint):
     def contacts(self) -> tuple[Contact, ...]:
         offset = -np.eye(6)[0]  # -t_x <= gap: the point does not go through the plane
         return (Contact("plane", "ball", np.zeros((0, 6)), self.gap, np.zeros(3), offset),)
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The point stays on its plane at its written gap (a follower kept on
+        its cam): the distance along the normal is kept; it slides and turns
+        freely. A point that should lift off in the motion is not a joint of
+        its large motion: leave it out of the motion's loops."""
+        return (Ideal("offset", 0),)

@@ -27,13 +27,22 @@ axial backlash Ja): contact ``axial``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal, Self
+from typing import ClassVar, Literal, Self
 
 import numpy as np
 from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
-from jointplay.model.joints.base import Contact, Joint, point_rows, point_rows_of
+from jointplay.model.joints.base import (
+    AXES_PARALLEL,
+    NO_SPIN,
+    Contact,
+    Coordinate,
+    Ideal,
+    Joint,
+    point_rows,
+    point_rows_of,
+)
 from jointplay.model.joints.cylindrical import axial_contact, axial_contacts_of
 
 
@@ -48,6 +57,7 @@ Z_NAMES = ("z x- y-", "z x- y+", "z x+ y-", "z x+ y+")
 
 class Prismatic(Joint):
     type: Literal["prismatic"] = "prismatic"
+    drivable: ClassVar[tuple[Coordinate, ...]] = ("slide",)
     length: PositiveLength
     width: PositiveLength
     height: PositiveLength
@@ -75,6 +85,19 @@ class Prismatic(Joint):
         jz = self.clearance_z if self.clearance_z is not None else self.clearance
         assert jy is not None and jz is not None
         return jy, jz
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The slider keeps its centre on the slot's axis and does not turn;
+        it slides along the axis, unless an ``axial_clearance`` holds it and
+        the slide is not the one driven."""
+        held = self.axial_clearance is not None and driven != "slide"
+        return (
+            *((Ideal("offset", 0),) if held else ()),
+            Ideal("offset", 1),
+            Ideal("offset", 2),
+            *AXES_PARALLEL,
+            *NO_SPIN,
+        )
 
     def contacts(self) -> tuple[Contact, ...]:
         jy, jz = self.play

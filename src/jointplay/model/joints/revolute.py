@@ -16,12 +16,19 @@ A ``backlash`` b holds the spin by a drive within +-b/2 (``drive.py``).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal, Self
+from typing import ClassVar, Literal, Self
 
 from pydantic import model_validator
 
 from jointplay.model.fields import Play, PositiveLength
-from jointplay.model.joints.base import Contact
+from jointplay.model.joints.base import (
+    AXES_PARALLEL,
+    CENTRES_MEET,
+    NO_SPIN,
+    Contact,
+    Coordinate,
+    Ideal,
+)
 from jointplay.model.joints.cylindrical import (
     axial_contact,
     bore_contacts_of,
@@ -33,6 +40,7 @@ from jointplay.model.joints.drive import Driven
 
 class Revolute(Driven):
     type: Literal["revolute"] = "revolute"
+    drivable: ClassVar[tuple[Coordinate, ...]] = ("spin",)
     length: PositiveLength
     axial_clearance: Play
 
@@ -40,6 +48,12 @@ class Revolute(Driven):
     def _check_length(self) -> Self:
         check_engagement(self.length, self.clearance)
         return self
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The centres coincide and the axes stay parallel; the spin is free
+        unless a drive (``backlash``) holds it and it is not the one driven."""
+        held = NO_SPIN if self.backlash is not None and driven != "spin" else ()
+        return (*CENTRES_MEET, *AXES_PARALLEL, *held)
 
     def contacts(self) -> tuple[Contact, ...]:
         return (

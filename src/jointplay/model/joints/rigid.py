@@ -14,7 +14,15 @@ import numpy as np
 from pydantic import field_validator
 
 from jointplay.model.fields import NonNegativeLength
-from jointplay.model.joints.base import Contact, Joint
+from jointplay.model.joints.base import (
+    AXES_PARALLEL,
+    CENTRES_MEET,
+    NO_SPIN,
+    Contact,
+    Coordinate,
+    Ideal,
+    Joint,
+)
 
 
 class Rigid(Joint):
@@ -43,3 +51,7 @@ class Rigid(Joint):
 
     def contacts(self) -> tuple[Contact, ...]:
         return (Contact("rigid", "fixed", np.eye(6), 0.0, np.zeros(3)),)
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """No relative motion: the centres coincide and no axis turns."""
+        return (*CENTRES_MEET, *AXES_PARALLEL, *NO_SPIN)

@@ -28,7 +28,14 @@ from pydantic import model_validator
 
 from jointplay.geometry import FloatArray, cross, is_parallel, joint_frame
 from jointplay.model.fields import Direction, NonNegativeLength, PositiveLength
-from jointplay.model.joints.base import Contact, Joint, point_rows, point_rows_of
+from jointplay.model.joints.base import (
+    Contact,
+    Coordinate,
+    Ideal,
+    Joint,
+    point_rows,
+    point_rows_of,
+)
 from jointplay.model.joints.cylindrical import check_engagement
 
 
@@ -57,6 +64,15 @@ class Slot(Joint):
 
     def frame_inputs(self) -> tuple[Any, ...]:
         return (self.axis, self.along)
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The pin stays in the slot: no offset across it (z), its axis not
+        tilted across it; it slides along the slot, along its own axis and
+        spins, unless a ``slot_length`` holds it along the slot."""
+        out = (Ideal("offset", 2), Ideal("axes", k=0, j=2))
+        if self.slot_length is not None:
+            out += (Ideal("offset", 1), Ideal("axes", k=0, j=1))
+        return out
 
     def contacts(self) -> tuple[Contact, ...]:
         out = []

@@ -15,7 +15,14 @@ from typing import Literal, Self
 
 import numpy as np
 
-from jointplay.model.joints.base import Contact, Joint, centred_balls_of, point_rows
+from jointplay.model.joints.base import (
+    Contact,
+    Coordinate,
+    Ideal,
+    Joint,
+    centred_balls_of,
+    point_rows,
+)
 
 
 class SphereInCylinder(Joint):
@@ -24,6 +31,10 @@ class SphereInCylinder(Joint):
     def contacts(self) -> tuple[Contact, ...]:
         centre = np.zeros(3)
         return (Contact("radial", "ball", point_rows(centre, "yz"), self.clearance / 2, centre),)
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The ball's centre stays on the bore's axis (it slides along it)."""
+        return (Ideal("offset", 1), Ideal("offset", 2))
 
     @classmethod
     def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:

@@ -17,7 +17,15 @@ from typing import Literal, Self
 
 import numpy as np
 
-from jointplay.model.joints.base import Contact, Joint, centred_balls_of, point_rows
+from jointplay.model.joints.base import (
+    CENTRES_MEET,
+    Contact,
+    Coordinate,
+    Ideal,
+    Joint,
+    centred_balls_of,
+    point_rows,
+)
 
 
 class Spherical(Joint):
@@ -26,6 +34,10 @@ class Spherical(Joint):
     def contacts(self) -> tuple[Contact, ...]:
         centre = np.zeros(3)
         return (Contact("ball", "ball", point_rows(centre), self.clearance / 2, centre),)
+
+    def ideal(self, driven: Coordinate | None = None) -> tuple[Ideal, ...]:
+        """The centres coincide; every rotation is free."""
+        return CENTRES_MEET
 
     @classmethod
     def contacts_of(cls, joints: Sequence[Self]) -> list[tuple[Contact, ...]]:
