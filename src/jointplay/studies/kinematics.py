@@ -1,0 +1,300 @@
+"""Nominal kinematics: every body's large displacement through a motion.
+
+A body's pose ``(R, p)`` places the point written at ``X`` at ``R X + p``
+(the pose written in the file is ``(I, 0)``; ground bodies keep it). Each
+joint's ideal constraint (``Joint.ideal``) is a list of scalar equations on
+the frame carried by its first body and the centre carried by its second,
+exact in finite rotations; the drive adds one equation, its coordinate at
+the step's value. Each step is solved by SciPy's ``least_squares``
+(Levenberg-Marquardt, analytic Jacobian) from the previous step's pose, so
+open chains and any number of loops are solved alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from jointplay.errors import MotionError, UnboundedMechanismError
+from jointplay.geometry import FloatArray, describe_motion, left_jacobian, rotation_matrix
+from jointplay.model.joints.base import Coordinate, Ideal
+from jointplay.model.mechanism import Model
+from jointplay.settings import MOTION, MotionSettings
+
+
+@dataclass(frozen=True)
+class Poses:
+    """Per step, every moving body's pose: ``R`` (S, B, 3, 3), ``p`` (S, B, 3)."""
+
+    bodies: tuple[str, ...]
+    values: FloatArray  # (S,) the drive's value, rad or mm
+    R: FloatArray
+    p: FloatArray
+
+    def place(self, step: int, body: str, X: FloatArray) -> FloatArray:
+        """Where the point written at ``X`` of ``body`` is at ``step`` (mm)."""
+        if body not in self.bodies:
+            return np.asarray(X, dtype=float)
+        i = self.bodies.index(body)
+        return np.asarray(self.R[step, i] @ np.asarray(X, dtype=float) + self.p[step, i])
+
+    def turn(self, step: int, body: str) -> FloatArray:
+        if body not in self.bodies:
+            return np.eye(3)
+        return np.asarray(self.R[step, self.bodies.index(body)])
+
+
+class _Equations:
+    """The ideal equations of a model with its drive, on the bodies' poses."""
+
+    def __init__(self, model: Model, settings: MotionSettings):
+        joint, coordinate, _, _ = model.motion_drive()
+        self.drive: Coordinate = coordinate
+        self.drive_joint = joint.name
+        self.bodies = tuple(b.name for b in model.moving_bodies)
+        index = {name: i for i, name in enumerate(self.bodies)}
+        centres = np.array([j.at for j in model.joints], dtype=float)
+        self.ell = max(float(np.linalg.norm(centres.max(axis=0) - centres.min(axis=0))), 1.0)
+        self.settings = settings
+        # one row per equation: (joint index, body a, body b, Ideal)
+        self.rows: list[tuple[int, int, int, Ideal]] = []
+        self.frames = []
+        for jdx, j in enumerate(model.joints):
+            a, b = (index.get(name, -1) for name in j.between)
+            self.frames.append((j.R_world_joint, np.array(j.at, dtype=float)))
+            driven = coordinate if j.name == joint.name else None
+            self.rows += [(jdx, a, b, eq) for eq in j.ideal(driven)]
+        self.drive_index = [j.name for j in model.joints].index(joint.name)
+        self.joint_names = tuple(j.name for j in model.joints)
+        self.n = 6 * len(self.bodies)
+
+    def _pose(
+        self, R0: FloatArray, p0: FloatArray, z: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        w = z.reshape(-1, 6)
+        R = np.array([rotation_matrix(w[i, :3]) @ R0[i] for i in range(len(R0))]).reshape(-1, 3, 3)
+        J = np.array([left_jacobian(w[i, :3]) for i in range(len(R0))]).reshape(-1, 3, 3)
+        return R, p0 + w[:, 3:], J
+
+    def evaluate(
+        self, R: FloatArray, p: FloatArray, Jl: FloatArray, value: float
+    ) -> tuple[FloatArray, FloatArray]:
+        """Residuals (mm) and their Jacobian w.r.t. ``z`` (per body: the
+        rotation vector's increment, then the shift)."""
+        ell = self.ell
+        eye, zero = np.eye(3), np.zeros(3)
+
+        def pose(i: int) -> tuple[FloatArray, FloatArray]:
+            return (R[i], p[i]) if i >= 0 else (eye, zero)
+
+        m = len(self.rows) + 1
+        res = np.zeros(m)
+        jac = np.zeros((m, self.n))
+
+        def add(row: int, body: int, g_rot: FloatArray, g_shift: FloatArray) -> None:
+            if body >= 0:
+                jac[row, 6 * body : 6 * body + 3] += g_rot @ Jl[body]
+                jac[row, 6 * body + 3 : 6 * body + 6] += g_shift
+
+        def joint_parts(jdx: int, a: int, b: int) -> tuple[FloatArray, ...]:
+            F, c = self.frames[jdx]
+            Ra, pa = pose(a)
+            Rb, pb = pose(b)
+            return Ra @ F, Rb @ F, Ra @ c + pa, Rb @ c, Rb @ c + pb, pa
+
+        for row, (jdx, a, b, eq) in enumerate(self.rows):
+            ua, ub, ca, rb, cb, pa = joint_parts(jdx, a, b)
+            if eq.kind == "offset":
+                u = ua[:, eq.k]
+                d = cb - ca
+                res[row] = u @ d
+                add(row, a, np.cross(u, cb - pa), -u)
+                add(row, b, np.cross(rb, u), u)
+            else:
+                u, v = ua[:, eq.j], ub[:, eq.k]
+                res[row] = ell * (u @ v)
+                add(row, a, ell * np.cross(u, v), zero)
+                add(row, b, ell * np.cross(v, u), zero)
+        row = m - 1
+        a_name, b_name = self.rows_drive_bodies
+        ua, ub, ca, rb, cb, pa = joint_parts(self.drive_index, a_name, b_name)
+        if self.drive == "slide":
+            u = ua[:, 0]
+            res[row] = u @ (cb - ca) - value
+            add(row, a_name, np.cross(u, cb - pa), -u)
+            add(row, b_name, np.cross(rb, u), u)
+        else:  # sin(phi - value) with R_rel[2, 1] = sin(phi), R_rel[1, 1] = cos(phi)
+            cos, sin = np.cos(value), np.sin(value)
+            for j, k, weight in ((2, 1, cos), (1, 1, -sin)):
+                u, v = ua[:, j], ub[:, k]
+                res[row] += ell * weight * (u @ v)
+                add(row, a_name, ell * weight * np.cross(u, v), zero)
+                add(row, b_name, ell * weight * np.cross(v, u), zero)
+        return res, jac
+
+    @property
+    def rows_drive_bodies(self) -> tuple[int, int]:
+        return self._drive_bodies
+
+    def joints_of(self, weights: FloatArray) -> tuple[str, ...]:
+        """The joints whose equations carry ``weights`` (per row) most."""
+        size = np.abs(weights)
+        top = float(size.max(initial=0.0))
+        names: list[str] = []
+        for row, w in enumerate(size):
+            if w > 0.1 * top:
+                jdx = self.rows[row][0] if row < len(self.rows) else self.drive_index
+                if self.joint_names[jdx] not in names:
+                    names.append(self.joint_names[jdx])
+        return tuple(names)
+
+
+def _shown(coordinate: Coordinate, value: float) -> str:
+    return f"{np.degrees(value):.6g} deg" if coordinate == "spin" else f"{value:.6g} mm"
+
+
+def nominal_poses(
+    model: Model,
+    values: FloatArray,
+    *,
+    settings: MotionSettings = MOTION,
+    source: str | None = None,
+) -> Poses:
+    """Every moving body's pose at each drive value of ``values`` (rad or
+    mm, from the pose written in the file), reached step by step from it.
+    Raises ``UnboundedMechanismError`` when the drive leaves a motion free,
+    ``MotionError`` at a dead point or a value out of reach."""
+    eqs = _Equations(model, settings)
+    index = {name: i for i, name in enumerate(eqs.bodies)}
+    drive = model.joint(eqs.drive_joint)
+    eqs._drive_bodies = tuple(index.get(name, -1) for name in drive.between)  # type: ignore[attr-defined]
+    B = len(eqs.bodies)
+    R = np.repeat(np.eye(3)[None], B, axis=0)
+    p = np.zeros((B, 3))
+    _check_driven(eqs, R, p, model)
+    values = np.asarray(values, dtype=float)
+    # from the written pose (drive 0) to the first value, by steps no larger than the motion's
+    step = float(np.max(np.abs(np.diff(values)), initial=abs(values[0]))) or abs(values[0])
+    lead = int(np.ceil(abs(values[0]) / step)) if step > 0 else 0
+    approach = np.linspace(0.0, values[0], lead + 1)[1:-1] if lead > 1 else np.zeros(0)
+    out_R, out_p = [], []
+    current = 0.0
+    for k, value in enumerate([*approach, *values]):
+        s = k - len(approach)  # the motion's step (negative: on the way to its start)
+        R, p = _solve_step(eqs, R, p, float(value), float(current), s, source)
+        current = float(value)
+        if s >= 0:
+            out_R.append(R)
+            out_p.append(p)
+    return Poses(eqs.bodies, values, np.array(out_R), np.array(out_p))
+
+
+def _solve_step(
+    eqs: _Equations,
+    R0: FloatArray,
+    p0: FloatArray,
+    value: float,
+    previous: float,
+    step: int,
+    source: str | None,
+) -> tuple[FloatArray, FloatArray]:
+    settings = eqs.settings
+    tol = max(settings.solve_tolerance, float(np.finfo(float).eps))
+
+    def fun(z: FloatArray) -> FloatArray:
+        return eqs.evaluate(*eqs._pose(R0, p0, z), value)[0]
+
+    def jac(z: FloatArray) -> FloatArray:
+        return eqs.evaluate(*eqs._pose(R0, p0, z), value)[1]
+
+    z0 = np.zeros(eqs.n)
+    m = len(eqs.rows) + 1
+    fit = least_squares(
+        fun,
+        z0,
+        jac=jac,
+        method="lm" if m >= eqs.n else "trf",
+        xtol=tol,
+        ftol=tol,
+        gtol=tol,
+        max_nfev=settings.evaluations,
+    )
+    R, p, Jl = eqs._pose(R0, p0, fit.x)
+    res, J = eqs.evaluate(R, p, Jl, value)
+    where = f"step {step}" if step >= 0 else "on the way from the written pose to the first step"
+    at = _shown(eqs.drive, value)
+    last = _shown(eqs.drive, previous)
+    worst = float(np.max(np.abs(res)))
+    if worst > settings.closure * eqs.ell:
+        joints = eqs.joints_of(res)
+        raise MotionError(
+            f"unreachable: at {where} (drive '{eqs.drive_joint}' at {at}) the ideal joints "
+            f"{', '.join(repr(j) for j in joints)} cannot close (off by {worst:.3g} mm): the "
+            f"linkage does not reach that drive value, and turns back between {last} and {at}; "
+            "give a range the linkage reaches",
+            kind="unreachable",
+            step=step,
+            value=value,
+            joints=joints,
+            source=source,
+        )
+    scale = _column_scale(eqs)
+    U, sigma, _ = np.linalg.svd(J * scale, full_matrices=False)
+    if sigma.size and sigma[-1] < settings.dead_point * sigma[0]:
+        joints = eqs.joints_of(U[:, -1])
+        raise MotionError(
+            f"dead point: at {where} (drive '{eqs.drive_joint}' at {at}) the drive no longer "
+            f"decides the pose: joints {', '.join(repr(j) for j in joints)} are at a toggle, "
+            "which the drive cannot pass; stop the range short of it, or drive another joint",
+            kind="dead point",
+            step=step,
+            value=value,
+            joints=joints,
+            source=source,
+        )
+    return R, p
+
+
+def _column_scale(eqs: _Equations) -> FloatArray:
+    """Rotations' columns times ``ell``: every unknown a length."""
+    scale = np.ones(eqs.n)
+    for i in range(eqs.n // 6):
+        scale[6 * i : 6 * i + 3] = 1.0 / eqs.ell
+    return scale
+
+
+def _check_driven(eqs: _Equations, R: FloatArray, p: FloatArray, model: Model) -> None:
+    """``UnboundedMechanismError`` (exit 3) if the ideal joints and the drive
+    leave a motion of some body free at the written pose."""
+    Jl = np.repeat(np.eye(3)[None], len(R), axis=0)
+    _, J = eqs.evaluate(R, p, Jl, 0.0)
+    scale = _column_scale(eqs)
+    _, sigma, Vt = np.linalg.svd(J * scale)
+    rank = int(np.sum(sigma > eqs.settings.mobility_rcond * sigma[0])) if sigma.size else 0
+    if rank == eqs.n:
+        return
+    d = Vt[-1] * scale
+    sizes = [
+        float(np.linalg.norm(d[6 * i : 6 * i + 6] / scale[6 * i : 6 * i + 6]))
+        for i in range(eqs.n // 6)
+    ]
+    i = int(np.argmax(sizes))
+    omega, shift = d[6 * i : 6 * i + 3], d[6 * i + 3 : 6 * i + 6]
+    motion = describe_motion(omega, shift, eqs.ell)  # about the origin at the written pose
+    body = eqs.bodies[i]
+    raise UnboundedMechanismError(
+        f"the drive '{eqs.drive_joint}' does not decide the motion: with its "
+        f"{eqs.drive} fixed, the ideal joints leave body '{body}' free ({motion}); "
+        "hold that motion with a joint, or drive it",
+        body=body,
+        motion=motion,
+        direction={
+            eqs.bodies[k]: (
+                tuple(float(c) for c in d[6 * k : 6 * k + 3]),  # type: ignore[misc]
+                tuple(float(c) for c in d[6 * k + 3 : 6 * k + 6]),
+            )
+            for k in range(eqs.n // 6)
+        },
+    )
