@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from jointplay.studies.contributions import Contributions, ContributionsResult
     from jointplay.studies.envelope import Envelope, EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
+    from jointplay.studies.motion import Motion, MotionResult
     from jointplay.studies.sweep import RotateLoad, Sweep, SweepResult, Vary
     from jointplay.studies.tolerances import Tolerances, TolerancesResult
 
@@ -64,6 +65,8 @@ _LAZY = {
     "solve": "solver.pipeline",
     "solve_cases": "solver.pipeline",
     "Workspace": "solver.workspace",
+    "Motion": "studies.motion",
+    "MotionResult": "studies.motion",
     "MonteCarlo": "studies.montecarlo",
     "MonteCarloResult": "studies.montecarlo",
     "Envelope": "studies.envelope",
@@ -133,6 +136,8 @@ __all__ = [
     "ModelError",
     "MonteCarlo",
     "MonteCarloResult",
+    "Motion",
+    "MotionResult",
     "OptionError",
     "Report",
     "RequirementResult",

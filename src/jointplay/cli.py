@@ -503,6 +503,66 @@ def sweep(
     _guarded(run, as_json)
 
 
+@app.command(short_help="The mechanism through its motion: the play's effect at every pose.")
+def motion(
+    model_path: ModelPath,
+    drive: Annotated[
+        str | None, typer.Option("--drive", metavar="JOINT", help="The joint that drives.")
+    ] = None,
+    span: Annotated[
+        str | None,
+        typer.Option(
+            "--range", metavar="START:STOP", help="The drive's range, e.g. '0 deg:360 deg'."
+        ),
+    ] = None,
+    steps: Annotated[int | None, typer.Option("--steps", min=2, help="Steps, both ends.")] = None,
+    case: CaseOption = None,
+    csv: Annotated[
+        Path | None,
+        typer.Option("--csv", metavar="FILE", help="Write the table (one row per step) as CSV."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print every step as JSON.")] = False,
+) -> None:
+    """Drive MODEL through its motion (its 'motion' section, or --drive and
+    --range): every body's pose by its ideal joints, and at every pose the
+    clearance equilibrium; a line per step."""
+    from jointplay.io.modelfile import load
+    from jointplay.present.textreport import render_motion
+    from jointplay.studies.motion import Motion
+
+    def run() -> None:
+        source = str(model_path)
+        bounds = None
+        if span is not None:
+            parts = span.split(":")
+            if len(parts) != 2:
+                raise OptionError(
+                    f"--range {span}: expected START:STOP, e.g. '0 deg:360 deg'", source=source
+                )
+            bounds = (_number_or_text(parts[0]), _number_or_text(parts[1]))
+        if csv is not None:
+            _check_outputs(csv, None)
+        model = load(model_path)
+        result = Motion(drive=drive, range=bounds, steps=steps, case=case).run(model, source)
+        _finish_study(
+            result,
+            csv,
+            None,
+            lambda: None,
+            as_json,
+            lambda: render_motion(result, source, _console()),
+        )
+
+    _guarded(run, as_json)
+
+
+def _number_or_text(text: str) -> float | str:
+    try:
+        return float(text)
+    except ValueError:
+        return text.strip()
+
+
 @app.command(short_help="Which toleranced play drives each functional point.")
 def contributions(
     model_path: ModelPath,

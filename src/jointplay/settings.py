@@ -287,6 +287,11 @@ class MotionSettings:
     #: fraction of the largest singular value is free (the drive leaves it
     #: undecided): the rank test of the solver's free motions.
     mobility_rcond: float = 1e-9
+    #: The largest change of the drive a step's solve starts from the previous
+    #: pose with (rad for a spin; times ``ell`` in mm for a slide): longer steps
+    #: are taken in parts, so that least squares start near the pose they close
+    #: (from 90 deg away a slider-crank's loop closes on its other branch).
+    largest_step: float = 0.1
 
 
 MOTION = MotionSettings()

@@ -413,6 +413,46 @@ def render_sweep(
     console.print(_fit(console, *parts))
 
 
+def render_motion(result: Any, source: str, console: Console) -> None:
+    """The report of ``jointplay motion``: one line per step, then each
+    requirement's worst step."""
+    head = Text()
+    head.append(
+        f"{result.model_name or source}: motion of {result.steps} steps, drive "
+        f"'{result.drive}' ({result.coordinate})\n",
+        style="bold",
+    )
+    head.append(f"every step certified: {CERTIFIED}")
+    table = Table(show_edge=False)
+    table.add_column("step", justify="right")
+    table.add_column(f"drive ({result.unit})", justify="right")
+    for name in result.point_names:
+        table.add_column(f"{name} at (mm)", justify="right")
+        table.add_column(f"d {name} (mm)", justify="right")
+    table.add_column(f"drive reaction ({result.reaction_unit})", justify="right")
+    table.add_column("touching")
+    for s in range(result.steps):
+        cells = [str(s), f"{result.shown_value(s):.6g}"]
+        for k in range(len(result.point_names)):
+            cells += [_vec(result.nominal[s, k], 6), _vec(result.displacement[s, k], 4)]
+        cells += [f"{result.drive_reaction[s]:.6g}", ", ".join(result.touching[s]) or "-"]
+        table.add_row(*cells)
+    tail = Text()
+    for q, name in enumerate(result.requirement_names):
+        s = result.worst_step(q)
+        ok = bool(np.all(result.measured[:, q] <= result.limits[q]))
+        tail.append(
+            f"requirement on {name}: {'passed' if ok else 'FAILED'} at every step"
+            if ok
+            else f"requirement on {name}: FAILED"
+        )
+        tail.append(
+            f"; worst at step {s} (drive {result.shown_value(s):.6g} {result.unit}): "
+            f"{result.measured[s, q]:.6g} mm of {result.limits[q]:g} mm\n"
+        )
+    console.print(_fit(console, head, table, tail))
+
+
 def _bar(percent: float, width: int = 10) -> str:
     full = round(width * percent / 100.0)
     return "#" * full + "." * (width - full)

@@ -175,19 +175,16 @@ def nominal_poses(
     p = np.zeros((B, 3))
     _check_driven(eqs, R, p, model)
     values = np.asarray(values, dtype=float)
-    # from the written pose (drive 0) to the first value, by steps no larger than the motion's
-    step = float(np.max(np.abs(np.diff(values)), initial=abs(values[0]))) or abs(values[0])
-    lead = int(np.ceil(abs(values[0]) / step)) if step > 0 else 0
-    approach = np.linspace(0.0, values[0], lead + 1)[1:-1] if lead > 1 else np.zeros(0)
+    limit = settings.largest_step * (1.0 if eqs.drive == "spin" else eqs.ell)
     out_R, out_p = [], []
-    current = 0.0
-    for k, value in enumerate([*approach, *values]):
-        s = k - len(approach)  # the motion's step (negative: on the way to its start)
-        R, p = _solve_step(eqs, R, p, float(value), float(current), s, source)
+    current = 0.0  # the pose written in the file
+    for s, value in enumerate(values):
+        parts = max(1, int(np.ceil(abs(float(value) - current) / limit)))
+        for part in np.linspace(current, float(value), parts + 1)[1:]:
+            R, p = _solve_step(eqs, R, p, float(part), current, s, source)
         current = float(value)
-        if s >= 0:
-            out_R.append(R)
-            out_p.append(p)
+        out_R.append(R)
+        out_p.append(p)
     return Poses(eqs.bodies, values, np.array(out_R), np.array(out_p))
 
 

@@ -1,0 +1,276 @@
+"""The mechanism through its range of motion, with the play's effect at every pose.
+
+``Motion(...).run(model)`` finds every body's pose at each step
+(``kinematics.nominal_poses``), builds the model as posed there (joints'
+centres carried by their second body and axes by their first, functional
+points, loads' points, centres of mass and outlines moved with their
+bodies; a load's force and torque keep their global directions unless it
+``follows: body``; gravity stays global) and solves the clearance
+equilibrium of that posed model with ``jointplay.solve``, one solve a pose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from jointplay.geometry import FloatArray
+from jointplay.io.modelfile import model_from_dict
+from jointplay.model.mechanism import Model
+from jointplay.result import Result
+from jointplay.settings import MOTION, MotionSettings
+from jointplay.studies.kinematics import Poses, nominal_poses
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") -> Model:
+    """``model`` placed as its bodies are at ``step``, without its motion."""
+    data = model.model_dump(by_alias=True, exclude_none=True)
+    data.pop("motion", None)
+
+    def at(body: str, X: Any) -> list[float]:
+        return [float(c) for c in poses.place(step, body, np.asarray(X, dtype=float))]
+
+    def turned(body: str, v: Any) -> list[float]:
+        return [float(c) for c in poses.turn(step, body) @ np.asarray(v, dtype=float)]
+
+    for joint, entry in zip(model.joints, data["joints"], strict=True):
+        a, b = joint.between
+        entry["at"] = at(b, joint.at)  # a sliding joint's centre travels with its slider
+        for key in ("axis", "up", "along"):
+            if entry.get(key) is not None:
+                entry[key] = turned(a, getattr(joint, key))
+    for point, entry in zip(model.points, data.get("points", []), strict=True):
+        entry["at"] = at(point.body, point.at)
+    for body, entry in zip(model.bodies, data["bodies"], strict=True):
+        if body.center_of_mass is not None:
+            entry["center_of_mass"] = at(body.name, body.center_of_mass)
+        if body.outline is not None:
+            entry["outline"] = [at(body.name, X) for X in body.outline]
+    groups = [(model.loads, data.get("loads", []))]
+    for case, loads in (model.load_cases or {}).items():
+        groups.append((loads, data["load_cases"][case]))
+    for loads, entries in groups:
+        for load, entry in zip(loads, entries, strict=True):
+            if load.at is not None:
+                entry["at"] = at(load.body, load.at)
+            if load.follows == "body":
+                for key in ("force", "torque"):
+                    value = getattr(load, key)
+                    if value is not None:
+                        entry[key] = turned(load.body, [float(c) for c in value])
+    return model_from_dict(data, source=source)
+
+
+@dataclass(frozen=True)
+class MotionResult:
+    """Per step: the drive's value, each point's nominal position and its
+    displacement due to the play, each joint's torsor and reaction, the
+    touching contacts, the drive's reaction, the requirements' measures."""
+
+    model_name: str | None
+    drive: str
+    coordinate: str  # "spin" or "slide"
+    values: FloatArray  # (S,) rad or mm
+    poses: Poses
+    point_names: tuple[str, ...]
+    nominal: FloatArray  # (S, P, 3) mm
+    displacement: FloatArray  # (S, P, 3) mm
+    results: tuple[Result, ...]
+    drive_reaction: FloatArray  # (S,) N*mm about the axis, or N along it (a on b)
+    touching: tuple[tuple[str, ...], ...]
+    requirement_names: tuple[str, ...]
+    measured: FloatArray  # (S, Q) mm
+    limits: FloatArray  # (Q,)
+
+    @property
+    def steps(self) -> int:
+        return len(self.values)
+
+    @property
+    def unit(self) -> str:
+        return "deg" if self.coordinate == "spin" else "mm"
+
+    def shown_value(self, s: int) -> float:
+        v = float(self.values[s])
+        return float(np.degrees(v)) if self.coordinate == "spin" else v
+
+    @property
+    def reaction_unit(self) -> str:
+        return "N*mm" if self.coordinate == "spin" else "N"
+
+    def worst_step(self, q: int) -> int:
+        return int(np.argmax(self.measured[:, q]))
+
+    def to_dict(self) -> dict[str, Any]:
+        steps = []
+        for s, result in enumerate(self.results):
+            steps.append(
+                {
+                    "drive": self.shown_value(s),
+                    "points": {
+                        name: {
+                            "nominal": _list(self.nominal[s, k]),
+                            "displacement": _list(self.displacement[s, k]),
+                        }
+                        for k, name in enumerate(self.point_names)
+                    },
+                    "joints": {
+                        name: {
+                            "translation": _list(j.translation),
+                            "rotation": _list(j.rotation),
+                            "reaction": {
+                                "force": _list(j.reaction_force),
+                                "moment": _list(j.reaction_moment),
+                            },
+                        }
+                        for name, j in result.joints.items()
+                    },
+                    "drive_reaction": float(self.drive_reaction[s]),
+                    "touching": list(self.touching[s]),
+                    "requirements": [r.to_dict() for r in result.requirements],
+                }
+            )
+        return {
+            "study": "motion",
+            "drive": {
+                "joint": self.drive,
+                "coordinate": self.coordinate,
+                "unit": self.unit,
+                "reaction_unit": self.reaction_unit,
+                "steps": self.steps,
+            },
+            "steps": steps,
+            "requirements": [
+                {
+                    "point": name,
+                    "max_displacement": float(self.limits[q]),
+                    "worst_step": self.worst_step(q),
+                    "measured": float(self.measured[self.worst_step(q), q]),
+                    "passed": bool(np.all(self.measured[:, q] <= self.limits[q])),
+                }
+                for q, name in enumerate(self.requirement_names)
+            ],
+        }
+
+    def to_dataframe(self) -> pd.DataFrame:
+        import pandas as pd
+
+        rows = []
+        for s in range(self.steps):
+            row: dict[str, Any] = {"step": s, f"drive ({self.unit})": self.shown_value(s)}
+            for k, name in enumerate(self.point_names):
+                for i, axis in enumerate("xyz"):
+                    row[f"{name} {axis} (mm)"] = float(self.nominal[s, k, i])
+                for i, axis in enumerate("xyz"):
+                    row[f"{name} d{axis} (mm)"] = float(self.displacement[s, k, i])
+            row[f"drive reaction ({self.reaction_unit})"] = float(self.drive_reaction[s])
+            row["touching"] = " ".join(self.touching[s])
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+    to_frame = to_dataframe
+
+
+def _without_round_off(nominal: FloatArray, motion: Motion) -> FloatArray:
+    """Nominal positions with components below what the kinematics closes to
+    (``MotionSettings.closure`` of their size) as 0."""
+    from jointplay.proven import proven
+
+    size = float(np.max(np.abs(nominal), initial=0.0))
+    return proven(nominal, motion.settings.closure * size)
+
+
+def _list(v: FloatArray) -> list[float]:
+    return [float(c) + 0.0 for c in v]
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Settings of a motion study: the model's ``motion`` section, or these
+    in its place (``drive``: a joint; ``range``: start and stop as the
+    section writes them; ``steps``)."""
+
+    drive: str | None = None
+    range: tuple[Any, Any] | None = None
+    steps: int | None = None
+    case: str | None = None
+    settings: MotionSettings = MOTION
+
+    def resolve(self, model: Model, source: str = "<model>") -> Model:
+        """``model`` with its motion section replaced by these settings."""
+        given = {
+            k: v
+            for k, v in (("drive", self.drive), ("range", self.range), ("steps", self.steps))
+            if v is not None
+        }
+        if not given:
+            if model.motion is None:
+                from jointplay.errors import StudyError
+
+                raise StudyError(
+                    "the model has no 'motion' section; add one, motion: {drive: JOINT, "
+                    "range: ['0 deg', '360 deg'], steps: 73}, or give --drive and --range",
+                    source=source,
+                )
+            return model
+        section = {} if model.motion is None else model.motion.model_dump()
+        section.update(given)
+        data = model.model_dump(by_alias=True, exclude_none=True)
+        data["motion"] = section
+        return model_from_dict(data, source=source)
+
+    def run(self, model: Model, source: str = "<model>") -> MotionResult:
+        from jointplay.solver.pipeline import solve
+
+        model = self.resolve(model, source)
+        assert model.motion is not None
+        joint, coordinate, start, stop = model.motion_drive()
+        values = np.linspace(start, stop, model.motion.steps)
+        poses = nominal_poses(model, values, settings=self.settings, source=source)
+        results, nominal, touching, reaction = [], [], [], []
+        for s in range(len(values)):
+            posed = posed_model(model, poses, s, source)
+            result = solve(posed, case=self.case) if self.case else solve(posed)
+            results.append(result)
+            nominal.append([poses.place(s, p.body, np.array(p.at)) for p in model.points])
+            touching.append(
+                tuple(
+                    f"{name}.{c.name}"
+                    for name, j in result.joints.items()
+                    for c in j.contacts
+                    if c.in_contact
+                )
+            )
+            held = result.joints[joint.name]
+            reaction.append(
+                held.reaction_moment[0] if coordinate == "spin" else held.reaction_force[0]
+            )
+        names = tuple(p.name for p in model.points)
+        P = len(names)
+        disp = np.array(
+            [[r.points[n].displacement for n in names] for r in results], dtype=float
+        ).reshape(len(values), P, 3)
+        measured = np.array(
+            [[q.measured for q in r.requirements] for r in results], dtype=float
+        ).reshape(len(values), len(model.requirements))
+        return MotionResult(
+            model.name,
+            joint.name,
+            coordinate,
+            values,
+            poses,
+            names,
+            _without_round_off(np.array(nominal, dtype=float).reshape(len(values), P, 3), self),
+            disp,
+            tuple(results),
+            np.array(reaction, dtype=float),
+            tuple(touching),
+            tuple(q.point for q in model.requirements),
+            measured,
+            np.array([q.max_displacement for q in model.requirements], dtype=float),
+        )
