@@ -69,6 +69,10 @@ class _Equations:
         self.drive_index = [j.name for j in model.joints].index(joint.name)
         self.joint_names = tuple(j.name for j in model.joints)
         self.n = 6 * len(self.bodies)
+        self._drive_bodies: tuple[int, int] = (
+            index.get(joint.between[0], -1),
+            index.get(joint.between[1], -1),
+        )
 
     def _pose(
         self, R0: FloatArray, p0: FloatArray, z: FloatArray
@@ -167,9 +171,6 @@ def nominal_poses(
     Raises ``UnboundedMechanismError`` when the drive leaves a motion free,
     ``MotionError`` at a dead point or a value out of reach."""
     eqs = _Equations(model, settings)
-    index = {name: i for i, name in enumerate(eqs.bodies)}
-    drive = model.joint(eqs.drive_joint)
-    eqs._drive_bodies = tuple(index.get(name, -1) for name in drive.between)  # type: ignore[attr-defined]
     B = len(eqs.bodies)
     R = np.repeat(np.eye(3)[None], B, axis=0)
     p = np.zeros((B, 3))

@@ -69,7 +69,7 @@ class Slot(Joint):
         """The pin stays in the slot: no offset across it (z), its axis not
         tilted across it; it slides along the slot, along its own axis and
         spins, unless a ``slot_length`` holds it along the slot."""
-        out = (Ideal("offset", 2), Ideal("axes", k=0, j=2))
+        out: tuple[Ideal, ...] = (Ideal("offset", 2), Ideal("axes", k=0, j=2))
         if self.slot_length is not None:
             out += (Ideal("offset", 1), Ideal("axes", k=0, j=1))
         return out
