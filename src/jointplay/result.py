@@ -29,12 +29,6 @@ if TYPE_CHECKING:
     from jointplay.assembly import Assembly
     from jointplay.model.mechanism import Load, Model, Requirement
 
-#: Largest relative imbalance of loads and contact forces that ``check`` accepts.
-EQUILIBRIUM_TOLERANCE = DEFAULT.equilibrium_tolerance
-
-#: A contact counts as touching when it uses this much of its play or more.
-TOUCHING = DEFAULT.touching
-
 
 @dataclass(frozen=True)
 class Certificate:
@@ -304,6 +298,8 @@ class Result:
     #: The smallest length, angle, force and moment this answer proves: every
     #: number of it below them is 0.
     resolution: Resolution = EXACT
+    #: The largest relative imbalance ``check`` accepts: the solve's settings'.
+    equilibrium_tolerance: float = DEFAULT.equilibrium_tolerance
 
     @property
     def linearization(self) -> Linearization:
@@ -372,10 +368,10 @@ class Result:
         c = self.certificate
         if not c.certified:
             raise SolverError(f"uncertified result: {c}")
-        if not self.equilibrium_residual <= EQUILIBRIUM_TOLERANCE:
+        if not self.equilibrium_residual <= self.equilibrium_tolerance:
             raise SolverError(
                 f"forces do not balance the loads: residual {self.equilibrium_residual:.3g} "
-                f"of the largest force ({EQUILIBRIUM_TOLERANCE:g} is required)"
+                f"of the largest force ({self.equilibrium_tolerance:g} is required)"
             )
 
 
@@ -416,7 +412,7 @@ def build_result(
     T = asm.tables
     stack = asm.stack
     _, _, level = stack.levels(x)
-    used = stack.gap_used(level)
+    used = stack.gap_used(level, settings.feasibility_tolerance * stack.largest_play())
     # past the clearance: only compliant contacts may be (hard ones by round-off)
     penetration = np.where(stack.spring > 0, np.maximum(level - stack.r, 0.0) * asm.s, 0.0)
     nc = len(asm.contacts)
@@ -455,7 +451,7 @@ def build_result(
     contacts = ContactTable(
         T.contact_name,
         gap,
-        gap >= TOUCHING,
+        gap >= settings.touching,
         proven(wrench[:, :3], res.force),
         point,
         past,
@@ -505,6 +501,7 @@ def build_result(
         requirements_of(model, points),
         asm.model_warnings,
         res,
+        settings.equilibrium_tolerance,
     )
 
 

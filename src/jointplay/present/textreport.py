@@ -13,7 +13,7 @@ from rich.text import Text
 
 from jointplay.geometry import FloatArray, fmt_point
 from jointplay.model.mechanism import Model
-from jointplay.result import EQUILIBRIUM_TOLERANCE, Result
+from jointplay.result import Result
 from jointplay.settings import DEFAULT
 
 if TYPE_CHECKING:  # the studies bring SciPy's statistics: a solve does not need them
@@ -35,7 +35,7 @@ def _vec(v: FloatArray, digits: int = 4) -> str:
 #: What every certified answer of a study proves.
 CERTIFIED = (
     f"no contact past its play by {DEFAULT.feasibility_tolerance:g} of the largest play, "
-    f"every body balanced to {EQUILIBRIUM_TOLERANCE:g} of the largest force"
+    f"every body balanced to {DEFAULT.equilibrium_tolerance:g} of the largest force"
 )
 
 #: The width of a console that is not a terminal (a pipe, a file, a CI log):
@@ -133,7 +133,8 @@ def certificate_words(result: Result) -> str:
             f"certificate: holds ({cert.method}): no contact past its "
             f"{'reach (its play, and its spring under its force)' if springs else 'play'} by "
             f"{res.length:.2g} mm or more; the loads and contact forces of every body "
-            f"balance to {res.balance:.2g} N ({EQUILIBRIUM_TOLERANCE:g} of the largest force)"
+            f"balance to {res.balance:.2g} N "
+            f"({result.equilibrium_tolerance:g} of the largest force)"
         )
     return (
         f"certificate: FAILED ({cert.method}): past clearance {cert.feasibility_mm:.1e} "
