@@ -21,14 +21,20 @@ space: a nonzero row of a null-space basis of ``G``.
 
 The rank is counted at ``SolverSettings.free_motion_rcond`` (singular
 values below it of the largest count as zero: the threshold of free
-motions and dependent rows), and an unknown takes part where its entry in a
-basis vector is above the same fraction of that vector's size. Dense models
-take one SVD of ``G``. Large (sparse) ones take the elimination by blocks of
-six columns that finds free motions (``free_motions.null_basis``), in time
-linear in the size: ``G``'s columns are grouped by joint, six at a time
-(padded with zero columns, which add their own null directions: they are
-counted off), so a row, one body's balance, touches the few joints at that
-body.
+motions and dependent rows), and an unknown takes part where its row of an
+orthonormal null-space basis is above it. Dense models take one SVD of
+``G`` (the split's own test of a determinate balance). Large (sparse) ones
+go in time linear in the size: first the joints between each pair of
+bodies together (side by side, the ground one body), a small SVD each
+(a door's two hinges, a carriage's corners: most redundancy is there);
+then what the pairs pass on, the range of each pair's work, through loops
+of bodies: the null space of those ranges side by side (six columns a
+pair, padded with zero columns, whose own null directions are counted
+off), by the elimination that finds free motions
+(``free_motions.null_basis``): a row, one body's balance, touches the few
+pairs at that body. That elimination measures blocks, not the whole: a
+redundancy that the positions' round-off blurs (singular values between
+1e-12 and 1e-9 of the largest) may be counted by the SVD and not by it.
 
 Compliant contacts (with ``stiffness``) are left out: their force is fixed by
 their penetration (the springs decide the split, the rule does not), so they
@@ -208,14 +214,15 @@ def _pair_blocks(work: Any, pair: IntArray, pairs: IntArray) -> list[_Blocks]:
 def _loops(
     m: int, blocks: list[_Blocks], n_y: int, pair: IntArray, rcond: float
 ) -> tuple[int, NDArray[np.bool_]]:
-    """The self-balanced force systems that run through several joints (a
-    closed loop of bodies): each joint passes on the wrenches of its range,
-    the orthonormal ``U_r`` of its work, and those that balance on every
-    body are the null space of ``C = [U_r of each joint]`` (body unknowns x
-    six columns per joint, padded with zero columns). Returns their number
-    and the unknowns that take part: ``y = V_r diag(1/s_r) z`` of a null
-    vector's part ``z`` on the joint (its entries above ``rcond`` of the
-    largest, on a ``z`` above ``rcond`` of the vector's size)."""
+    """The self-balanced force systems that run through several pairs of
+    bodies (a closed loop of bodies): each pair passes on its range, its
+    work's ``U_r diag(s_r) = G_p V_r`` (so that the singular values are
+    ``G``'s), and those that balance on every body are the null space of
+    ``C = [U_r diag(s_r) of each pair]`` (body unknowns x six columns per
+    pair, padded with zero columns). Returns their number and the unknowns
+    that take part: ``y = V_r z`` of a null vector's part ``z`` on the pair
+    (its entries above ``rcond`` of the largest of the pair, on a ``z``
+    above ``rcond`` of the vector's size)."""
     c_rows, c_cols, c_vals = [], [], []
     y_rows, y_cols, y_vals = [], [], []
     real = []
