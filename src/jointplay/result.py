@@ -8,6 +8,7 @@ joint centre in the joint frame, and the state of each contact; and the
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ from numpy.typing import NDArray
 from jointplay.errors import SolverError
 from jointplay.finite import IDENTITY, Linearization, Placement, linearization
 from jointplay.geometry import FloatArray, cross, describe_motion
+from jointplay.indeterminacy import DETERMINATE, Indeterminacy, indeterminacy_of
 from jointplay.numerics.free_motions import IntArray, column_groups
 from jointplay.proven import EXACT, Resolution, proven
 from jointplay.settings import DEFAULT, SolverSettings
@@ -300,6 +302,24 @@ class Result:
     resolution: Resolution = EXACT
     #: The largest relative imbalance ``check`` accepts: the solve's settings'.
     equilibrium_tolerance: float = DEFAULT.equilibrium_tolerance
+    #: Counts the static indeterminacy of the touching contacts (see
+    #: ``indeterminate``); called lazily. None: not counted (``--exact``).
+    find_indeterminate: Callable[[], Indeterminacy] | None = field(
+        default=None, repr=False, compare=False
+    )
+    _indeterminate: Indeterminacy | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def indeterminate(self) -> Indeterminacy:
+        """The static indeterminacy of the touching contacts
+        (``jointplay.indeterminacy``): its degree, and the joints and contacts
+        whose forces are split by the least-squares rule, not by the balance
+        (degree 0 and none when the balance decides every force)."""
+        if self._indeterminate is None:
+            found = self.find_indeterminate() if self.find_indeterminate else DETERMINATE
+            object.__setattr__(self, "_indeterminate", found)
+        assert self._indeterminate is not None
+        return self._indeterminate
 
     @property
     def linearization(self) -> Linearization:
@@ -332,6 +352,8 @@ class Result:
         state["describe_free"] = _Known(self.free_motions)
         state["_linearization"] = self.linearization
         state["linearize"] = None
+        state["_indeterminate"] = self.indeterminate
+        state["find_indeterminate"] = None
         return state
 
     def to_dict(self) -> dict[str, Any]:
@@ -347,6 +369,7 @@ class Result:
             "warnings": list(self.warnings),
             "accuracy": self.accuracy(),
             "requirements": [r.to_dict() for r in self.requirements],
+            "indeterminate": self.indeterminate.to_dict(),
         }
 
     def accuracy(self) -> dict[str, Any]:
@@ -502,6 +525,7 @@ def build_result(
         asm.model_warnings,
         res,
         settings.equilibrium_tolerance,
+        functools.partial(indeterminacy_of, asm, x.copy(), settings),
     )
 
 

@@ -123,6 +123,35 @@ def sobol_share(v: float, interval: Any) -> str:
     return f"{100 * v:.1f} [{lo:.1f}, {hi:.1f}]"
 
 
+#: The forces' sentence names this many joints at most (a large mechanism's
+#: redundant loops run through thousands): the others are counted.
+NAMED_JOINTS = 6
+
+
+def indeterminacy_words(result: Result) -> str | None:
+    """The forces' sentence where the touching contacts are statically
+    indeterminate (``Result.indeterminate``), naming the joints that share
+    the redundant load; None where the balance decides every force (the
+    text and the report alike)."""
+    found = result.indeterminate
+    if found.degree <= 0:
+        return None
+    names = list(found.joints)
+    if not names:
+        shared = "the touching contacts"
+    elif len(names) == 1:
+        shared = f"the contacts of {names[0]}"
+    elif len(names) <= NAMED_JOINTS:
+        shared = ", ".join(names[:-1]) + f" and {names[-1]}"
+    else:
+        shared = ", ".join(names[:NAMED_JOINTS]) + f" and {len(names) - NAMED_JOINTS} other joints"
+    return (
+        f"Forces: the load shared by {shared} is split by the equal-springs rule "
+        f"(statically indeterminate, degree {found.degree}); the rigid parts do not decide it; "
+        "give `stiffness` for the real split."
+    )
+
+
 def certificate_words(result: Result) -> str:
     """The certificate's line: what it proves, not the round-off it measured
     (the text and the report alike)."""
@@ -160,6 +189,9 @@ def render(
         header.append(f"\nwarning: {warning}", style="bold yellow")
     parts: list[Table | Text] = [header]
     header.append(f"\ncontact forces are those of {'a on b'} for each joint 'between: [a, b]'")
+    split = indeterminacy_words(result)
+    if split is not None:
+        header.append(f"\n{split}")
 
     for joint in model.joints:
         jr = result.joints[joint.name]
