@@ -23,7 +23,7 @@ LAYERS = [
     {"io"},
     {"numerics"},
     {"assembly", "finite"},
-    {"result"},
+    {"result", "indeterminacy"},
     {"solver"},
     {"studies"},
     {"present"},

@@ -7,6 +7,7 @@ from dataclasses import fields
 from pathlib import Path
 
 import jointplay
+from conftest import PAPER
 from jointplay.settings import DEFAULT, SolverSettings
 
 SRC = Path(jointplay.__file__).parent
@@ -51,12 +52,13 @@ def test_no_tolerance_literal_inside_the_algorithms() -> None:
 def test_one_value_per_concept() -> None:
     """The solver and the batch once called a force "positive" above 1e-8 and
     1e-9 of the largest; the certificate's and the result's tolerances were
-    written out twice. Now each is one field, and the names that modules
-    export for them are those fields."""
-    from jointplay import result
-
-    assert DEFAULT.equilibrium_tolerance == result.EQUILIBRIUM_TOLERANCE
-    assert DEFAULT.touching == result.TOUCHING
+    written out twice. Now each is one field, and a result reads the
+    settings it was solved with: a finer balance is checked as such."""
+    model = jointplay.load(PAPER / "6.1.6.1.yaml")
+    loose = jointplay.solve(model)
+    fine = jointplay.solve(model, SolverSettings(equilibrium_tolerance=1e-9))
+    assert loose.equilibrium_tolerance == DEFAULT.equilibrium_tolerance
+    assert fine.equilibrium_tolerance == 1e-9
     names = [f.name for f in fields(SolverSettings)]
     assert len(names) == len(set(names))
     assert jointplay.SolverSettings is SolverSettings

@@ -38,7 +38,6 @@ from jointplay.model.joints.base import cones_of, frames_of
 from jointplay.model.mechanism import Load, Model
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
-from jointplay.settings import DEFAULT
 
 IntArray = NDArray[np.intp]
 
@@ -488,14 +487,23 @@ class BallStack:
         safe = np.where(rho > 0.0, rho, 1.0)
         return v * np.repeat(lam / safe, self.k, axis=-1)
 
-    def gap_used(self, level: FloatArray, radii: FloatArray | None = None) -> FloatArray:
+    def largest_play(self) -> float:
+        """The largest radius (scaled; 1 where every play is 0, springs at no
+        play): the length the certificate's feasibility is relative to."""
+        largest = float(np.max(self.r)) if len(self.r) else 0.0
+        return largest if largest > 0 else 1.0
+
+    def gap_used(
+        self, level: FloatArray, reach: float, radii: FloatArray | None = None
+    ) -> FloatArray:
         """Fraction of each cone's play used at ``level = |A_i x| + B_i x``, in
         [0, 1] (a limit with no play, or one a deviation moved in past its
-        play, counts as used as soon as it is reached); ``radii``: other
-        radii than the stack's (a row each, like ``level``)."""
+        play, counts as used once it is reached to ``reach``, the
+        certificate's feasibility as a length); ``radii``: other radii than
+        the stack's (a row each, like ``level``)."""
         radii = self.r if radii is None else radii
         r = np.where(radii > 0, radii, 1.0)
-        reached = level >= np.minimum(radii, 0.0) - DEFAULT.zero_play_reach
+        reached = level >= np.minimum(radii, 0.0) - reach
         return np.clip(np.where(radii > 0, level / r, reached), 0.0, 1.0)
 
 

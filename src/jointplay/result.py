@@ -8,6 +8,7 @@ joint centre in the joint frame, and the state of each contact; and the
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ from numpy.typing import NDArray
 from jointplay.errors import SolverError
 from jointplay.finite import IDENTITY, Linearization, Placement, linearization
 from jointplay.geometry import FloatArray, cross, describe_motion
+from jointplay.indeterminacy import DETERMINATE, Indeterminacy, indeterminacy_of
 from jointplay.numerics.free_motions import IntArray, column_groups
 from jointplay.proven import EXACT, Resolution, proven
 from jointplay.settings import DEFAULT, SolverSettings
@@ -28,12 +30,6 @@ from jointplay.settings import DEFAULT, SolverSettings
 if TYPE_CHECKING:
     from jointplay.assembly import Assembly
     from jointplay.model.mechanism import Load, Model, Requirement
-
-#: Largest relative imbalance of loads and contact forces that ``check`` accepts.
-EQUILIBRIUM_TOLERANCE = DEFAULT.equilibrium_tolerance
-
-#: A contact counts as touching when it uses this much of its play or more.
-TOUCHING = DEFAULT.touching
 
 
 @dataclass(frozen=True)
@@ -304,6 +300,26 @@ class Result:
     #: The smallest length, angle, force and moment this answer proves: every
     #: number of it below them is 0.
     resolution: Resolution = EXACT
+    #: The largest relative imbalance ``check`` accepts: the solve's settings'.
+    equilibrium_tolerance: float = DEFAULT.equilibrium_tolerance
+    #: Counts the static indeterminacy of the touching contacts (see
+    #: ``indeterminate``); called lazily. None: not counted (``--exact``).
+    find_indeterminate: Callable[[], Indeterminacy] | None = field(
+        default=None, repr=False, compare=False
+    )
+    _indeterminate: Indeterminacy | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def indeterminate(self) -> Indeterminacy:
+        """The static indeterminacy of the touching contacts
+        (``jointplay.indeterminacy``): its degree, and the joints and contacts
+        whose forces are split by the least-squares rule, not by the balance
+        (degree 0 and none when the balance decides every force)."""
+        if self._indeterminate is None:
+            found = self.find_indeterminate() if self.find_indeterminate else DETERMINATE
+            object.__setattr__(self, "_indeterminate", found)
+        assert self._indeterminate is not None
+        return self._indeterminate
 
     @property
     def linearization(self) -> Linearization:
@@ -336,6 +352,8 @@ class Result:
         state["describe_free"] = _Known(self.free_motions)
         state["_linearization"] = self.linearization
         state["linearize"] = None
+        state["_indeterminate"] = self.indeterminate
+        state["find_indeterminate"] = None
         return state
 
     def to_dict(self) -> dict[str, Any]:
@@ -351,6 +369,7 @@ class Result:
             "warnings": list(self.warnings),
             "accuracy": self.accuracy(),
             "requirements": [r.to_dict() for r in self.requirements],
+            "indeterminate": self.indeterminate.to_dict(),
         }
 
     def accuracy(self) -> dict[str, Any]:
@@ -372,10 +391,10 @@ class Result:
         c = self.certificate
         if not c.certified:
             raise SolverError(f"uncertified result: {c}")
-        if not self.equilibrium_residual <= EQUILIBRIUM_TOLERANCE:
+        if not self.equilibrium_residual <= self.equilibrium_tolerance:
             raise SolverError(
                 f"forces do not balance the loads: residual {self.equilibrium_residual:.3g} "
-                f"of the largest force ({EQUILIBRIUM_TOLERANCE:g} is required)"
+                f"of the largest force ({self.equilibrium_tolerance:g} is required)"
             )
 
 
@@ -416,7 +435,7 @@ def build_result(
     T = asm.tables
     stack = asm.stack
     _, _, level = stack.levels(x)
-    used = stack.gap_used(level)
+    used = stack.gap_used(level, settings.feasibility_tolerance * stack.largest_play())
     # past the clearance: only compliant contacts may be (hard ones by round-off)
     penetration = np.where(stack.spring > 0, np.maximum(level - stack.r, 0.0) * asm.s, 0.0)
     nc = len(asm.contacts)
@@ -455,7 +474,7 @@ def build_result(
     contacts = ContactTable(
         T.contact_name,
         gap,
-        gap >= TOUCHING,
+        gap >= settings.touching,
         proven(wrench[:, :3], res.force),
         point,
         past,
@@ -505,6 +524,8 @@ def build_result(
         requirements_of(model, points),
         asm.model_warnings,
         res,
+        settings.equilibrium_tolerance,
+        functools.partial(indeterminacy_of, asm, x.copy(), settings),
     )
 
 

@@ -105,10 +105,6 @@ class SolverSettings:
     free_turn_rad: float = 1e3
 
     # -- polishing on the active set (Newton on the KKT equations) -------------
-    #: Refine the interior-point answer on its active set.
-    polish: bool = True
-    #: Start each solve after the first from the previous active set.
-    warm_start: bool = True
     #: Double-precision round-off of a well-scaled quantity: where Newton
     #: stops, and what results and eliminations treat as an exact zero.
     round_off: float = 1e-14
@@ -155,21 +151,11 @@ class SolverSettings:
     #: A cone rests at its apex (a face flat, a ball centred) when |A_i x| is
     #: below this fraction of its play and its force vector this far inside.
     apex: float = 1e-6
-    #: The active-set rounds start from the cones within this fraction of their
-    #: play from their limit, or from the active cones without those loaded
-    #: below ``faint`` of the largest force; the starts share ``refine_rounds``
-    #: Newton runs each (a round drops one cone; a start that keeps finding
-    #: sets may use the runs of later ones). Three: of 13,738 starts that
-    #: found the optimum (the whole suite, and a long random search of the
-    #: property tests, with every weak cone dropped in one round), 687 needed
-    #: a second round, 32 a third and none a fourth; a degenerate bearing
-    #: chain walks one contact a round (20 shafts: 15 rounds from the first
-    #: start).
-    #: The sets a start met are not tried again, so a later start may walk on
-    #: where it stopped.
-    near_limit: float = 1e-3
-    faint: float = 1e-4
-    refine_rounds: int = 3
+    #: Newton runs on the interior point's active set, each correcting it
+    #: (the contacts pushed past join, else the most negative force leaves):
+    #: a degenerate bearing chain of 19 shafts drops one contact a run and
+    #: needs 5; the example cases need one.
+    newton_runs: int = 6
     #: Proximal weight of Newton's steps on a face that may be tied: the steps
     #: along the tie stay short ...
     tie_prox: float = 1e-9
@@ -177,9 +163,6 @@ class SolverSettings:
     #: farther than the size of the position (or of the forces).
     far: float = 1e3
 
-    #: A contact with no play counts as used when its level is within this of
-    #: its limit (round-off of a scaled length, or of mm).
-    zero_play_reach: float = 1e-12
     #: mm: how far an envelope's support value may be from the optimum when
     #: Clarabel stalls just short of its tolerance ("AlmostSolved": a tilt
     #: zone on a prismatic guide, 1.1e-10 mm); far below the micrometres a
@@ -229,13 +212,12 @@ class SolverSettings:
         """The one retry's settings (an answer that does not certify, or a
         step of its route that cannot be done): finer, on another path (a
         tie's least-norm program has its regularization already), the
-        interior point refined, no warm start."""
+        interior point refined."""
         return replace(
             self,
             ipm_tolerance=self.fine_ipm_tolerance,
             ipm_regularization=self.fine_ipm_regularization,
             sparse_interior_refinement=True,
-            warm_start=False,
         )
 
 

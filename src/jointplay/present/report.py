@@ -539,7 +539,7 @@ class _Page:
         from jointplay.present.plot import clearance_figure, mechanism_figure
 
         self.section("Solution" if case is None else f"Solution, load case '{case}'")
-        from jointplay.present.textreport import certificate_words
+        from jointplay.present.textreport import certificate_words, indeterminacy_words
 
         self.parts.append(
             f'<p class="certificate">Status <b>{html.escape(result.status)}</b>; '
@@ -592,6 +592,9 @@ class _Page:
                 "Contacts and forces",
             )
         )
+        split = indeterminacy_words(result)
+        if split is not None:
+            self.paragraph(split)
         self.parts.append(
             _table(
                 ["body", "translation at the origin (mm)", "rotation (rad)"],

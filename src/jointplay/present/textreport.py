@@ -13,7 +13,7 @@ from rich.text import Text
 
 from jointplay.geometry import FloatArray, fmt_point
 from jointplay.model.mechanism import Model
-from jointplay.result import EQUILIBRIUM_TOLERANCE, Result
+from jointplay.result import Result
 from jointplay.settings import DEFAULT
 
 if TYPE_CHECKING:  # the studies bring SciPy's statistics: a solve does not need them
@@ -35,7 +35,7 @@ def _vec(v: FloatArray, digits: int = 4) -> str:
 #: What every certified answer of a study proves.
 CERTIFIED = (
     f"no contact past its play by {DEFAULT.feasibility_tolerance:g} of the largest play, "
-    f"every body balanced to {EQUILIBRIUM_TOLERANCE:g} of the largest force"
+    f"every body balanced to {DEFAULT.equilibrium_tolerance:g} of the largest force"
 )
 
 #: The width of a console that is not a terminal (a pipe, a file, a CI log):
@@ -123,6 +123,35 @@ def sobol_share(v: float, interval: Any) -> str:
     return f"{100 * v:.1f} [{lo:.1f}, {hi:.1f}]"
 
 
+#: The forces' sentence names this many joints at most (a large mechanism's
+#: redundant loops run through thousands): the others are counted.
+NAMED_JOINTS = 6
+
+
+def indeterminacy_words(result: Result) -> str | None:
+    """The forces' sentence where the touching contacts are statically
+    indeterminate (``Result.indeterminate``), naming the joints that share
+    the redundant load; None where the balance decides every force (the
+    text and the report alike)."""
+    found = result.indeterminate
+    if found.degree <= 0:
+        return None
+    names = list(found.joints)
+    if not names:
+        shared = "the touching contacts"
+    elif len(names) == 1:
+        shared = f"the contacts of {names[0]}"
+    elif len(names) <= NAMED_JOINTS:
+        shared = ", ".join(names[:-1]) + f" and {names[-1]}"
+    else:
+        shared = ", ".join(names[:NAMED_JOINTS]) + f" and {len(names) - NAMED_JOINTS} other joints"
+    return (
+        f"Forces: the load shared by {shared} is split by the equal-springs rule "
+        f"(statically indeterminate, degree {found.degree}); the rigid parts do not decide it; "
+        "give `stiffness` for the real split."
+    )
+
+
 def certificate_words(result: Result) -> str:
     """The certificate's line: what it proves, not the round-off it measured
     (the text and the report alike)."""
@@ -133,7 +162,8 @@ def certificate_words(result: Result) -> str:
             f"certificate: holds ({cert.method}): no contact past its "
             f"{'reach (its play, and its spring under its force)' if springs else 'play'} by "
             f"{res.length:.2g} mm or more; the loads and contact forces of every body "
-            f"balance to {res.balance:.2g} N ({EQUILIBRIUM_TOLERANCE:g} of the largest force)"
+            f"balance to {res.balance:.2g} N "
+            f"({result.equilibrium_tolerance:g} of the largest force)"
         )
     return (
         f"certificate: FAILED ({cert.method}): past clearance {cert.feasibility_mm:.1e} "
@@ -159,6 +189,9 @@ def render(
         header.append(f"\nwarning: {warning}", style="bold yellow")
     parts: list[Table | Text] = [header]
     header.append(f"\ncontact forces are those of {'a on b'} for each joint 'between: [a, b]'")
+    split = indeterminacy_words(result)
+    if split is not None:
+        header.append(f"\n{split}")
 
     for joint in model.joints:
         jr = result.joints[joint.name]

@@ -25,7 +25,7 @@ from jointplay.errors import SolverError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix, solve_rows
-from jointplay.settings import TINY
+from jointplay.settings import DEFAULT, TINY, SolverSettings
 from jointplay.solver import certificate, faces, forces, held, pipeline
 
 BoolArray = NDArray[np.bool_]
@@ -83,10 +83,11 @@ class BatchSolution:
         out[:, :3] = v_origin
         return out
 
-    def gap_used(self) -> FloatArray:
+    def gap_used(self, settings: SolverSettings = DEFAULT) -> FloatArray:
         """(B, n): fraction of each ball contact's play used."""
         stack = self.asm.stack
-        return stack.gap_used(stack.levels(self.x)[2])
+        reach = settings.feasibility_tolerance * stack.largest_play()
+        return stack.gap_used(stack.levels(self.x)[2], reach)
 
 
 @dataclass(frozen=True)
@@ -114,15 +115,13 @@ def solved_start(
     plays and centres unless given) as a ``Start``; None for a large (sparse)
     mechanism, whose rows are solved one by one, for no load, for a sample
     the full solver declines, and for an answer with no active set to start
-    from. ``ws``'s warm start is left as it was."""
+    from."""
     norm = float(np.linalg.norm(work))
     if ws.asm.sparse or norm == 0.0:
         return None
     r = ws.stack.r if radii is None else np.asarray(radii, dtype=float)
     c = ws.stack.centres() if centres is None else np.asarray(centres, dtype=float)
     solver = ws if radii is None and centres is None else ws.with_radii(r, centres)
-    kept = solver.last
-    solver.last = None  # a start of its own: the same answer in every process
     try:
         with linalg.one_blas_thread():
             scale = pipeline.load_scale(solver, norm)
@@ -130,8 +129,6 @@ def solved_start(
             point = pipeline.optimum(solver, g_hat, ws.softness(scale))
     except (UnassembledError, SolverError):
         return None  # no start: the batch meets this sample's trouble itself, if at all
-    finally:
-        solver.last = kept
     key = point.active if point.active is not None else point.tie
     if key is None:
         return None
@@ -257,8 +254,7 @@ def _solve_batch(
     guess_rows = ws.settings.batch_guess_rows
     full = 0
     # the batched Newton works on dense stacks; a large (sparse) mechanism's
-    # rows are solved one by one (warm-started from the one before when the
-    # plays do not vary)
+    # rows are solved one by one
     dense = not ws.asm.sparse
     # rows per Newton batch (n at most the unknowns and all multipliers)
     n_most = ws.m + n_balls + ws.stack.A.shape[0] + ws.Eq.shape[0]
@@ -323,8 +319,6 @@ def _solve_batch(
             break
         first, pending = int(pending[0]), pending[1:]
         solver = ws.with_radii(r[first], c[first]) if varied else ws
-        if dense:
-            solver.last = None  # a warm start would retry the set the batch gave up on
         full += 1
         try:
             if varied and scales[first] == norms[first]:  # a faint load beside a preload?
@@ -553,7 +547,8 @@ def _newton_batch(
     # may share the load: the split rule decides, as when the set is redundant
     in_set = np.zeros(len(ws.balls), dtype=bool)
     in_set[[*surface, *linear]] = True
-    touching = (stack.spring == 0) & (stack.gap_used(stack.levels(x, c)[2], r) >= st.touching)
+    used = stack.gap_used(stack.levels(x, c)[2], st.feasibility_tolerance * ws.max_radius, r)
+    touching = (stack.spring == 0) & (used >= st.touching)
     outside = np.any(touching & ~in_set, axis=1)
     if tie is not None:
         # the least-norm point of the face's affine hull is the tie's answer only

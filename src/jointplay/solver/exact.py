@@ -308,7 +308,7 @@ def _build(
                 local_point = c.contact.acting_point(fi, float(lam[i]))
                 level = c.exact_level(asm.s, R_rel, phi, t_rel)
                 r = c.radius * asm.s
-                reached = level >= -st.zero_play_reach
+                reached = level >= -st.feasibility_tolerance * ws.max_radius * asm.s
                 gap = float(np.clip(level / r, 0.0, 1.0)) if r > 0 else float(reached)
                 touching = gap >= st.touching
                 past = max(level - r, 0.0) if c.stiffness > 0 else 0.0
@@ -373,6 +373,7 @@ def _build(
         requirements=requirements_of(model, points),
         model_warnings=asm.model_warnings,
         resolution=res,
+        equilibrium_tolerance=st.equilibrium_tolerance,
     )
 
 

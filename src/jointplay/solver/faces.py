@@ -3,7 +3,7 @@ positions they leave.
 
 A ``Point`` is one candidate answer in scaled unknowns with its multipliers.
 A ``Face`` is an active set's equations, built once per workspace and kept
-(``Workspace.faces``): the batch and the warm starts meet the same sets
+(``Workspace.faces``): the batch and the single solves meet the same sets
 again and again. Whether a face pins the position down decides between a
 plain Newton polish and the least-norm rule for ties (``ties.py``).
 """
@@ -83,19 +83,10 @@ class Face:
     #: Computed when first asked (a null space): most trial faces never are.
     _determine: Callable[[], bool | None] = field(repr=False, compare=False)
     _ties: Callable[[], FloatArray | None] = field(repr=False, compare=False)
-    _free_left: Callable[[], free_motions.Eliminated] = field(repr=False, compare=False)
 
     @cached_property
     def determined(self) -> bool | None:
         return self._determine()
-
-    def free_left(self) -> free_motions.Eliminated:
-        """A large mechanism's face that does not tilt: the elimination of
-        its rows with the joints' (``holders`` reads what they leave free).
-        ``determined`` hands its own over, kept only until it is taken and
-        only for a face that does not pin the position (6.7 MB at 2,000
-        segments, and a study meets many faces)."""
-        return self._free_left()
 
     @cached_property
     def tie_rows(self) -> FloatArray | None:
@@ -135,20 +126,9 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
         rhs[f_rows] = lin.centres()
         tilting = bool(np.any(sub.has_offset & (sub.k > 0)))
 
-        handed: list[free_motions.Eliminated] = []  # ``determined``'s, for ``holders``
-
-        def free_left(L: Matrix = L, sub: BallStack = sub) -> free_motions.Eliminated:
-            return handed.pop() if handed else _eliminated(ws, linalg.vstack([L, sub.A], ws.m))
-
         def determined(L: Matrix = L, sub: BallStack = sub) -> bool | None:
             if tilting:
                 return None
-            if ws.sparse:
-                left = _eliminated(ws, linalg.vstack([L, sub.A], ws.m))
-                pins = bool(left.deficit <= ws.N.shape[1])
-                if not pins:  # ``holders`` asks next what the face leaves free
-                    handed.append(left)
-                return pins
             return pins_position(ws, linalg.vstack([L, sub.A], ws.m))
 
         def ties(L: Matrix = L, sub: BallStack = sub) -> FloatArray | None:
@@ -172,7 +152,6 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
             tilting,
             determined,
             ties,
-            free_left,
         )
         ws.faces[key] = face
     return face
@@ -228,41 +207,6 @@ def _held_rows(ws: Workspace, face: Face, x: FloatArray) -> Matrix | None:
         M = linalg.dense(sub.face_rows(i))
         rows.append(M - np.outer(w, w @ M))
     return linalg.vstack(rows, ws.m)
-
-
-def holders(ws: Workspace, face: Face, x: FloatArray) -> list[int]:
-    """The cones outside ``face`` that would hold a motion it leaves free
-    (besides the mechanism's free motions, which move no cone): those whose
-    rows move along one; none if the face pins the position. A face that
-    leaves a motion free is a tie only if these cannot join it: on a long
-    chain the interior point may leave such a contact open, its force below
-    its tolerance (a 10,000-segment tube string: 377 spigot ends up to
-    1.3 % of their play open, with forces down to 2e-9 of the largest; with
-    them Newton pins every position, without them the face ties). Every
-    cone such a motion moves is named, however far from its limit: the
-    start is judged by Newton and the certificate, not by its size."""
-    rcond = ws.settings.free_motion_rcond
-    if ws.sparse and face.determined is not None:  # the face's own elimination
-        if face.determined:
-            return []
-        free = face.free_left().basis(orthonormal=False)
-    else:
-        rows = _held_rows(ws, face, x)
-        if rows is None:
-            return []
-        C = linalg.vstack([ws.E, rows], ws.m)
-        if ws.sparse:  # at the free motions' threshold, as ``pins_position`` counts
-            free = _eliminated(ws, rows).basis(orthonormal=False)
-        else:
-            free = linalg.null_space(C, ws.m, rcond)
-    if free.shape[1] <= ws.N.shape[1]:  # only the free motions: the face pins the position
-        return []
-    stack = ws.stack
-    moved = linalg.row_norms(stack.A @ free) ** 2
-    cone_moved = np.sqrt(stack.segment_sum(moved)) + linalg.row_norms(stack.B @ free)
-    inside = set(face.key[0]) | set(face.key[1])
-    held = np.flatnonzero(cone_moved > rcond * stack.cone_size)
-    return [int(i) for i in held if int(i) not in inside]
 
 
 def determined_rows(

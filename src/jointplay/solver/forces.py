@@ -37,7 +37,6 @@ from numpy.typing import NDArray
 from jointplay.assembly import Assembly, BallStack, IntArray
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
-from jointplay.numerics.linalg import Matrix
 from jointplay.settings import GRAM_CERTAIN, GRAM_MARGIN, TINY
 from jointplay.solver import conic
 
@@ -326,7 +325,8 @@ def _classes(
     their ``radii`` (and ``centres``)."""
     v, rho, level = stack.levels(x, centres)
     flat = (stack.k == 0) | (rho <= apex_level)
-    touching = (stack.spring == 0) & (stack.gap_used(level, radii) >= settings.touching)
+    reach = settings.feasibility_tolerance * stack.largest_play()
+    touching = (stack.spring == 0) & (stack.gap_used(level, reach, radii) >= settings.touching)
     apex = touching & flat
     pressed = np.zeros_like(apex)
     if lam is not None:
@@ -672,94 +672,3 @@ def _cone_program(
     if not conic.has_answer(sol):
         return None
     return np.asarray(given + np.asarray(sol.x))
-
-
-def pushing(
-    stack: BallStack,
-    Eq: Matrix,
-    x: FloatArray,
-    g_hat: FloatArray,
-    key: tuple[tuple[int, ...], tuple[int, ...]],
-    settings: SolverSettings,
-) -> FloatArray | None:
-    """Forces ``lam >= 0`` of the contacts ``key`` (surface cones, then
-    one-sided limits) at ``x``, each along its contact's direction there,
-    that balance ``g_hat`` with any forces of the rigid rows ``Eq``.
-    Dense: non-negative least squares on the loads left once the rigid
-    rows take their part. Sparse: one linear program (``_pushing_program``).
-    None when none balance to ``newton_accept`` of the terms (the set's
-    positions are then not optimal)."""
-    surface, linear = key
-    sub = stack.take(surface)
-    v, rho = sub.norms(x)
-    u = v / np.repeat(rho, sub.k)
-    if linalg.is_sparse(stack.A):
-        Js = sp.vstack(
-            [sp.csr_matrix(sub.surface_work(u)), sp.csr_matrix(stack.B[list(linear)])], "csr"
-        )
-        return _pushing_program(Js, Eq, g_hat, settings)
-    import scipy.optimize as so  # on this route only: 0.1 s to import
-
-    Eq = linalg.dense(Eq)
-    J = np.vstack(
-        [
-            sub.surface_work(u) if surface else np.zeros((0, len(x))),
-            linalg.dense(stack.B[list(linear)]),
-        ]
-    )
-    if Eq.shape[0]:  # what the rigid rows cannot take: the part orthogonal to their range
-        U, sv, _ = np.linalg.svd(Eq.T, full_matrices=False)
-        U = U[:, sv > settings.free_motion_rcond * sv[0]]
-        M, b = J.T - U @ (U.T @ J.T), g_hat - U @ (U.T @ g_hat)
-    else:
-        M, b = J.T, g_hat
-    try:
-        lam, _ = so.nnls(M, b)
-    except RuntimeError:  # its iteration limit (3 per unknown)
-        return None
-    return _balancing(lam, b - M @ lam, b, settings)
-
-
-def _pushing_program(
-    J: Matrix, Eq: Matrix, g_hat: FloatArray, settings: SolverSettings
-) -> FloatArray | None:
-    """``pushing`` on a large (sparse) model: ``lam >= 0`` and ``nu`` with
-    ``J^T lam + Eq^T nu = g_hat``, one Clarabel call (non-negative least
-    squares, dense and one contact per step, would take minutes on the
-    3,000 contacts of a 1,000-shaft bearing chain). Its tolerance is the
-    acceptance's, checked again on the answer with its negative round-off
-    cut off."""
-    na, ne = J.shape[0], Eq.shape[0]
-    A = sp.vstack(
-        [
-            sp.hstack([J.T, sp.csr_matrix(Eq).T]),
-            sp.hstack([-sp.identity(na), sp.csr_matrix((na, ne))]),
-        ],
-        format="csc",
-    )
-    n = na + ne
-    sol = clarabel.DefaultSolver(
-        sp.csc_matrix((n, n)),
-        np.zeros(n),
-        A,
-        np.r_[g_hat, np.zeros(na)],
-        [clarabel.ZeroConeT(len(g_hat)), clarabel.NonnegativeConeT(na)],
-        conic.options(settings, settings.newton_accept),
-    ).solve()
-    if not conic.has_answer(sol):
-        return None
-    y = np.asarray(sol.x)
-    lam = np.maximum(y[:na], 0.0)
-    miss = g_hat - linalg.adjoint(J, lam) - linalg.adjoint(Eq, y[na:])
-    return _balancing(lam, miss, g_hat, settings)
-
-
-def _balancing(
-    lam: FloatArray, miss: FloatArray, b: FloatArray, settings: SolverSettings
-) -> FloatArray | None:
-    """``lam`` if the balance it leaves of the loads ``b`` misses by at
-    most ``newton_accept`` of the terms (``pushing``'s acceptance), else None."""
-    scale = max(1.0, float(np.max(np.abs(b))), float(np.max(lam, initial=0.0)))
-    if float(np.max(np.abs(miss))) > settings.newton_accept * scale:
-        return None
-    return np.asarray(lam, dtype=np.float64)

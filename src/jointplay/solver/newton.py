@@ -2,8 +2,7 @@
 
 ``newton`` is the one algorithm: stationarity, the active cones on their
 surface and the equalities, solved to round-off from a nearby point (an
-interior-point answer, the previous solve's optimum or a batch neighbour).
-``kkt_point`` and ``newton_on`` put it on a face and judge what it returns.
+interior-point answer or a batch neighbour). ``kkt_point`` puts it on a face.
 """
 
 from __future__ import annotations
@@ -18,32 +17,10 @@ from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
 from jointplay.settings import DEFAULT, SolverSettings
-from jointplay.solver import certificate, faces
+from jointplay.solver import faces
 
 if TYPE_CHECKING:
     from jointplay.solver.workspace import Workspace
-
-
-def newton_on(
-    ws: Workspace,
-    g_hat: FloatArray,
-    sigma: FloatArray,
-    key: faces.FaceKey,
-    x0: FloatArray,
-    lam0: FloatArray,
-    iterations: int,
-    method: str,
-    max_iter: int,
-) -> faces.Point | None:
-    """Solve the KKT equations of the active set ``key`` and accept only a
-    certified, unique optimum: feasible, forces balancing the loads, every
-    active force strictly positive (strictly inside its cone for a face at
-    its apex), on a face that pins the position down."""
-    point = kkt_point(ws, g_hat, sigma, key, x0, lam0, iterations, method, max_iter)
-    if point is None or weak_forces(ws, point, key).size:
-        return None
-    point.certificate = certificate.certify(ws, g_hat, sigma, point)
-    return point if point.certificate.certified else None
 
 
 def weak_forces(ws: Workspace, point: faces.Point, key: faces.FaceKey) -> IntArray:

@@ -10,8 +10,8 @@ convex, so Clarabel's interior-point answer is the global optimum. Then:
    metric, so free unloaded motions come out as exactly 0.
 2. *Polish.* The interior-point answer is accurate to its tolerance only.
    From it we read the active contacts and solve the optimality (KKT)
-   equations of that active set with Newton's method (``newton.py``), to
-   machine precision, with a few active-set rounds where the interior point
+   equations of that active set with Newton's method (``newton.py``), with
+   at most ``newton_runs`` corrections of the set where the interior point
    cannot tell a faintly loaded contact from a nearly touching one.
 3. *Ties.* When the optimal positions form a face, one more cone program
    picks its least-norm point (``ties.py``).
@@ -20,15 +20,15 @@ convex, so Clarabel's interior-point answer is the global optimum. Then:
    certificate (``certificate.py``) holds; else once more at a finer
    interior-point tolerance, then declined.
 
-The routes, in order: warm start (Newton on the last active set); interior
-point, then polish (active-set rounds from five starts); least-norm face
-program when the face does not pin the position; the finer retry.
+The route: interior point, then Newton on its active set (bounded
+corrections); the least-norm face program when the face does not pin the
+position; the split; the certificate; once, the finer retry.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -39,7 +39,7 @@ from jointplay.errors import SolverError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Load, Model
 from jointplay.numerics import linalg
-from jointplay.result import EQUILIBRIUM_TOLERANCE, Result, build_result
+from jointplay.result import Result, build_result
 from jointplay.settings import SolverSettings
 from jointplay.solver import certificate, conic, faces, forces, held, newton, ties
 from jointplay.solver.workspace import Workspace
@@ -113,11 +113,12 @@ def _solve_loads(ws: Workspace, loads: Sequence[Load] | None) -> Result:
     # The certificate balances the forces in the solver's scaled unknowns;
     # per body and in newtons (Result.check) a badly scaled mechanism can
     # fall short. A number that fails its own check is not printed.
-    if result.equilibrium_residual > EQUILIBRIUM_TOLERANCE:
+    tolerance = ws.settings.equilibrium_tolerance
+    if result.equilibrium_residual > tolerance:
         raise SolverError(
             "the solver's answer could not be certified: its contact forces balance the "
             f"loads on each body only to {result.equilibrium_residual:.3g} of the largest "
-            f"force ({EQUILIBRIUM_TOLERANCE:g} is required). "
+            f"force ({tolerance:g} is required). "
             + held.weak_hint(ws)
             + " If not, please report this model."
         )
@@ -268,12 +269,9 @@ def contacts_optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> fac
     if share <= ws.settings.round_off:
         return rest_position(ws, "no contact load")
     sigma_c = sigma * share  # the compliance of loads of the share's size
-    warmed = warm(ws, g_c, sigma_c) if ws.settings.warm_start else None
-    point = warmed if warmed is not None else interior_point(ws, g_c, sigma_c)
+    point = interior_point(ws, g_c, sigma_c)
     held.check_turns(ws, point.x)  # before polishing, which a nearly free body defeats
-    if warmed is None and ws.settings.polish:
-        point = polish(ws, g_c, sigma_c, point)
-    ws.last = point if point.active is not None else None
+    point = polish(ws, g_c, sigma_c, point)
     if g_c is g_hat:  # the whole load: the route's certificate is the answer's
         return replace(point, lam=point.lam.copy(), f=point.f.copy(), nu=None)
     return replace(point, lam=point.lam * share, f=point.f * share, nu=None, certificate=None)
@@ -322,15 +320,6 @@ def interior_point_compliant(ws: Workspace, g_hat: FloatArray, sigma: FloatArray
     return faces.Point(x, z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations)
 
 
-def warm(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point | None:
-    last = ws.last
-    if last is None or last.active is None:
-        return None
-    return newton.newton_on(
-        ws, g_hat, sigma, last.active, last.x, last.lam, 0, "warm-started Newton", 12
-    )
-
-
 def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point) -> faces.Point:
     key = faces.active_set(ws, point.x, point.lam, point.f, ws.stack)
     optimum = refine_active(ws, g_hat, sigma, point, key)
@@ -340,7 +329,7 @@ def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Poi
         key = optimum.active
     if faces.pins_by_newton(optimum) or faces.is_determined(ws, faces.face_of(ws, key), optimum.x):
         return optimum
-    optimum.active = None  # the face is not a warm start: x is not unique
+    optimum.active = None  # the face does not pin x: it is not unique
     tied = ties.least_norm(ws, sigma, optimum, key)
     tied.tie = key  # but the batch solves other loads on it (``Face.tie_rows``)
     return tied
@@ -349,61 +338,27 @@ def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Poi
 def refine_active(
     ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
 ) -> faces.Point | None:
-    """A certified optimum, from the KKT equations of the active set
-    ``key`` read from the interior-point answer or, failing that, of ``key``
-    with every cone the interior point loads strictly, with the cones that
-    hold a motion its face leaves free (``faces.holders``, an elimination:
-    after the cheap start, which the 10,000-segment chain's 389 faint
-    contacts take, 0.74 s sooner), of every cone near its limit, or of
-    ``key`` without its faint cones (each start once,
-    a set met before is not tried again); if some force comes out negative
-    or a cone is pushed past its limit, take steps of an active-set method:
-    add the cones pushed past, or else drop the one whose force is most
-    negative. A large mechanism needs them: there an interior-point answer
-    to 1e-10 cannot tell a slightly loaded contact from a nearly touching
-    one. The starts share ``refine_rounds`` Newton runs each, so a start
-    that walks on may use what the others would (a degenerate chain's walk
-    is one contact a round). The optimum need not be unique (a tie)."""
+    """A certified optimum from the KKT equations of the active set ``key``
+    the interior point shows, with at most ``newton_runs`` corrections of
+    that set (``active_set_steps``): an interior-point answer to 1e-10
+    cannot always tell a faintly loaded contact from a nearly touching one.
+    The retry's set (``retry_of``) adds every contact whose force the
+    balance cannot drop: a faint push under a large turn is one that the
+    interior point leaves short of its limit. The optimum need not be
+    unique (a tie)."""
     stack = ws.stack
     if not len(stack.k):
         return None
-    _, rho, level = stack.levels(point.x)
+    _, rho, _ = stack.levels(point.x)
     r = np.where(stack.r > 0, stack.r, ws.max_radius)
     f_norm = np.sqrt(stack.segment_sum(point.f * point.f))
     st = ws.settings
     at_apex = (stack.k == 0) | ((rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * point.lam))
-    near = set(np.flatnonzero((stack.r - level) / r <= st.near_limit).tolist())
-    # a contact the interior point loads faintly may be one that nearly
-    # touches (its equations then contradict the others')
-    both = np.array([*key[0], *key[1]], dtype=np.intp)
-    top = float(np.max(point.lam, initial=0.0))
-    faint = set(both[point.lam[both] < st.faint * top].tolist())
-    # and one it loads faintly but clearly (a 0.01 N push under a 1e5 N*mm
-    # turn) may be one the interior point left short of its limit: its
-    # slack outweighs its relative force, and without it the set's
-    # equations leave the push unheld
-    loaded = set(np.flatnonzero(point.lam > st.positive_force * top).tolist())
-    seen: set[frozenset[int]] = set()
-    held_now = {*key[0], *key[1]}
-
-    def with_holders() -> set[int]:  # none if the interior point's face pins the position
-        return held_now | set(faces.holders(ws, faces.face_of(ws, key), point.x))
-
-    starts: tuple[Callable[[], set[int]], ...] = (
-        lambda: held_now,
-        lambda: held_now | loaded,
-        with_holders,
-        lambda: near,
-        lambda: held_now - faint,
-    )
-    budget = [st.refine_rounds * len(starts)]  # Newton runs shared by the starts
-    for start in starts:
-        if budget[0] <= 0:
-            break
-        found = active_set_steps(ws, g_hat, sigma, point, start(), at_apex, seen, budget)
-        if found is not None:
-            return found
-    return None
+    active = {*key[0], *key[1]}
+    if retry_of(ws) is None:
+        top = float(np.max(point.lam, initial=0.0))
+        active |= set(np.flatnonzero(point.lam > st.equilibrium_tolerance * top).tolist())
+    return active_set_steps(ws, g_hat, sigma, point, active, at_apex)
 
 
 def active_set_steps(
@@ -413,21 +368,19 @@ def active_set_steps(
     point: faces.Point,
     active: set[int],
     at_apex: NDArray[np.bool_],
-    seen: set[frozenset[int]],
-    budget: list[int],
 ) -> faces.Point | None:
-    """The active-set rounds of ``refine_active`` from ``active``, each a
-    Newton run taken from ``budget`` (shared by the starts)."""
+    """The active-set corrections of ``refine_active`` from ``active``, each
+    a Newton run, at most ``newton_runs`` (a set met before ends them)."""
     stack = ws.stack
     r = np.where(stack.r > 0, stack.r, ws.max_radius)
     lam_scale = float(np.max(np.abs(point.lam)))
     x, lam = point.x, point.lam
     st = ws.settings
-    while budget[0] > 0:
+    seen: set[frozenset[int]] = set()
+    for _ in range(st.newton_runs):
         if frozenset(active) in seen:
             return None
         seen.add(frozenset(active))
-        budget[0] -= 1
         trial_key: faces.FaceKey = (
             tuple(sorted(i for i in active if not at_apex[i])),
             tuple(sorted(i for i in active if at_apex[i])),
@@ -457,9 +410,9 @@ def active_set_steps(
             # Newton's forces on a degenerate set (more contacts touch than
             # the positions need) are one split of many: one may pull where
             # another pushes only, and then these positions are optimal
-            pushing = pushing_optimum(ws, g_hat, sigma, trial, trial_key)
-            if pushing is not None:
-                return pushing
+            shared = split_optimum(ws, g_hat, sigma, trial, trial_key)
+            if shared is not None:
+                return shared
         # a face at its apex whose force reaches its cone's edge tilts
         # onto its surface; the other weak cones leave the set
         lam_top = float(np.max(trial.lam, initial=0.0))
@@ -482,35 +435,30 @@ def active_set_steps(
     return None
 
 
-def pushing_optimum(
+def split_optimum(
     ws: Workspace, g_hat: FloatArray, sigma: FloatArray, trial: faces.Point, key: faces.FaceKey
 ) -> faces.Point | None:
     """``trial`` (a round's positions, every contact of ``key`` touching,
-    none past) with forces that push and balance the loads there, if some
-    do and certify: then its positions are optimal whatever Newton's forces.
-    Hard models whose ``key`` has no face at its apex only (each force
-    along the one direction its contact gives it: ``forces.pushing``)."""
-    surface, linear = key
-    stack = ws.stack
-    if np.any(sigma) or np.any(stack.k[list(linear)]):
+    none past) with the split's forces on its touching contacts
+    (``forces.least_squares_split``), if they certify: then its positions
+    are optimal whatever Newton's forces on a degenerate set. Hard models."""
+    if np.any(sigma):
         return None
-    lam_key = forces.pushing(stack, ws.Eq, trial.x, g_hat, key, ws.settings)
-    if lam_key is None:
+    apex = ws.settings.feasibility_tolerance * ws.max_radius
+    nu = rigid_multipliers(ws, g_hat, trial)
+    shared = forces.least_squares_split(
+        ws.asm, trial.x, trial.lam, trial.f, nu, g_hat, apex, ws.settings, None
+    )
+    if shared is None:
         return None
-    lam = np.zeros(len(ws.balls))
-    lam[[*surface, *linear]] = lam_key
-    f = np.zeros(stack.A.shape[0])
-    rows = stack.rows_of(surface)
-    v, rho = stack.norms(trial.x)
-    f[rows] = stack.take(surface).surface_forces(v[rows], rho[list(surface)], lam[list(surface)])
-    point = replace(trial, lam=lam, f=f, certificate=None)
-    point.certificate = certificate.certify(ws, g_hat, sigma, point)
+    point = replace(trial, lam=shared.lam, f=shared.f, nu=shared.nu, certificate=None)
+    point.certificate = certificate.certify(ws, g_hat, sigma, point, shared.nu)
     if not point.certificate.certified:
         return None
     # a contact with no force (to round-off) does not bound the tie
-    loaded = lam > ws.settings.positive_force * float(np.max(lam))
+    loaded = shared.lam > ws.settings.positive_force * float(np.max(shared.lam))
     point.active = (
-        tuple(i for i in surface if loaded[i]),
-        tuple(i for i in linear if loaded[i]),
+        tuple(i for i in key[0] if loaded[i]),
+        tuple(i for i in key[1] if loaded[i]),
     )
     return point

@@ -3,8 +3,8 @@
 It holds what every solve of the model shares: the assembled matrices, the
 free motions ``N`` and the rows that pin them (``K``), the equalities, and
 data derived from them on first use (the interior-point program, each active
-set's face). A solve reads it and changes nothing but those caches and the
-warm-start hint ``last``; the algorithms are functions (``pipeline.py``).
+set's face). A solve reads it and changes nothing but those caches; the
+algorithms are functions (``pipeline.py``).
 """
 
 from __future__ import annotations
@@ -27,15 +27,14 @@ from jointplay.solver import certificate, conic, held
 
 if TYPE_CHECKING:
     from jointplay.solver.batch import BatchSolution, Start
-    from jointplay.solver.faces import Face, FaceKey, Point
+    from jointplay.solver.faces import Face, FaceKey
 
 
 class Workspace:
     """The solver's side of one model: assembled matrices and free motions.
 
     Built once from an ``Assembly``; the model is never modified. ``solve``
-    may be called again with other loads (``loads=``): each call after the
-    first starts from the previous active set (see ``SolverSettings.warm_start``).
+    may be called again with other loads (``loads=``), each solved on its own.
     """
 
     def __init__(self, assembly: Assembly, settings: SolverSettings | None = None):
@@ -58,8 +57,7 @@ class Workspace:
         else:  # none: the metric (0.2 s at 10,000 joints) waits for a tie, if any
             self.K = sp.csr_matrix((0, self.m))
         self.Eq = linalg.vstack([self.E, self.K], self.m)
-        largest = float(np.max(stack.r)) if len(stack.r) else 0.0
-        self.max_radius = largest if largest > 0 else 1.0  # all zero: springs at 0 play
+        self.max_radius = stack.largest_play()
         self.balance = certificate.Balance(self)
         #: each active set's face, built when first met (``faces.face_of``)
         self.faces: dict[FaceKey, Face] = {}
@@ -68,9 +66,6 @@ class Workspace:
         #: the largest force of springs that deviations press at no load
         #: (``pipeline.load_scale``), found when first needed
         self.preload: float | None = None
-        #: the warm start: the last solve's optimum and active set (a hint only:
-        #: what it leads to is certified like any other answer)
-        self.last: Point | None = None
 
     @classmethod
     def of(cls, model: Model, settings: SolverSettings | None = None) -> Workspace:
@@ -81,13 +76,12 @@ class Workspace:
         what depends on the assembly and the free motions' threshold alone
         is shared: the free motions (a 10,000-shaft chain's cost 2 s), the
         balance's maps and the faces (their rows and whether they pin the
-        position); the cone programs and the warm start are made anew."""
+        position); the cone programs are made anew."""
         if settings.free_motion_rcond != self.settings.free_motion_rcond:
             return Workspace(self.asm, settings)
         other = copy.copy(self)
         other.settings = settings
         other.compliant_program = None
-        other.last = None
         other.__dict__.pop("interior_program", None)  # its Clarabel settings are the old ones
         return other
 

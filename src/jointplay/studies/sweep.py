@@ -7,8 +7,8 @@ axis in steps (a rotating unbalance, a crank cycle). Several parameters make
 a grid: every combination is one step, the last parameter changing fastest.
 
 Every step is a full, certified solve of the changed model. Steps that change
-only the loads reuse the assembled workspace (its contact faces, its warm
-start), so a turning load costs about a millisecond a step. The table of a
+only the loads reuse the assembled workspace (its free motions and contact
+faces), so a turning load costs about a millisecond a step. The table of a
 sweep holds, per step, the functional points' displacements, the joints'
 relative torsors and each contact's state and force.
 

@@ -1,0 +1,242 @@
+"""The degree of static indeterminacy of the touching contacts, and which
+contacts share the redundant load (``Result.indeterminate``), against counts
+made by hand: force unknowns of the touching contacts less the balance
+equations they reach. Each case's count is in its docstring."""
+
+from __future__ import annotations
+
+import json
+import pickle
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+import jointplay
+from conftest import PAPER, ROOT
+from jointplay.indeterminacy import DETERMINATE
+from jointplay.io.modelfile import model_from_dict
+from jointplay.numerics import linalg
+from jointplay.present.report import Report
+from test_cli import run
+
+STUDIES = ROOT / "examples" / "studies"
+
+#: The sentence of ``jointplay solve`` for the door (the text and the report alike).
+DOOR_SENTENCE = (
+    "Forces: the load shared by hinge1 and hinge2 is split by the equal-springs rule "
+    "(statically indeterminate, degree 1); the rigid parts do not decide it; "
+    "give `stiffness` for the real split."
+)
+
+
+def door(stiffness: float | None = None) -> dict[str, Any]:
+    """A door on two hinges on one vertical axis, 1 m apart, with equal
+    axial plays, its weight 400 mm off the axis."""
+    hinge = {
+        "type": "revolute",
+        "between": ["frame", "door"],
+        "axis": [0, 0, 1],
+        "length": 40,
+        "clearance": 0.1,
+        "axial_clearance": 0.2,
+    }
+    if stiffness is not None:
+        hinge["stiffness"] = stiffness
+    return {
+        "name": "door on two hinges",
+        "bodies": [{"name": "frame", "ground": True}, {"name": "door"}],
+        "joints": [
+            {"name": "hinge1", "at": [0, 0, 0], **hinge},
+            {"name": "hinge2", "at": [0, 0, 1000], **hinge},
+        ],
+        "loads": [{"body": "door", "at": [400, 0, 500], "force": [0, 0, -300]}],
+    }
+
+
+def table_on_four_feet() -> dict[str, Any]:
+    """A plate on four equal one-sided feet at (+-100, +-100), centred by a
+    pin with play, pressed down off its centre."""
+    feet = [(100, 100), (-100, 100), (-100, -100), (100, -100)]
+    joints: list[dict[str, Any]] = [
+        {
+            "name": f"foot{i}",
+            "type": "point",
+            "between": ["floor", "table"],
+            "at": [x, y, 0],
+            "axis": [0, 0, 1],
+        }
+        for i, (x, y) in enumerate(feet, start=1)
+    ]
+    joints.append(
+        {
+            "name": "pin",
+            "type": "sphere_in_cylinder",
+            "between": ["floor", "table"],
+            "at": [0, 0, 0],
+            "axis": [0, 0, 1],
+            "clearance": 0.1,
+        }
+    )
+    return {
+        "name": "table on four feet",
+        "bodies": [{"name": "floor", "ground": True}, {"name": "table"}],
+        "joints": joints,
+        "loads": [{"body": "table", "at": [20, 10, 80], "force": [0, 0, -200]}],
+    }
+
+
+def test_a_door_on_two_hinges_has_one_redundant_axial_force() -> None:
+    """The weight pulls the door down onto both hinges' axial limits at once
+    (equal plays) and tilts it onto the bore ends farthest apart (hinge1's
+    lower end, hinge2's upper one). Unknowns: two axial forces, both along
+    the axis and on it, and two radial ones in the plane of the tilt: 4.
+    Equations they reach: the axial force (1: on the axis, the axial forces
+    make no moment), and the radial force and the moment of the tilt (2):
+    3. Degree 4 - 3 = 1, and only the two axial contacts share it; the
+    rule splits them equally (150 N each)."""
+    result = jointplay.solve(model_from_dict(door()))
+    result.check()
+    found = result.indeterminate
+    assert found.degree == 1
+    assert found.joints == ("hinge1", "hinge2")
+    assert found.contacts == ("hinge1.axial", "hinge2.axial")
+    for name in ("hinge1", "hinge2"):
+        (axial,) = (c for c in result.joints[name].contacts if c.name == "axial")
+        assert axial.force_magnitude == pytest.approx(150.0, rel=1e-8)
+
+
+def test_springs_decide_the_door_s_split() -> None:
+    """With a ``stiffness`` every contact of the hinges is a spring: its
+    force is its penetration's, none is rigid redundancy (degree 0)."""
+    result = jointplay.solve(model_from_dict(door(stiffness=1e5)))
+    assert result.indeterminate == DETERMINATE
+
+
+def test_the_carriage_on_its_guide_counts_five() -> None:
+    """The carriage rests on the guide's four vertical corner contacts and
+    is pushed against its four lateral ones, all touching; the nut's face
+    lies flat. Unknowns: 8 corner forces, each along its contact's
+    direction, and the face's force and centre of pressure (3): 11. The
+    carriage's six balance equations are all reached (Fx by the face; Fy
+    and Mz by the lateral corners; Fz, Mx, My by the vertical ones): 6.
+    Degree 11 - 6 = 5, every touching contact taking part (the face's
+    moments share My and Mz with the corners). On a plane alone the four
+    vertical corners would be 4 forces against Fz, Mx, My: 1 of the 5."""
+    result = jointplay.solve(jointplay.load(STUDIES / "carriage.yaml"))
+    result.check()
+    found = result.indeterminate
+    assert found.degree == 5
+    assert found.joints == ("guide", "nut")
+    touching = {
+        f"{name}.{c.name}"
+        for name, jr in result.joints.items()
+        for c in jr.contacts
+        if c.in_contact
+    }
+    assert set(found.contacts) == touching and len(touching) == 9
+
+
+def test_a_table_on_four_equal_feet_counts_one() -> None:
+    """Four vertical point forces against the plate's Fz, Mx, My (the pin,
+    with play, does not touch under a vertical load): 4 - 3 = 1, the four
+    feet sharing it."""
+    result = jointplay.solve(model_from_dict(table_on_four_feet()))
+    result.check()
+    found = result.indeterminate
+    assert found.degree == 1
+    assert found.joints == ("foot1", "foot2", "foot3", "foot4")
+    assert [c.split(".")[0] for c in found.contacts] == list(found.joints)
+
+
+@pytest.mark.parametrize("case", ["resting", "leaning on foot4"])
+def test_the_wobbly_table_rests_on_three_feet(case: str) -> None:
+    """One foot 50 um short: the table rocks, three feet carry it: three
+    vertical forces not on a line against Fz, Mx, My: degree 0."""
+    model = jointplay.load(STUDIES / "wobbly_table.yaml")
+    result = jointplay.solve(model, case=case)
+    result.check()
+    carrying = [
+        n for n, jr in result.joints.items() if n.startswith("foot") and jr.contacts[0].in_contact
+    ]
+    assert len(carrying) == 3
+    assert result.indeterminate.degree == 0
+    assert result.indeterminate.joints == () and result.indeterminate.contacts == ()
+
+
+def test_a_welded_closed_loop_counts_six() -> None:
+    """Three rigid joints close a loop ground - A - B - ground: 18 force
+    unknowns against two bodies' 12 equations, 6 left; all three welds share
+    them."""
+    model = model_from_dict(
+        {
+            "name": "welded loop",
+            "bodies": [{"name": "G", "ground": True}, {"name": "A"}, {"name": "B"}],
+            "joints": [
+                {"name": "w1", "type": "rigid", "between": ["G", "A"], "at": [0, 0, 0]},
+                {"name": "w2", "type": "rigid", "between": ["A", "B"], "at": [100, 0, 0]},
+                {"name": "w3", "type": "rigid", "between": ["B", "G"], "at": [200, 0, 0]},
+            ],
+            "loads": [{"body": "A", "at": [50, 0, 0], "force": [0, 0, -10]}],
+        }
+    )
+    found = jointplay.solve(model).indeterminate
+    assert found.degree == 6
+    assert found.joints == ("w1", "w2", "w3")
+
+
+@pytest.mark.parametrize(
+    ("make", "degree"),
+    [
+        (lambda: model_from_dict(door()), 1),
+        (lambda: jointplay.load(STUDIES / "carriage.yaml"), 5),
+        (lambda: model_from_dict(table_on_four_feet()), 1),
+    ],
+    ids=["door", "carriage", "table"],
+)
+def test_a_large_model_s_count_is_the_same(
+    make: Any, degree: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The sparse path (by pairs of bodies, then loops) counts as the dense SVD."""
+    dense = jointplay.solve(make()).indeterminate
+    monkeypatch.setattr(linalg, "SPARSE_FROM", 0)
+    sparse = jointplay.solve(make()).indeterminate
+    assert dense.degree == degree
+    assert sparse == dense
+
+
+def test_a_determinate_shaft_says_nothing() -> None:
+    """Paper 6.1.6.1: a ball and one end of the bore touch, 3 + 1 unknowns
+    against the shaft's 5 held equations (the spin is free): determinate."""
+    result = jointplay.solve(jointplay.load(PAPER / "6.1.6.1.yaml"))
+    assert result.indeterminate.degree == 0
+    proc = run("solve", str(PAPER / "6.1.6.1.yaml"))
+    assert proc.returncode == 0, proc.stderr
+    assert "Forces:" not in proc.stdout and "indeterminate" not in proc.stdout
+    html = Report(studies=False).render(jointplay.load(PAPER / "6.1.6.1.yaml"), "6.1.6.1")
+    assert "statically indeterminate" not in html
+
+
+def test_solve_says_so_in_text_json_and_report(tmp_path: Path) -> None:
+    path = tmp_path / "door.yaml"
+    path.write_text(yaml.safe_dump(door()), encoding="utf-8")
+    proc = run("solve", str(path))
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count(DOOR_SENTENCE) == 1
+    proc = run("solve", str(path), "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["indeterminate"] == {
+        "degree": 1,
+        "joints": ["hinge1", "hinge2"],
+        "contacts": ["hinge1.axial", "hinge2.axial"],
+    }
+    html = Report(studies=False).render(model_from_dict(door()), "door")
+    assert f"<p>{DOOR_SENTENCE}</p>" in html
+
+
+def test_the_count_travels_with_a_pickled_result() -> None:
+    result = jointplay.solve(model_from_dict(door()))
+    copy = pickle.loads(pickle.dumps(result))
+    assert copy.indeterminate == result.indeterminate
+    assert copy.find_indeterminate is None
