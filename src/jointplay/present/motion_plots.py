@@ -36,6 +36,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from jointplay.model.mechanism import Model, Requirement
+    from jointplay.proven import Resolution
     from jointplay.result import JointResult
     from jointplay.studies.motion import MotionResult
 
@@ -49,6 +50,9 @@ POINTS_SHOWN = 4
 #: is at least this share of the wider (a coupler curve); a straighter path
 #: (a piston's stroke) gets scales of its own, or its play would not show.
 EQUAL_ASPECT_SHARE = 0.1
+#: The displacement's curves: the measure, then the X, Y, Z components (no
+#: red: that is the limit's).
+CURVE_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd")
 #: The joints' force curves cycle through these dashes.
 LINE_STYLES = ("-", "--", "-.", ":")
 #: ``poses_figure`` draws this many poses by default, spread over the motion.
@@ -236,34 +240,40 @@ def joint_forces(result: MotionResult) -> dict[str, FloatArray]:
 def contact_switches(result: MotionResult) -> dict[str, tuple[int, ...]]:
     """Per joint, the steps whose touching contacts differ from the step
     before's: a contact starts or stops touching, or one touching at both
-    pushes the other way (its force turned by more than a quarter turn, the
-    play crossed). A force below what its answer proves has no side."""
+    pushes the other way (its force, or its torque for a drive's backlash,
+    turned by more than a quarter turn: the play crossed). A force or torque
+    below what its answer proves has no side."""
     out: dict[str, tuple[int, ...]] = {}
     for name in joint_forces(result):
-        sides = [_sides(r.joints[name], r.resolution.force) for r in result.results]
+        sides = [_sides(r.joints[name], r.resolution) for r in result.results]
         out[name] = tuple(s for s in range(1, len(sides)) if _switched(sides[s - 1], sides[s]))
     return out
 
 
-def _sides(jr: JointResult, zero: float) -> dict[str, FloatArray | None]:
-    """The touching contacts of a joint, each with its force's direction
-    (None where the force is 0 to the answer's resolution)."""
-    out: dict[str, FloatArray | None] = {}
-    for c in jr.contacts:
-        if not c.in_contact:
-            continue
-        size = c.force_magnitude
-        out[c.name] = np.asarray(c.force) / size if size > zero else None
-    return out
+#: A touching contact's side: the directions of its force and of its torque
+#: (None where it is 0 to the answer's resolution).
+Side = tuple[FloatArray | None, FloatArray | None]
 
 
-def _switched(before: dict[str, FloatArray | None], now: dict[str, FloatArray | None]) -> bool:
+def _sides(jr: JointResult, resolution: Resolution) -> dict[str, Side]:
+    def direction(v: FloatArray, zero: float) -> FloatArray | None:
+        size = float(np.linalg.norm(v))
+        return np.asarray(v) / size if size > zero else None
+
+    return {
+        c.name: (direction(c.force, resolution.force), direction(c.torque, resolution.moment))
+        for c in jr.contacts
+        if c.in_contact
+    }
+
+
+def _switched(before: dict[str, Side], now: dict[str, Side]) -> bool:
     if before.keys() != now.keys():
         return True
-    for name, u in now.items():
-        w = before[name]
-        if u is not None and w is not None and float(u @ w) < 0.0:
-            return True
+    for name, side in now.items():
+        for u, w in zip(side, before[name], strict=True):
+            if u is not None and w is not None and float(u @ w) < 0.0:
+                return True
     return False
 
 
@@ -370,6 +380,25 @@ def drawn_plane(model: Model, result: MotionResult) -> tuple[int, int]:
     return h, v
 
 
+def spread_steps(result: MotionResult, count: int = POSES_SHOWN) -> list[int]:
+    """``count`` steps spread over the motion; over a closed cycle (the last
+    pose is the first) the last is left out."""
+    from jointplay.settings import MOTION
+
+    last = result.steps - 1
+    R, p = result.poses.R, result.poses.p
+    # the same pose to what the kinematics closes a loop to
+    size = max(float(np.max(np.abs(p), initial=0.0)), 1.0)
+    off = max(
+        float(np.max(np.abs(R[last] - R[0]), initial=0.0)) * size,
+        float(np.max(np.abs(p[last] - p[0]), initial=0.0)),
+    )
+    closed = off <= MOTION.closure * size
+    end = last + 1 if closed else last
+    parts = count if closed else count - 1
+    return sorted({round(end * i / max(parts, 1)) for i in range(count)} - {end})
+
+
 def poses_figure(model: Model, result: MotionResult, steps: Sequence[int] | None = None) -> Figure:
     """The mechanism at ``steps`` (default: ``POSES_SHOWN`` spread over the
     motion), drawn over each other in its plane, the later poses darker."""
@@ -381,8 +410,7 @@ def poses_figure(model: Model, result: MotionResult, steps: Sequence[int] | None
     from jointplay.present.plot import BODY_COLOURS, POINT
 
     if steps is None:
-        last = result.steps - 1
-        steps = sorted({round(last * i / (POSES_SHOWN - 1)) for i in range(POSES_SHOWN)})
+        steps = spread_steps(result)
     h, v = drawn_plane(model, result)
     fig, ax = plt.subplots(figsize=(9, 6), layout="constrained")
     bodies = list(body_lines(model))
@@ -404,9 +432,10 @@ def poses_figure(model: Model, result: MotionResult, steps: Sequence[int] | None
         for k in range(len(result.point_names)):
             P = result.nominal[s, k]
             ax.plot([P[h]], [P[v]], "D", color=POINT, markersize=3, alpha=shade)
+        tag = result.nominal[s, 0] if result.point_names else C[-1]
         ax.annotate(
             f"{result.shown_value(s):g} {result.unit}",
-            (float(C[0, h]), float(C[0, v])),
+            (float(tag[h]), float(tag[v])),
             fontsize=7,
             alpha=shade,
         )
