@@ -92,6 +92,7 @@ class Balance:
     def __init__(self, ws: Workspace):
         asm = ws.asm
         self.asm = asm
+        self.stack = ws.stack  # the workspace's cones: exact rotations' are linearized
         self.E = ws.E
         n = len(asm.body_names)
         # per body: force rows as they are, moment rows to N*mm over ell (units of |g|/s)
@@ -160,7 +161,7 @@ class Balance:
     ) -> tuple[FloatArray, FloatArray]:
         """(B,) worst per-body imbalance relative to the largest force in the
         balance, and the rigid multipliers used."""
-        stack = self.asm.stack
+        stack = self.stack
         rest = g_hat - stack.adjoint(f, lam) if len(stack.k) else g_hat.copy()
         if nu is None:
             nu = self.rigid_multipliers(rest)
@@ -206,7 +207,11 @@ def check(
         # each contact's over its own reach: a faint force on a small play
         # left clear is not hidden by a large play elsewhere; and a contact
         # clear by more than ``clear`` of it pushes with nothing at all
-        own = np.where(reach > 0, reach, ws.max_radius)
+        # (the exact route's cones, linearized at a placement, move the
+        # contact's offset into their radii: its own play stays ``ws.plays``)
+        play = ws.plays if r is None else r
+        own_reach = play + sigma * np.maximum(lam, 0.0)
+        own = np.where(own_reach > 0, own_reach, ws.max_radius)
         slack = np.abs(reach - level) / own
         slack = np.where(slack > ws.settings.clear, 1.0, slack)
         turned = np.abs(lam * rho - stack.segment_sum(f * v)) / own

@@ -43,6 +43,9 @@ class Workspace:
         self.m = assembly.m
         self.balls = assembly.balls
         self.stack = stack = assembly.stack
+        #: each contact's own play, what the certificate weighs its slack
+        #: against (``exact`` linearizes the cones, their offsets in the radii)
+        self.plays = stack.r
         self.E = assembly.E
         self.sparse = assembly.sparse
         #: the free motions (dense, or sparse for a large mechanism)
