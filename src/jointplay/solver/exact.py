@@ -54,6 +54,7 @@ from jointplay.result import (
     requirements_of,
 )
 from jointplay.solver import certificate, conic, faces, pipeline
+from jointplay.solver.workspace import Balance
 
 if TYPE_CHECKING:
     from jointplay.solver.workspace import Workspace
@@ -64,7 +65,7 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     start = time.perf_counter()
     asm = ws.asm
     loads = tuple(asm.model.loads_of(None) if loads is None else loads)
-    linear = ws.solve(loads=loads)
+    linear = pipeline.solve_loads(ws, loads)
     x = asm.unknowns_of(linear.bodies)
     iterations = 0
     st = ws.settings
@@ -122,7 +123,7 @@ def _at_placement(ws: Workspace, stack: BallStack, fixed: FloatArray) -> Workspa
     certificate."""
     out = copy.copy(ws)
     out.stack, out.E = stack, fixed
-    out.balance = certificate.Balance(out)
+    out.balance = Balance(out)
     return out
 
 
