@@ -737,6 +737,8 @@ def check_answer(ref: Reference, doc: dict[str, Any]) -> list[str]:
                 W = wrench_of(rj, printed[c.name])
                 total += W
                 if c.fixed:
+                    # held at its centre (a deviation moves it): its part of the dual bound
+                    dual += float(W @ c.centre)
                     continue
                 # in the contact's rows: the wrench on b is -(rows^T f + lam offset), |f| <= lam
                 basis = c.rows.T if c.offset is None else np.column_stack([c.rows.T, c.offset])

@@ -289,5 +289,5 @@ def test_the_retry_shares_the_free_motions_and_answers_as_a_new_workspace(
     monkeypatch.setattr(Workspace, "__init__", counted_init)
     monkeypatch.setattr(Workspace, "with_settings", counted_with)
     monkeypatch.setattr(pipeline, "answer", refused_at_first)
-    pipeline.solve(bearing_chain(15)).check()
+    jointplay.solve(bearing_chain(15)).check()
     assert made == [1] and retried == [1]

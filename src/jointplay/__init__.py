@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     )
     from jointplay.settings import SolverSettings
     from jointplay.solver.batch import BatchSolution
-    from jointplay.solver.pipeline import solve, solve_cases
+    from jointplay.solver.solve import solve, solve_cases
     from jointplay.solver.workspace import Workspace
     from jointplay.studies.contributions import Contributions, ContributionsResult
     from jointplay.studies.envelope import Envelope, EnvelopeResult
@@ -62,8 +62,8 @@ _LAZY = {
     "Result": "result",
     "SolverSettings": "settings",
     "BatchSolution": "solver.batch",
-    "solve": "solver.pipeline",
-    "solve_cases": "solver.pipeline",
+    "solve": "solver.solve",
+    "solve_cases": "solver.solve",
     "Workspace": "solver.workspace",
     "Motion": "studies.motion",
     "MotionResult": "studies.motion",

@@ -22,14 +22,11 @@ Rows are checked together (a single answer is a batch of one).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from jointplay.assembly import IntArray
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.result import Certificate
@@ -86,101 +83,6 @@ class Checks:
         return ok
 
 
-class Balance:
-    """What the balance check needs of a mechanism, built once per workspace."""
-
-    def __init__(self, ws: Workspace):
-        asm = ws.asm
-        self.asm = asm
-        self.E = ws.E
-        n = len(asm.body_names)
-        # per body: force rows as they are, moment rows to N*mm over ell (units of |g|/s)
-        self.weight = np.column_stack(
-            [np.ones((n, 3)), np.repeat((asm.s / (asm.turn * asm.ell))[:, None], 3, 1)]
-        ).ravel()
-        self.per_contact = np.r_[np.ones(3), np.full(3, 1.0 / asm.ell)]
-
-    @cached_property
-    def reaction_maps(self) -> tuple[linalg.Matrix, linalg.Matrix, linalg.Matrix]:
-        """Each joint's reaction (6 per joint: force, moment over ell) from
-        the force vectors ``f``, the forces ``lam`` and the rigid rows' ``nu``:
-        the sum of its contacts' wrenches, one map each, built once."""
-        T = self.asm.tables
-        n_joints = int(T.centre.shape[0])
-        ball_joint = T.joint_of[T.is_ball]
-        fixed_joint = T.joint_of[~T.is_ball]
-        w = np.tile(self.per_contact, n_joints)
-
-        def gather(joint_of: IntArray) -> linalg.Matrix:  # contacts' 6-rows -> joints' 6-rows
-            rows = (6 * joint_of[:, None] + np.arange(6)).ravel()
-            cols = np.arange(6 * len(joint_of))
-            if self.asm.sparse:
-                return sp.csr_matrix(
-                    (w[rows], (rows, cols)), shape=(6 * n_joints, 6 * len(joint_of))
-                )
-            out = np.zeros((6 * n_joints, 6 * len(joint_of)))
-            out[rows, cols] = w[rows]
-            return out
-
-        n = len(ball_joint)
-        offsets = T.offset_ball.ravel()
-        rows, cols = np.arange(6 * n), np.repeat(np.arange(n), 6)
-        if self.asm.sparse:
-            offset_map: linalg.Matrix = sp.csr_matrix((-offsets, (rows, cols)), shape=(6 * n, n))
-        else:
-            offset_map = np.zeros((6 * n, n))
-            offset_map[rows, cols] = -offsets
-        to_ball, to_fixed = gather(ball_joint), gather(fixed_joint)
-        return to_ball @ T.wrench_ball, to_ball @ offset_map, to_fixed @ T.wrench_fixed
-
-    def rigid_multipliers(self, rest: FloatArray) -> FloatArray:
-        """(B, rigid rows): what the rigid rows carry of the generalized
-        forces ``rest``, by least squares (redundant rigid joints share)."""
-        E = self.E
-        if not E.shape[0]:
-            return np.zeros((rest.shape[0], 0))
-        if not linalg.is_sparse(E):
-            return np.asarray(np.linalg.lstsq(np.asarray(E).T, rest.T, rcond=None)[0].T)
-        return np.array([linalg.lstsq(E.T, row) for row in rest])
-
-    def largest_reaction(self, lam: FloatArray, f: FloatArray, nu: FloatArray) -> FloatArray:
-        """(B,): the largest joint reaction, force or moment over ell."""
-        B = lam.shape[0]
-        if not self.asm.tables.centre.shape[0]:
-            return np.zeros(B)
-        of_f, of_lam, of_nu = self.reaction_maps
-        joints = linalg.times(of_f, f) + linalg.times(of_lam, lam)
-        if nu.shape[1]:
-            joints = joints + linalg.times(of_nu, nu)
-        joints = joints.reshape(B, -1, 3)
-        return np.asarray(np.sqrt((joints * joints).sum(axis=-1).max(axis=1, initial=0.0)))
-
-    def residual(
-        self, g_hat: FloatArray, lam: FloatArray, f: FloatArray, nu: FloatArray | None
-    ) -> tuple[FloatArray, FloatArray]:
-        """(B,) worst per-body imbalance relative to the largest force in the
-        balance, and the rigid multipliers used."""
-        stack = self.asm.stack
-        rest = g_hat - stack.adjoint(f, lam) if len(stack.k) else g_hat.copy()
-        if nu is None:
-            nu = self.rigid_multipliers(rest)
-        if nu.shape[1]:
-            rest = rest - linalg.adjoint(self.E, nu)
-        B = g_hat.shape[0]
-        # the largest norms as roots of the largest squares (sqrt is monotone
-        # and correctly rounded: the same numbers, fewer roots)
-        body = (rest * self.weight).reshape(B, -1, 2, 3)
-        applied = (g_hat * self.weight).reshape(B, -1, 2, 3)
-        scale = np.maximum(
-            np.sqrt((applied * applied).sum(axis=-1).max(axis=(1, 2), initial=0.0)),
-            self.largest_reaction(lam, f, nu),
-        )
-        worst = np.sqrt((body * body).sum(axis=-1).max(axis=(1, 2), initial=0.0))
-        # no load and no force: nothing to balance (a preload is balanced too)
-        out = np.where(scale > 0, worst / np.where(scale > 0, scale, 1.0), 0.0)
-        return np.asarray(out), np.asarray(nu)
-
-
 def check(
     ws: Workspace,
     g_hat: FloatArray,
@@ -206,7 +108,11 @@ def check(
         # each contact's over its own reach: a faint force on a small play
         # left clear is not hidden by a large play elsewhere; and a contact
         # clear by more than ``clear`` of it pushes with nothing at all
-        own = np.where(reach > 0, reach, ws.max_radius)
+        # (the exact route's cones, linearized at a placement, move the
+        # contact's offset into their radii: its own play stays ``ws.plays``)
+        play = ws.plays if r is None else r
+        own_reach = play + sigma * np.maximum(lam, 0.0)
+        own = np.where(own_reach > 0, own_reach, ws.max_radius)
         slack = np.abs(reach - level) / own
         slack = np.where(slack > ws.settings.clear, 1.0, slack)
         turned = np.abs(lam * rho - stack.segment_sum(f * v)) / own

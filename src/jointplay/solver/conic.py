@@ -200,12 +200,64 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
         ray = infeasibility(ws)
         if ray is not None:
             raise unassembled(ws, ray)
-    if not has_answer(sol):  # feasible programs: numerical trouble
+    if not has_answer(sol):
+        # Clarabel can stop short of its certificate of unboundedness on a
+        # body that lifts off compliant one-sided contacts: look for the ray
+        # itself before calling it numerical trouble
+        g = -q[: ws.m]
+        ray = driven_ray(ws, g)
+        if ray is not None:
+            raise held.unbounded(ws.asm, held.driven_motion(ws, g, ray), one_way=True)
         raise SolverError(
             f"the cone solver stopped with status {status_name(sol)} on this model. "
             + held.weak_hint(ws)
         )
     return sol
+
+
+def driven_ray(ws: Workspace, g: FloatArray) -> FloatArray | None:
+    """A motion of unit size that the loads' work ``g`` drives and that no
+    contact, spring or rigid row stops however far it goes (the recession
+    cone of the clearances: ``|A_i d| <= -B_i d``, ``E d = 0``, and ``K d = 0``
+    for the free motions, which ``held.check_driven`` took), or None if the
+    loads do no work on any: the program ``max g @ d`` over that cone and
+    ``|d| <= 1``. A cone with no face row (``B_i = 0``) holds ``A_i d = 0``,
+    written as equalities so that the program keeps an interior."""
+    if not np.any(g):
+        return None
+    stack, m = ws.stack, ws.m
+    B = sp.csr_matrix(stack.B)
+    faced = np.diff(B.indptr) > 0  # cones with a face row
+    one_sided, tilted = faced & (stack.k == 0), faced & (stack.k > 0)
+    flat = stack.rows_of(np.flatnonzero(~faced))
+    zero = linalg.vstack([ws.Eq, stack.A[flat]], m)
+    blocks = [sp.csr_matrix(zero), B[np.flatnonzero(one_sided)]]
+    cones: list[Any] = [
+        clarabel.ZeroConeT(zero.shape[0]),
+        clarabel.NonnegativeConeT(int(one_sided.sum())),
+    ]
+    for i in np.flatnonzero(tilted).tolist():  # (-B_i d, -A_i d) in the cone
+        blocks.append(sp.vstack([B[i], sp.csr_matrix(stack.cone_rows(i))]))
+        cones.append(clarabel.SecondOrderConeT(int(stack.k[i]) + 1))
+    blocks.append(sp.vstack([sp.csr_matrix((1, m)), -sp.identity(m)]))  # (1, d): |d| <= 1
+    cones.append(clarabel.SecondOrderConeT(m + 1))
+    A = sp.csc_matrix(sp.vstack(blocks))
+    b = np.zeros(A.shape[0])
+    b[-m - 1] = 1.0
+    keep = [c for c in cones if c.dim]
+    sol = clarabel.DefaultSolver(
+        sp.csc_matrix((m, m)), -g, A, b, keep, options(ws.settings)
+    ).solve()
+    if not has_answer(sol):
+        return None
+    d = np.asarray(sol.x)
+    size = float(np.linalg.norm(d))
+    st = ws.settings
+    if float(g @ d) <= st.drive_tolerance * float(np.linalg.norm(g)) or size == 0.0:
+        return None
+    d = d / size
+    # the interior point's ray to its tolerance: it must hold no contact back
+    return d if held.holds_no_more(ws, g, np.zeros(m), d) else None
 
 
 def infeasibility(ws: Workspace) -> FloatArray | None:

@@ -3,12 +3,14 @@
 Start from the small-displacement answer. At the current placement of every
 body (``finite.placements``: P -> c_b + V + R(Omega)(P - c_b)), linearize
 each contact's exact cone (``Contact.exact_parts``) and the loads' virtual
-work, and solve that cone program for a step; repeat until the step and the
-exact overshoot of every clearance are below ``exact_tolerance_mm`` (1e-9 mm). A small proximal term
-(the joint metric) makes each step unique; it vanishes at the fixed point,
-where the step is 0, so the answer is an exact-geometry equilibrium: its
-contact forces (the last program's duals) balance the loads at the displaced
-points, which ``Result.equilibrium_residual`` checks in global axes.
+work, and solve that cone program for a step; repeat until the step is
+below ``exact_settle_mm``. A small proximal term (the joint metric) makes
+each step unique; it vanishes at the fixed point, where the step is 0, so
+the answer is an exact-geometry equilibrium. It is accepted only if the one
+certificate (``certificate.check``: feasibility, per-body balance, forces in
+their cones, complementarity) holds for the exact cones linearized at the
+final placement with the last program's duals, and its forces balance the
+loads at the displaced points in global axes (``Result.equilibrium_residual``).
 
 Free motions of the current placement keep the value of the small-displacement
 answer (0). Derivatives are analytic: each contact's parts with respect to a
@@ -19,6 +21,7 @@ Jacobian, and the loads' virtual work likewise.
 
 from __future__ import annotations
 
+import copy
 import time
 from collections.abc import Sequence
 from dataclasses import replace
@@ -50,7 +53,8 @@ from jointplay.result import (
     points_of,
     requirements_of,
 )
-from jointplay.solver import conic, pipeline
+from jointplay.solver import certificate, conic, faces, pipeline
+from jointplay.solver.workspace import Balance
 
 if TYPE_CHECKING:
     from jointplay.solver.workspace import Workspace
@@ -61,7 +65,7 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     start = time.perf_counter()
     asm = ws.asm
     loads = tuple(asm.model.loads_of(None) if loads is None else loads)
-    linear = ws.solve(loads=loads)
+    linear = pipeline.solve_loads(ws, loads)
     x = asm.unknowns_of(linear.bodies)
     iterations = 0
     st = ws.settings
@@ -70,7 +74,7 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
         parts = _contact_parts(asm, x)
         g = _virtual_work(asm, x, loads)
         scale = max(float(np.linalg.norm(g)), preload)
-        step, lam, f, nu = _step(ws, x, parts, g, scale)
+        step, *_ = _step(ws, x, parts, g, scale)
         x = x + step
         moved = float(np.max(np.abs(step))) * asm.s  # mm (a turn: mm at the length scale)
         if moved <= st.exact_settle_mm:
@@ -84,39 +88,43 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     parts = _contact_parts(asm, x)
     g = _virtual_work(asm, x, loads)
     scale = max(float(np.linalg.norm(g)), preload)
-    _, lam, f, nu = _step(ws, x, parts, g, scale)
-    to_newton = scale / asm.s
-    result = _build(ws, x, lam * to_newton, f * to_newton, nu * to_newton, loads)
-    feas = max(
-        [
-            float(np.linalg.norm(a) + b) - r
-            for (a, b), r in zip(parts.balls, _reach(ws, ws.softness(scale), lam), strict=True)
-        ]
-        + [0.0]
-    )
-    fixed = max([float(np.max(np.abs(a))) for a, _ in parts.fixed if len(a)] + [0.0])
-    feas_mm = max(feas, fixed)
-    cert = Certificate(
-        certified=feas_mm <= st.exact_tolerance_mm
-        and result.equilibrium_residual <= st.equilibrium_tolerance,
-        method=f"exact rotations ({iterations} re-linearizations)",
-        feasibility_mm=max(feas_mm, 0.0),
-        equilibrium_residual=result.equilibrium_residual,
-        complementarity=0.0,
-        min_force=float(np.min(lam)) * to_newton if len(lam) else 0.0,
-        iterations=iterations,
-    )
+    _, lam, f, nu, here = _step(ws, x, parts, g, scale)
+    # the one certificate (``certificate.check``) at the final placement, in
+    # its own terms: the exact cones linearized there, where the step is 0
+    g_hat = g / scale if scale else g
+    sigma = ws.softness(scale)
+    method = f"exact rotations ({iterations} re-linearizations)"
+    point = faces.Point(np.zeros(asm.m), lam, f, method, iterations, nu=nu)
+    cert = certificate.certify(here, g_hat, sigma, point, nu)
     if not cert.certified:
         raise SolverError(
             "--exact: the exact-geometry answer could not be certified: "
-            f"{cert.feasibility_mm:.3g} mm past a clearance, equilibrium residual "
-            f"{cert.equilibrium_residual:.3g}; please report this model"
+            + certificate.refusal(here, g_hat, sigma, point)
+            + "; the small-displacement answer is the one printed without --exact. "
+            "Please report this model."
         )
-    object.__setattr__(result, "certificate", cert)
+    to_newton = scale / asm.s
+    result = _build(ws, x, lam * to_newton, f * to_newton, nu * to_newton, loads, cert)
+    # as the small-displacement route (``pipeline``): per body and in newtons
+    if result.equilibrium_residual > st.equilibrium_tolerance:
+        raise SolverError(
+            "--exact: the exact-geometry answer could not be certified: its contact forces "
+            f"balance the loads on each body only to {result.equilibrium_residual:.3g} of the "
+            f"largest force ({st.equilibrium_tolerance:g} is required); please report this model"
+        )
     object.__setattr__(result, "solve_time", time.perf_counter() - start)
-    worst = max(feas_mm, 0.0)
-    object.__setattr__(result, "_linearization", Linearization(worst, None, ()))
+    object.__setattr__(result, "_linearization", Linearization(cert.feasibility_mm, None, ()))
     return result
+
+
+def _at_placement(ws: Workspace, stack: BallStack, fixed: FloatArray) -> Workspace:
+    """``ws`` with the cones ``stack`` and rigid rows ``fixed`` of the exact
+    geometry linearized at a placement (unknowns: the step from it), for the
+    certificate."""
+    out = copy.copy(ws)
+    out.stack, out.E = stack, fixed
+    out.balance = Balance(out)
+    return out
 
 
 class _Parts:
@@ -202,16 +210,12 @@ def _parts_jacobian(asm: Assembly, x: FloatArray) -> FloatArray:
     return np.vstack(rows) if rows else np.zeros((0, asm.m))
 
 
-def _reach(ws: Workspace, sigma: FloatArray, lam: FloatArray) -> FloatArray:
-    """Each contact's reach (mm): its play, plus a compliant one's penetration."""
-    return (ws.stack.r + sigma * np.maximum(lam, 0.0)) * ws.asm.s
-
-
 def _step(
     ws: Workspace, x: FloatArray, parts: _Parts, g: FloatArray, scale: float
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, Workspace]:
     """One linearized cone program: (step, lam, f, fixed multipliers), scaled:
-    the loads' work divided by ``scale`` (``pipeline.load_scale``).
+    the loads' work divided by ``scale`` (``pipeline.load_scale``), and the
+    workspace of that linearization (``_at_placement``).
 
     The same program as a small-displacement solve (``conic.cone_program``),
     with each contact's exact parts linearized at ``x``: cone i is
@@ -257,7 +261,8 @@ def _step(
     q[:m] = -g / scale if scale else 0.0
     sol = conic.run(ws, prog, q)
     z = np.asarray(sol.z)
-    return np.asarray(sol.x)[:m], z[prog.soc_first], z[prog.f_rows], z[: len(fixed_rows)]
+    here = _at_placement(ws, linear, J[fixed_rows])
+    return np.asarray(sol.x)[:m], z[prog.soc_first], z[prog.f_rows], z[: len(fixed_rows)], here
 
 
 def _build(
@@ -267,6 +272,7 @@ def _build(
     f: FloatArray,
     nu: FloatArray,
     loads: tuple[Load, ...],
+    cert: Certificate,
 ) -> Result:
     """The exact answer as a ``Result``: bodies with their exact rotations,
     joint torsors of the exact relative placement, forces at the displaced points."""
@@ -366,7 +372,7 @@ def _build(
         bodies,
         joints,
         points,
-        Certificate(True, "exact", 0.0, 0.0, 0.0, 0.0, 0),
+        cert,
         residual,
         0.0,
         ws.free_motions,

@@ -19,16 +19,10 @@ from jointplay.geometry import FloatArray, describe_motion
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
 from jointplay.settings import DEFAULT, TINY
+from jointplay.solver.workspace import limit_rows
 
 if TYPE_CHECKING:
     from jointplay.solver.workspace import Workspace
-
-
-def limit_rows(ws: Workspace) -> Matrix:
-    """Every row that limits a motion: the contacts' rows, the offsets of the
-    faces that tilt, the rigid rows. What they leave free is ``ws.N``."""
-    stack = ws.stack
-    return linalg.vstack([stack.A, stack.B[np.flatnonzero(stack.has_offset)], ws.E], ws.m)
 
 
 def check_driven(ws: Workspace, g: FloatArray) -> None:

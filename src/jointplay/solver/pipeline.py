@@ -34,53 +34,17 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from jointplay.assembly import assemble
 from jointplay.errors import SolverError
 from jointplay.geometry import FloatArray
-from jointplay.model.mechanism import Load, Model
-from jointplay.numerics import linalg
+from jointplay.model.mechanism import Load
 from jointplay.result import Result, build_result
-from jointplay.settings import SolverSettings
 from jointplay.solver import certificate, conic, faces, forces, held, newton, ties
 from jointplay.solver.workspace import Workspace
 
 
-def solve(
-    model: Model,
-    settings: SolverSettings | None = None,
-    *,
-    case: str | None = None,
-    exact: bool = False,
-) -> Result:
-    """Find the equilibrium of ``model`` (under load case ``case``, if given):
-    positions, contacts, forces and certificate. ``exact``: with exact
-    rotations, refined from the small-displacement answer (``exact.py``)."""
-    ws = Workspace(assemble(model), settings)
-    return ws.solve(loads=None if case is None else model.loads_of(case), exact=exact)
-
-
-def solve_cases(
-    model: Model, settings: SolverSettings | None = None, *, exact: bool = False
-) -> dict[str, Result]:
-    """Every load case of ``model`` on one assembly: ``{case: Result}``."""
-    ws = Workspace(assemble(model), settings)
-    return {case: ws.solve(loads=model.loads_of(case), exact=exact) for case in model.case_names}
-
-
-def solve_loads(
-    ws: Workspace, loads: Sequence[Load] | None = None, *, exact: bool = False
-) -> Result:
-    """The certified equilibrium of ``ws``'s model under its loads, or under
-    ``loads`` instead (``exact``: with exact rotations, see ``exact.py``)."""
-    with linalg.one_blas_thread():
-        if exact:
-            from jointplay.solver.exact import solve_exact
-
-            return solve_exact(ws, loads)
-        return _solve_loads(ws, loads)
-
-
-def _solve_loads(ws: Workspace, loads: Sequence[Load] | None) -> Result:
+def solve_loads(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
+    """The certified small-displacement equilibrium of ``ws``'s model under
+    its loads, or under ``loads`` instead."""
     start = time.perf_counter()
     if loads is None:
         loads = ws.asm.model.loads_of(None)

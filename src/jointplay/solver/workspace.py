@@ -3,8 +3,12 @@
 It holds what every solve of the model shares: the assembled matrices, the
 free motions ``N`` and the rows that pin them (``K``), the equalities, and
 data derived from them on first use (the interior-point program, each active
-set's face). A solve reads it and changes nothing but those caches; the
-algorithms are functions (``pipeline.py``).
+set's face), the rows that limit motion (``limit_rows``) and what the
+balance check needs (``Balance``). A solve reads it and changes nothing but
+those caches; the algorithms are functions in the layers above, which import
+this module and never the reverse: ``solve``, ``solve_batch`` and
+``interior_program`` reach up by a late import (``solve.py``, ``batch.py``,
+``conic.py``), so that the public methods stay on the workspace.
 """
 
 from __future__ import annotations
@@ -17,16 +21,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.sparse as sp
 
-from jointplay.assembly import Assembly, assemble
+from jointplay.assembly import Assembly, IntArray, assemble
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Load, Model
 from jointplay.numerics import free_motions, linalg
+from jointplay.numerics.linalg import Matrix
 from jointplay.result import Result, describe_free_motions
 from jointplay.settings import SolverSettings
-from jointplay.solver import certificate, conic, held
 
 if TYPE_CHECKING:
     from jointplay.solver.batch import BatchSolution, Start
+    from jointplay.solver.conic import ConeProgram
     from jointplay.solver.faces import Face, FaceKey
 
 
@@ -43,12 +48,15 @@ class Workspace:
         self.m = assembly.m
         self.balls = assembly.balls
         self.stack = stack = assembly.stack
+        #: each contact's own play, what the certificate weighs its slack
+        #: against (``exact`` linearizes the cones, their offsets in the radii)
+        self.plays = stack.r
         self.E = assembly.E
         self.sparse = assembly.sparse
         #: the free motions (dense, or sparse for a large mechanism)
         with linalg.one_blas_thread():
             rcond = self.settings.free_motion_rcond
-            self.N = linalg.null_space(held.limit_rows(self), self.m, rcond)
+            self.N = linalg.null_space(limit_rows(self), self.m, rcond)
         #: rows that hold the answer orthogonal to N in the least-norm metric
         if not self.sparse:
             self.K = assembly.metric_times(self.N).T
@@ -58,11 +66,11 @@ class Workspace:
             self.K = sp.csr_matrix((0, self.m))
         self.Eq = linalg.vstack([self.E, self.K], self.m)
         self.max_radius = stack.largest_play()
-        self.balance = certificate.Balance(self)
+        self.balance = Balance(self)
         #: each active set's face, built when first met (``faces.face_of``)
         self.faces: dict[FaceKey, Face] = {}
         #: the cone program with penetrations, built when first needed
-        self.compliant_program: conic.ConeProgram | None = None
+        self.compliant_program: ConeProgram | None = None
         #: the largest force of springs that deviations press at no load
         #: (``pipeline.load_scale``), found when first needed
         self.preload: float | None = None
@@ -78,7 +86,7 @@ class Workspace:
         balance's maps and the faces (their rows and whether they pin the
         position); the cone programs are made anew."""
         if settings.free_motion_rcond != self.settings.free_motion_rcond:
-            return Workspace(self.asm, settings)
+            return type(self)(self.asm, settings)
         other = copy.copy(self)
         other.settings = settings
         other.compliant_program = None
@@ -90,11 +98,14 @@ class Workspace:
         """The largest singular value of the rows that limit motion: the
         scale of the free motions' rank threshold (a large mechanism's face
         tests count against it, ``faces.pins_position``)."""
-        return free_motions.largest_singular_value(held.limit_rows(self))
+        return free_motions.largest_singular_value(limit_rows(self))
 
     @cached_property
-    def interior_program(self) -> conic.ConeProgram:
-        """The cone program of the hard problem (its loads are set per solve)."""
+    def interior_program(self) -> ConeProgram:
+        """The cone program of the hard problem (its loads are set per solve),
+        built on first use by the layer above (``conic``)."""
+        from jointplay.solver import conic
+
         e = np.zeros(self.Eq.shape[0])
         refine = conic.refined(self.settings, self.asm.sparse)
         return conic.cone_program(self, None, self.Eq, e, self.stack, refine=refine)
@@ -123,9 +134,9 @@ class Workspace:
     def solve(self, loads: Sequence[Load] | None = None, *, exact: bool = False) -> Result:
         """The equilibrium under the model's loads, or under ``loads`` instead
         (``exact``: with exact rotations, see ``solver/exact.py``)."""
-        from jointplay.solver import pipeline
+        from jointplay.solver.solve import solve_loads  # the public functions, on top
 
-        return pipeline.solve_loads(self, loads, exact=exact)
+        return solve_loads(self, loads, exact=exact)
 
     def solve_batch(
         self,
@@ -156,7 +167,7 @@ class Workspace:
         the scaled cone radii (``Assembly.balls`` order) and ``centre`` the
         cones' centres (stacked like the rows of ``stack.A``); scales, free
         motions and unknowns stay those of this one, so answers compare row by row."""
-        return Workspace(self.asm.with_radii(radii, centre), self.settings)
+        return type(self)(self.asm.with_radii(radii, centre), self.settings)
 
     def softness(self, g_norm: float | FloatArray) -> FloatArray:
         """Compliant contacts: the elastic energy k p^2 / 2 (p in mm) becomes
@@ -168,3 +179,106 @@ class Workspace:
         mask = spring > 0
         out[..., mask] = g_arr[..., None] / (spring[mask] * self.asm.s**2)
         return out
+
+
+def limit_rows(ws: Workspace) -> Matrix:
+    """Every row that limits a motion: the contacts' rows, the offsets of the
+    faces that tilt, the rigid rows. What they leave free is ``ws.N``."""
+    stack = ws.stack
+    return linalg.vstack([stack.A, stack.B[np.flatnonzero(stack.has_offset)], ws.E], ws.m)
+
+
+class Balance:
+    """What the balance check needs of a mechanism, built once per workspace."""
+
+    def __init__(self, ws: Workspace):
+        asm = ws.asm
+        self.asm = asm
+        self.stack = ws.stack  # the workspace's cones: exact rotations' are linearized
+        self.E = ws.E
+        n = len(asm.body_names)
+        # per body: force rows as they are, moment rows to N*mm over ell (units of |g|/s)
+        self.weight = np.column_stack(
+            [np.ones((n, 3)), np.repeat((asm.s / (asm.turn * asm.ell))[:, None], 3, 1)]
+        ).ravel()
+        self.per_contact = np.r_[np.ones(3), np.full(3, 1.0 / asm.ell)]
+
+    @cached_property
+    def reaction_maps(self) -> tuple[linalg.Matrix, linalg.Matrix, linalg.Matrix]:
+        """Each joint's reaction (6 per joint: force, moment over ell) from
+        the force vectors ``f``, the forces ``lam`` and the rigid rows' ``nu``:
+        the sum of its contacts' wrenches, one map each, built once."""
+        T = self.asm.tables
+        n_joints = int(T.centre.shape[0])
+        ball_joint = T.joint_of[T.is_ball]
+        fixed_joint = T.joint_of[~T.is_ball]
+        w = np.tile(self.per_contact, n_joints)
+
+        def gather(joint_of: IntArray) -> linalg.Matrix:  # contacts' 6-rows -> joints' 6-rows
+            rows = (6 * joint_of[:, None] + np.arange(6)).ravel()
+            cols = np.arange(6 * len(joint_of))
+            if self.asm.sparse:
+                return sp.csr_matrix(
+                    (w[rows], (rows, cols)), shape=(6 * n_joints, 6 * len(joint_of))
+                )
+            out = np.zeros((6 * n_joints, 6 * len(joint_of)))
+            out[rows, cols] = w[rows]
+            return out
+
+        n = len(ball_joint)
+        offsets = T.offset_ball.ravel()
+        rows, cols = np.arange(6 * n), np.repeat(np.arange(n), 6)
+        if self.asm.sparse:
+            offset_map: linalg.Matrix = sp.csr_matrix((-offsets, (rows, cols)), shape=(6 * n, n))
+        else:
+            offset_map = np.zeros((6 * n, n))
+            offset_map[rows, cols] = -offsets
+        to_ball, to_fixed = gather(ball_joint), gather(fixed_joint)
+        return to_ball @ T.wrench_ball, to_ball @ offset_map, to_fixed @ T.wrench_fixed
+
+    def rigid_multipliers(self, rest: FloatArray) -> FloatArray:
+        """(B, rigid rows): what the rigid rows carry of the generalized
+        forces ``rest``, by least squares (redundant rigid joints share)."""
+        E = self.E
+        if not E.shape[0]:
+            return np.zeros((rest.shape[0], 0))
+        if not linalg.is_sparse(E):
+            return np.asarray(np.linalg.lstsq(np.asarray(E).T, rest.T, rcond=None)[0].T)
+        return np.array([linalg.lstsq(E.T, row) for row in rest])
+
+    def largest_reaction(self, lam: FloatArray, f: FloatArray, nu: FloatArray) -> FloatArray:
+        """(B,): the largest joint reaction, force or moment over ell."""
+        B = lam.shape[0]
+        if not self.asm.tables.centre.shape[0]:
+            return np.zeros(B)
+        of_f, of_lam, of_nu = self.reaction_maps
+        joints = linalg.times(of_f, f) + linalg.times(of_lam, lam)
+        if nu.shape[1]:
+            joints = joints + linalg.times(of_nu, nu)
+        joints = joints.reshape(B, -1, 3)
+        return np.asarray(np.sqrt((joints * joints).sum(axis=-1).max(axis=1, initial=0.0)))
+
+    def residual(
+        self, g_hat: FloatArray, lam: FloatArray, f: FloatArray, nu: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """(B,) worst per-body imbalance relative to the largest force in the
+        balance, and the rigid multipliers used."""
+        stack = self.stack
+        rest = g_hat - stack.adjoint(f, lam) if len(stack.k) else g_hat.copy()
+        if nu is None:
+            nu = self.rigid_multipliers(rest)
+        if nu.shape[1]:
+            rest = rest - linalg.adjoint(self.E, nu)
+        B = g_hat.shape[0]
+        # the largest norms as roots of the largest squares (sqrt is monotone
+        # and correctly rounded: the same numbers, fewer roots)
+        body = (rest * self.weight).reshape(B, -1, 2, 3)
+        applied = (g_hat * self.weight).reshape(B, -1, 2, 3)
+        scale = np.maximum(
+            np.sqrt((applied * applied).sum(axis=-1).max(axis=(1, 2), initial=0.0)),
+            self.largest_reaction(lam, f, nu),
+        )
+        worst = np.sqrt((body * body).sum(axis=-1).max(axis=(1, 2), initial=0.0))
+        # no load and no force: nothing to balance (a preload is balanced too)
+        out = np.where(scale > 0, worst / np.where(scale > 0, scale, 1.0), 0.0)
+        return np.asarray(out), np.asarray(nu)

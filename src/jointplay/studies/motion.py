@@ -225,7 +225,7 @@ class Motion:
         return model_from_dict(data, source=source)
 
     def run(self, model: Model, source: str = "<model>") -> MotionResult:
-        from jointplay.solver.pipeline import solve
+        from jointplay.solver.solve import solve
 
         model = self.resolve(model, source)
         assert model.motion is not None
