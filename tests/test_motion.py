@@ -23,8 +23,13 @@ TURN = np.linspace(0.0, 2 * np.pi, 73)
 
 
 def _with_motion(path: Path, **motion: object) -> jointplay.Model:
+    """The model at ``path`` with its motion changed, and one constant force
+    on its first load's point in place of its loads (a table over one drive
+    reads nothing over another)."""
     data = jointplay.load(path).model_dump(by_alias=True, exclude_none=True)
     data["motion"] = {**data.get("motion", {}), **motion}
+    first = data["loads"][0]
+    data["loads"] = [{"body": first["body"], "at": first["at"], "force": [-1500.0, 0, 0]}]
     return model_from_dict(data, source=str(path))
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from jointplay.geometry import FloatArray
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model
+from jointplay.model.tables import DriveTable
 from jointplay.result import Result
 from jointplay.settings import MOTION, MotionSettings
 from jointplay.studies.kinematics import Poses, nominal_poses
@@ -28,8 +29,10 @@ if TYPE_CHECKING:
 
 
 def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") -> Model:
-    """``model`` placed as its bodies are at ``step``, without its motion."""
+    """``model`` placed as its bodies are at ``step``, without its motion;
+    its loads' tables read at the step's drive value."""
     data = model.model_dump(by_alias=True, exclude_none=True)
+    drive = float(poses.values[step])
     data.pop("motion", None)
 
     def at(body: str, X: Any) -> list[float]:
@@ -58,11 +61,15 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
         for load, entry in zip(loads, entries, strict=True):
             if load.at is not None:
                 entry["at"] = at(load.body, load.at)
-            if load.follows == "body":
-                for key in ("force", "torque"):
-                    value = getattr(load, key)
-                    if value is not None:
-                        entry[key] = turned(load.body, [float(c) for c in value])
+            for key in ("force", "torque"):
+                value = getattr(load, key)
+                if value is None:
+                    continue
+                # a table over the drive's value, read at this step's value
+                value = [c.at(drive) if isinstance(c, DriveTable) else c for c in value]
+                if load.follows == "body":
+                    value = turned(load.body, [float(c) for c in value])
+                entry[key] = value
     return model_from_dict(data, source=source)
 
 
