@@ -121,3 +121,224 @@ def test_answer_at_a_pose_is_the_posed_models() -> None:
     )
     assert result.to_dict()["study"] == "motion"
     assert len(result.to_dataframe()) == 5
+
+
+# -- the clearance answer over the motion against closed forms ------------------------
+#: The clearance answer meets a closed form to this (mm): the brief's promise.
+PLAY_TOL = 1e-6
+#: ... and, for an angle, to this (rad).
+PLAY_ANGLE_TOL = 1e-8
+#: A table over a turn: a compressor's gas force (N), always pushing the piston.
+GAS = [["0 deg", -1500], ["20 deg", -400], ["40 deg", -150], ["180 deg", -150],
+       ["270 deg", -400], ["320 deg", -1000], ["345 deg", -1500], ["360 deg", -1500]]  # fmt: skip
+R_CRANK, L_ROD = 40.0, 140.0
+#: Diametral clearances (mm): main bearing, crank pin, wrist pin, guide.
+SC_PLAYS = (0.020, 0.030, 0.024, 0.036)
+
+
+def _slider_crank(h: float, force: object, steps: int = 37) -> jointplay.Model:
+    """Crank R_CRANK, rod L_ROD, the guide's axis at offset ``h`` along x; the
+    crank driven at its main bearing without backlash; one force along the
+    guide at the wrist pin (N, or a table): the rod carries no load of its own."""
+    xb = R_CRANK + float(np.sqrt(L_ROD**2 - h**2))
+    wrist = [xb, h, 0.0]
+    o, a, b, g = SC_PLAYS
+    pin = {"type": "revolute", "axis": [0, 0, 1], "length": 20, "axial_clearance": 0.1}
+    return model_from_dict(
+        {
+            "bodies": [
+                {"name": "frame", "ground": True},
+                {"name": "crank"},
+                {"name": "rod"},
+                {"name": "piston"},
+            ],
+            "joints": [
+                {
+                    **pin,
+                    "name": "main bearing",
+                    "between": ["frame", "crank"],
+                    "at": [0, 0, 0],
+                    "clearance": o,
+                    "backlash": 0,
+                },
+                {
+                    **pin,
+                    "name": "crank pin",
+                    "between": ["crank", "rod"],
+                    "at": [R_CRANK, 0, 0],
+                    "clearance": a,
+                },
+                {
+                    **pin,
+                    "name": "wrist pin",
+                    "between": ["rod", "piston"],
+                    "at": wrist,
+                    "clearance": b,
+                },
+                {
+                    "name": "guide",
+                    "type": "prismatic",
+                    "between": ["frame", "piston"],
+                    "at": wrist,
+                    "axis": [1, 0, 0],
+                    "up": [0, 1, 0],
+                    "length": 40,
+                    "width": 40,
+                    "height": 40,
+                    "clearance": g,
+                },
+            ],
+            "loads": [{"body": "piston", "at": wrist, "force": [force, 0, 0]}],
+            "points": [{"name": "piston top", "body": "piston", "at": [xb + 20, h, 0]}],
+            "motion": {"drive": "main bearing", "range": ["0 deg", "360 deg"], "steps": steps},
+        },
+        source="slider_crank",
+    )
+
+
+@pytest.mark.parametrize("h", [0.0, 10.0, -25.0])
+@pytest.mark.parametrize(
+    "force", [-1500.0, 800.0, {"table": GAS}], ids=["compressed", "pulled", "gas table"]
+)
+def test_slider_crank_play_closes_along_the_rod(h: float, force: object) -> None:
+    """The rod carries no load: a two-force member, its force N along its
+    direction u = (cos phi, sin phi) from the crank pin to the wrist pin,
+    sin phi = (h - r sin t) / l. In compression (F < 0) every pin's play
+    closes against N: the crank (held in rotation by the drive) shifts by
+    -e_O u in the main bearing, the rod's end at the crank pin by a further
+    -e_A u, the piston at the wrist pin by a further -e_B u (e: radial plays,
+    half the clearances). The guide pushes the piston across with -N sin phi,
+    so the piston's offset is dy = e_G sign(sin phi) (e_G half the guide's
+    clearance); it turns nothing, the force being at the guide's centre. The
+    rod is rigid along u: u . d_piston = u . d_rod(crank pin) - e_B, so
+    dx cos phi + dy sin phi = -(e_O + e_A + e_B), and
+
+        dx = -(e_O + e_A + e_B + e_G |sin phi|) / cos phi.
+
+    In tension every play closes the other way: the same with the signs
+    turned. The gas table pushes at every step: the compressed answer. The
+    drive holds M = -F dx_nominal/dt = F r (sin t - cos t tan phi)
+    (virtual work on the nominal geometry, the table's force at t)."""
+    model = _slider_crank(h, force)
+    result = Motion().run(model)
+    t = result.values
+    sin_phi = (h - R_CRANK * np.sin(t)) / L_ROD
+    cos_phi = np.sqrt(1.0 - sin_phi**2)
+    e_o, e_a, e_b, e_g = (c / 2 for c in SC_PLAYS)
+    gas = isinstance(force, dict)
+    F = np.interp(t, [np.radians(float(x.split()[0])) for x, _ in GAS], [y for _, y in GAS])
+    F = F if gas else np.full_like(t, float(force))  # type: ignore[arg-type]
+    sign = np.sign(F)
+    dx = sign * (e_o + e_a + e_b + e_g * np.abs(sin_phi)) / cos_phi
+    d = result.displacement[:, 0]
+    assert np.max(np.abs(d[:, 0] - dx)) < PLAY_TOL
+    across = np.abs(sin_phi) > 1e-9  # where the guide pushes, the piston's offset
+    assert np.max(np.abs(d[across, 1] + sign[across] * e_g * np.sign(sin_phi[across]))) < (PLAY_TOL)
+    assert np.max(np.abs(d[:, 2])) < PLAY_TOL
+    M = F * R_CRANK * (np.sin(t) - np.cos(t) * sin_phi / cos_phi)
+    assert np.max(np.abs(result.drive_reaction - M)) < 1e-8 * np.max(np.abs(M))
+
+
+#: The four-bar: crank a from O2 = 0, coupler b, rocker c to O4 = (d, 0).
+FB_A, FB_B_AT, FB_D = 60.0, (150.0, 110.0), 200.0
+#: Diametral clearances (mm): O2 (the motor's bearing), A, B, O4.
+FB_PLAYS = (0.010, 0.024, 0.020, 0.030)
+
+
+def _four_bar(torque: float) -> jointplay.Model:
+    """The gallery's four-bar's geometry, its crank driven without backlash,
+    a torque on the rocker (N*mm): the coupler carries no load of its own."""
+    bx, by = FB_B_AT
+    o2, a, b, o4 = FB_PLAYS
+    pin = {"type": "revolute", "axis": [0, 0, 1], "length": 12, "axial_clearance": 0.05}
+    return model_from_dict(
+        {
+            "bodies": [
+                {"name": "frame", "ground": True},
+                {"name": "crank"},
+                {"name": "coupler"},
+                {"name": "rocker"},
+            ],
+            "joints": [
+                {
+                    **pin,
+                    "name": "motor",
+                    "between": ["frame", "crank"],
+                    "at": [0, 0, 0],
+                    "clearance": o2,
+                    "backlash": 0,
+                },
+                {
+                    **pin,
+                    "name": "pin A",
+                    "between": ["crank", "coupler"],
+                    "at": [0, FB_A, 0],
+                    "clearance": a,
+                },
+                {
+                    **pin,
+                    "name": "pin B",
+                    "between": ["coupler", "rocker"],
+                    "at": [bx, by, 0],
+                    "clearance": b,
+                },
+                {
+                    **pin,
+                    "name": "pivot",
+                    "between": ["frame", "rocker"],
+                    "at": [FB_D, 0, 0],
+                    "clearance": o4,
+                },
+            ],
+            "loads": [{"body": "rocker", "torque": [0, 0, torque]}],
+            "points": [
+                {"name": "rocker pivot", "body": "rocker", "at": [FB_D, 0, 0]},
+                {"name": "rocker tip", "body": "rocker", "at": [bx, by, 0]},
+            ],
+            "motion": {"drive": "motor", "range": ["0 deg", "360 deg"], "steps": 37},
+        },
+        source="four_bar",
+    )
+
+
+@pytest.mark.parametrize("torque", [2000.0, -3000.0], ids=["counter-clockwise", "clockwise"])
+def test_four_bar_play_as_a_coupler_length(torque: float) -> None:
+    """The coupler carries no load: a two-force member along u (from pin A to
+    pin B). Whatever the sign of its force, each play closes along u: the
+    crank (held in rotation by the drive) shifts by its bearing's radial
+    play e_1 along u, the coupler by e_2 more at A; at B and at the rocker's
+    pivot the plays e_3, e_4 close along u too, so for the rocker's rotation
+    the four add up as a change of the coupler's length by E = e_1 + e_2 +
+    e_3 + e_4 (a compressed coupler acts shortened, a pulled one
+    lengthened). The torque T turns the rocker its way, so its rotation is
+    E |d theta_4 / d b| at fixed theta_2, from Freudenstein's equation
+    f = K1 cos th4 - K2 cos th2 + K3 - cos(th2 - th4) = 0 with
+    K3 = (a^2 - b^2 + c^2 + d^2) / (2 a c):
+    d th4/d b = -(df/db) / (df/dth4) = (b / (a c)) / (-K1 sin th4 - sin(th2 - th4)).
+    The rocker's pivot shifts by e_4 along u, against the coupler's force on
+    the rocker: -sign(T) sign(d th4/d b) e_4 u."""
+    model = _four_bar(torque)
+    result = Motion().run(model)
+    t = result.values
+    bx, by = FB_B_AT
+    a, b, c, d = FB_A, float(np.hypot(bx, by - FB_A)), float(np.hypot(bx - FB_D, by)), FB_D
+    e = [p / 2 for p in FB_PLAYS]
+    nominal = result.nominal  # (S, 2, 3): the pivot, the tip (pin B)
+    pin_b = nominal[:, 1, :2]
+    pin_a = np.stack([-FB_A * np.sin(t), FB_A * np.cos(t)], axis=1)
+    th2 = np.pi / 2 + t
+    th4 = np.arctan2(pin_b[:, 1], pin_b[:, 0] - d)
+    K1 = d / a
+    sensitivity = (b / (a * c)) / (-K1 * np.sin(th4) - np.sin(th2 - th4))
+    turn = np.sign(torque) * sum(e) * np.abs(sensitivity)
+    arm = pin_b - [d, 0.0]
+    moved = result.displacement[:, 1, :2] - result.displacement[:, 0, :2]
+    rotation = (arm[:, 0] * moved[:, 1] - arm[:, 1] * moved[:, 0]) / np.sum(arm**2, axis=1)
+    assert np.max(np.abs(rotation - turn)) < PLAY_ANGLE_TOL
+    u = (pin_b - pin_a) / np.linalg.norm(pin_b - pin_a, axis=1)[:, None]
+    pivot = -np.sign(torque) * np.sign(sensitivity)[:, None] * e[3] * u
+    assert np.max(np.abs(result.displacement[:, 0, :2] - pivot)) < PLAY_TOL
+    assert np.max(np.abs(result.displacement[:, :, 2])) < PLAY_TOL
+    # the rigid rocker: the tip moves as the pivot's shift and the rotation say
+    tip = pivot + turn[:, None] * np.stack([-arm[:, 1], arm[:, 0]], axis=1)
+    assert np.max(np.abs(result.displacement[:, 1, :2] - tip)) < PLAY_TOL
