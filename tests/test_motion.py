@@ -6,15 +6,18 @@ model's own."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 
 import jointplay
 from jointplay.errors import ModelError, MotionError, UnboundedMechanismError
 from jointplay.io.modelfile import model_from_dict
 from jointplay.studies.kinematics import nominal_poses
 from jointplay.studies.motion import Motion, posed_model
+from test_cli import run
 
 GALLERY = Path(__file__).parent.parent / "examples" / "gallery"
 #: The closed forms are met to this (mm, rad): the brief's kinematic promise.
@@ -245,60 +248,59 @@ FB_A, FB_B_AT, FB_D = 60.0, (150.0, 110.0), 200.0
 FB_PLAYS = (0.010, 0.024, 0.020, 0.030)
 
 
-def _four_bar(torque: float) -> jointplay.Model:
+def _four_bar(torque: float, drive: str = "motor", turn: object = "360 deg") -> jointplay.Model:
     """The gallery's four-bar's geometry, its crank driven without backlash,
-    a torque on the rocker (N*mm): the coupler carries no load of its own."""
+    a torque on the rocker (N*mm): the coupler carries no load of its own.
+    ``drive``: "pivot" drives the rocker instead, from 0 to ``turn``."""
     bx, by = FB_B_AT
     o2, a, b, o4 = FB_PLAYS
     pin = {"type": "revolute", "axis": [0, 0, 1], "length": 12, "axial_clearance": 0.05}
-    return model_from_dict(
-        {
-            "bodies": [
-                {"name": "frame", "ground": True},
-                {"name": "crank"},
-                {"name": "coupler"},
-                {"name": "rocker"},
-            ],
-            "joints": [
-                {
-                    **pin,
-                    "name": "motor",
-                    "between": ["frame", "crank"],
-                    "at": [0, 0, 0],
-                    "clearance": o2,
-                    "backlash": 0,
-                },
-                {
-                    **pin,
-                    "name": "pin A",
-                    "between": ["crank", "coupler"],
-                    "at": [0, FB_A, 0],
-                    "clearance": a,
-                },
-                {
-                    **pin,
-                    "name": "pin B",
-                    "between": ["coupler", "rocker"],
-                    "at": [bx, by, 0],
-                    "clearance": b,
-                },
-                {
-                    **pin,
-                    "name": "pivot",
-                    "between": ["frame", "rocker"],
-                    "at": [FB_D, 0, 0],
-                    "clearance": o4,
-                },
-            ],
-            "loads": [{"body": "rocker", "torque": [0, 0, torque]}],
-            "points": [
-                {"name": "rocker pivot", "body": "rocker", "at": [FB_D, 0, 0]},
-                {"name": "rocker tip", "body": "rocker", "at": [bx, by, 0]},
-            ],
-            "motion": {"drive": "motor", "range": ["0 deg", "360 deg"], "steps": 37},
-        },
-        source="four_bar",
-    )
+    data: dict[str, Any] = {
+        "bodies": [
+            {"name": "frame", "ground": True},
+            {"name": "crank"},
+            {"name": "coupler"},
+            {"name": "rocker"},
+        ],
+        "joints": [
+            {
+                **pin,
+                "name": "motor",
+                "between": ["frame", "crank"],
+                "at": [0, 0, 0],
+                "clearance": o2,
+            },
+            {
+                **pin,
+                "name": "pin A",
+                "between": ["crank", "coupler"],
+                "at": [0, FB_A, 0],
+                "clearance": a,
+            },
+            {
+                **pin,
+                "name": "pin B",
+                "between": ["coupler", "rocker"],
+                "at": [bx, by, 0],
+                "clearance": b,
+            },
+            {
+                **pin,
+                "name": "pivot",
+                "between": ["frame", "rocker"],
+                "at": [FB_D, 0, 0],
+                "clearance": o4,
+            },
+        ],
+        "loads": [{"body": "rocker", "torque": [0, 0, torque]}],
+        "points": [
+            {"name": "rocker pivot", "body": "rocker", "at": [FB_D, 0, 0]},
+            {"name": "rocker tip", "body": "rocker", "at": [bx, by, 0]},
+        ],
+        "motion": {"drive": drive, "range": [0, turn], "steps": 37},
+    }
+    data["joints"][["motor", "pivot"].index(drive) * 3]["backlash"] = 0
+    return model_from_dict(data, source="four_bar")
 
 
 @pytest.mark.parametrize("torque", [2000.0, -3000.0], ids=["counter-clockwise", "clockwise"])
@@ -342,3 +344,53 @@ def test_four_bar_play_as_a_coupler_length(torque: float) -> None:
     # the rigid rocker: the tip moves as the pivot's shift and the rotation say
     tip = pivot + turn[:, None] * np.stack([-arm[:, 1], arm[:, 0]], axis=1)
     assert np.max(np.abs(result.displacement[:, 1, :2] - tip)) < PLAY_TOL
+
+
+def _four_bar_file(tmp_path: Path, model: jointplay.Model) -> Path:
+    path = tmp_path / "four_bar.yaml"
+    path.write_text(yaml.safe_dump(model.model_dump(by_alias=True, exclude_none=True)))
+    return path
+
+
+def _toggle_turn(sign: float = 1.0) -> float:
+    """How far the rocker turns from the written pose to a toggle with the
+    crank and coupler in line (rad): there |O2 B| = b + a (``sign`` 1, the
+    rocker turned clockwise) or b - a (-1, counter-clockwise), so
+    d^2 + c^2 + 2 d c cos th4 = (b + sign a)^2."""
+    bx, by = FB_B_AT
+    b, c = float(np.hypot(bx, by - FB_A)), float(np.hypot(bx - FB_D, by))
+    th4 = np.arccos(((b + sign * FB_A) ** 2 - FB_D**2 - c**2) / (2 * FB_D * c))
+    return float(th4 - np.arctan2(by, bx - FB_D))
+
+
+def test_a_four_bar_driven_through_its_toggle_stops_at_the_dead_point(tmp_path: Path) -> None:
+    """Driven by its rocker through the rocker's extreme (a step on it), the
+    four-bar stops there: "dead point", the step and the loop's joints; from
+    the command line, one line and exit 2."""
+    model = _four_bar(1000.0, drive="pivot", turn=2 * _toggle_turn())
+    with pytest.raises(MotionError, match="dead point") as err:
+        nominal_poses(model, np.linspace(0.0, 2 * _toggle_turn(), 3))
+    assert err.value.kind == "dead point" and err.value.step == 1 and err.value.exit_code == 2
+    assert {"motor", "pin A", "pin B"} <= set(err.value.joints)
+    proc = run("motion", str(_four_bar_file(tmp_path, model)), "--steps", "3")
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert "dead point: at step 1" in proc.stderr and "'pin A'" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_a_grashof_rocker_turned_a_full_turn_is_out_of_reach(tmp_path: Path) -> None:
+    """The crank-rocker driven by its rocker through 360 deg: the rocker
+    swings only between its toggles, so a step past one is "unreachable",
+    naming the step and the joints; from the command line exit 2."""
+    model = _four_bar(1000.0, drive="pivot", turn="360 deg")
+    with pytest.raises(MotionError, match="unreachable") as err:
+        Motion().run(model)
+    swing = _toggle_turn(-1.0)  # the counter-clockwise toggle; steps of 10 deg
+    assert err.value.kind == "unreachable" and err.value.step == int(
+        np.ceil(swing / np.radians(10))
+    )
+    assert "pivot" in err.value.joints
+    proc = run("motion", str(_four_bar_file(tmp_path, model)))
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert f"unreachable: at step {err.value.step}" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
