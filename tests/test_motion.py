@@ -394,3 +394,35 @@ def test_a_grashof_rocker_turned_a_full_turn_is_out_of_reach(tmp_path: Path) -> 
     assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
     assert f"unreachable: at step {err.value.step}" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("force", [-1500.0, 800.0], ids=["compressed", "pulled"])
+def test_a_shared_deviation_turns_with_its_body(force: float) -> None:
+    """The crank's features made in one setup ('deviations', on the crank):
+    its crank pin's seat off by t along the crank (the frame's z, 'up' along
+    the crank as written). Carried with the crank, it makes the crank longer
+    by t at every angle, so the piston moves by t dx/dr = t (cos t + sin t
+    tan phi) besides the plays' closed form (the rod's force, along u, does
+    not move the seat: the deviation centres the play, the play still
+    closes along u)."""
+    h, offset = 10.0, 0.004
+    data = _slider_crank(h, force, steps=13).model_dump(by_alias=True, exclude_none=True)
+    data["deviations"] = [
+        {
+            "name": "crank setup",
+            "body": "crank",
+            "at": [R_CRANK, 0, 0],
+            "axis": [0, 0, 1],
+            "up": [1, 0, 0],
+            "position": {"diameter": "10 um", "mean": [0, 0, offset]},
+        }
+    ]
+    data["joints"][1]["deviation"] = "crank setup"
+    result = Motion().run(model_from_dict(data, source="slider_crank"))
+    t = result.values
+    sin_phi = (h - R_CRANK * np.sin(t)) / L_ROD
+    cos_phi = np.sqrt(1.0 - sin_phi**2)
+    e_o, e_a, e_b, e_g = (c / 2 for c in SC_PLAYS)
+    plays = np.sign(force) * (e_o + e_a + e_b + e_g * np.abs(sin_phi)) / cos_phi
+    longer = offset * (np.cos(t) + np.sin(t) * sin_phi / cos_phi)
+    assert np.max(np.abs(result.displacement[:, 0, 0] - plays - longer)) < PLAY_TOL

@@ -615,14 +615,6 @@ def _check_motion(model: Model) -> list[EntryError]:
         model.motion_drive()
     except ValueError as exc:
         return [EntryError("motion", str(exc))]
-    if model.deviations:
-        return [
-            EntryError(
-                "motion",
-                "the model has shared deviations ('deviations'), whose frames a motion does "
-                "not carry yet; give each joint its own deviation, or remove 'motion'",
-            )
-        ]
     return []
 
 

@@ -3,9 +3,10 @@
 ``Motion(...).run(model)`` finds every body's pose at each step
 (``kinematics.nominal_poses``), builds the model as posed there (joints'
 centres carried by their second body and axes by their first, functional
-points, loads' points, centres of mass and outlines moved with their
-bodies; a load's force and torque keep their global directions unless it
-``follows: body``; gravity stays global) and solves the clearance
+points, loads' points, centres of mass, outlines and shared deviations'
+points and frames moved with their bodies; a load's force and torque keep
+their global directions unless it ``follows: body``, and its tables are
+read at the step's drive value; gravity stays global) and solves the clearance
 equilibrium of that posed model with ``jointplay.solve``, one solve a pose.
 """
 
@@ -54,6 +55,12 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
             entry["center_of_mass"] = at(body.name, body.center_of_mass)
         if body.outline is not None:
             entry["outline"] = [at(body.name, X) for X in body.outline]
+    for dev, entry in zip(model.deviations, data.get("deviations", []), strict=True):
+        # features made together on one body: their point and frame move with it
+        entry["at"] = at(dev.body, dev.at)
+        for key in ("axis", "up"):
+            if entry.get(key) is not None:
+                entry[key] = turned(dev.body, getattr(dev, key))
     groups = [(model.loads, data.get("loads", []))]
     for case, loads in (model.load_cases or {}).items():
         groups.append((loads, data["load_cases"][case]))
