@@ -5,6 +5,9 @@ model's own."""
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +20,7 @@ from jointplay.errors import ModelError, MotionError, UnboundedMechanismError
 from jointplay.io.modelfile import model_from_dict
 from jointplay.studies.kinematics import nominal_poses
 from jointplay.studies.motion import Motion, posed_model
-from test_cli import run
+from test_cli import _missing, run
 
 GALLERY = Path(__file__).parent.parent / "examples" / "gallery"
 #: The closed forms are met to this (mm, rad): the brief's kinematic promise.
@@ -426,3 +429,60 @@ def test_a_shared_deviation_turns_with_its_body(force: float) -> None:
     plays = np.sign(force) * (e_o + e_a + e_b + e_g * np.abs(sin_phi)) / cos_phi
     longer = offset * (np.cos(t) + np.sin(t) * sin_phi / cos_phi)
     assert np.max(np.abs(result.displacement[:, 0, 0] - plays - longer)) < PLAY_TOL
+
+
+def _motion_numbers(doc: dict[str, Any]) -> list[float]:
+    """The numbers of a motion's --json that its text prints to 6 digits:
+    the drive's values and reactions, the requirements' worst measures."""
+    wanted = [step["drive"] for step in doc["steps"]]
+    wanted += [step["drive_reaction"] for step in doc["steps"]]
+    return wanted + [q["measured"] for q in doc["requirements"]]
+
+
+@pytest.mark.parametrize("columns", ["80", "200"])
+def test_piped_motion_text_keeps_every_number_whole(columns: str) -> None:
+    """Piped (a CI log, a file), the motion's table is one line a step at any
+    COLUMNS: every number --json gives that the text prints is whole, and
+    every touching contact's joint and name are on its step's line."""
+    import os
+
+    env = {**os.environ, "COLUMNS": columns}
+    args = ["motion", str(GALLERY / "slider_crank.yaml"), "--steps", "13"]
+
+    def call(*extra: str) -> str:
+        proc = subprocess.run(
+            [sys.executable, "-m", "jointplay.cli", *args, *extra],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env=env,
+        )
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout
+
+    doc = json.loads(call("--json"))
+    text = call()
+    assert not _missing(_motion_numbers(doc), text), text
+    assert "…" not in text
+    rows = [line for line in text.splitlines() if "│" in line]
+    assert len(rows) == len(doc["steps"])
+    for row, step in zip(rows, doc["steps"], strict=True):
+        touching = [name.split(".", 1) for name in step["touching"]]
+        assert all(joint in row and contact in row for joint, contact in touching)
+
+
+def test_a_narrow_terminal_keeps_the_motion_numbers_whole() -> None:
+    """In an 80-column terminal the motion's wide table is printed row by
+    row as a list: every line fits, every number whole."""
+    import io
+
+    from rich.console import Console
+
+    from jointplay.present.textreport import render_motion
+
+    result = Motion(steps=5).run(jointplay.load(GALLERY / "slider_crank.yaml"))
+    buf = io.StringIO()
+    render_motion(result, "slider_crank.yaml", Console(file=buf, width=80, markup=False))
+    text = buf.getvalue()
+    assert all(len(line) <= 80 for line in text.splitlines())
+    assert not _missing(_motion_numbers(json.loads(json.dumps(result.to_dict()))), text)
