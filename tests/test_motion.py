@@ -486,3 +486,78 @@ def test_a_narrow_terminal_keeps_the_motion_numbers_whole() -> None:
     text = buf.getvalue()
     assert all(len(line) <= 80 for line in text.splitlines())
     assert not _missing(_motion_numbers(json.loads(json.dumps(result.to_dict()))), text)
+
+
+# -- load tables over the drive's value -----------------------------------------------
+@pytest.mark.parametrize(
+    ("table", "words"),
+    [
+        ([["0 deg", -200]], "table: expected at least 2 rows"),
+        ([["0 deg", -200], "oops"], "table row 1: expected [drive, value]"),
+        ([["0 deg", -200], ["180 deg", -1500], ["90 deg", -200]], "increasing order"),
+        ([["0 deg", -200], ["360 mm", -200]], "mix angles and lengths"),
+        ([["0 deg", -200], ["360 deg", "2 mm"]], "table row 1: the value: expected a force"),
+        ([["0 deg", -200], ["360 deg", "lots"]], "table row 1: the value"),
+        ([["0 deg", -200], ["a while", -200]], "neither an angle"),
+        ([["10 deg", -200], ["360 deg", -200]], "extend it to 0"),
+        ([["0 mm", -200], ["360 mm", -200]], "give them in deg"),
+        ([["0 deg", -200], ["180 deg", -200]], "extend the table over the motion's range"),
+        ([[0, -200], [3.0, -200]], "extend the table over the motion's range"),  # rad
+    ],
+)
+def test_bad_load_tables(table: list[Any], words: str) -> None:
+    """Each names the file, the load and the component, and says the fix."""
+    data = jointplay.load(GALLERY / "slider_crank.yaml").model_dump(
+        by_alias=True, exclude_none=True
+    )
+    data["loads"][0]["force"] = [{"table": table}, 0, 0]
+    with pytest.raises(ModelError) as err:
+        model_from_dict(data, source="crank.yaml")
+    assert err.value.exit_code == 2
+    message = str(err.value)
+    assert "crank.yaml" in message and "loads[0]" in message and "component x" in message
+    assert words in message, message
+
+
+def test_a_load_table_needs_a_motion(tmp_path: Path) -> None:
+    """Without a motion a table has no drive to be read against: exit 2 with
+    the fix, one line, from Python and from the command line."""
+    data = yaml.safe_load((GALLERY / "slider_crank.yaml").read_text())
+    del data["motion"]
+    data["loads"][0]["force"] = [{"table": GAS}, 0, 0]
+    with pytest.raises(ModelError, match="has no 'motion' section; add motion:"):
+        model_from_dict(data, source="crank.yaml")
+    path = tmp_path / "crank.yaml"
+    path.write_text(yaml.safe_dump(data))
+    proc = run("solve", str(path))
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert "loads[0]" in proc.stderr and "add motion:" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_a_motion_range_past_the_table_is_refused() -> None:
+    """--range (Motion(range=...)) past a load's table: the same message."""
+    model = jointplay.load(GALLERY / "slider_crank.yaml")
+    with pytest.raises(ModelError, match="the motion runs from 0 deg to 720 deg; extend"):
+        Motion(range=("0 deg", "720 deg")).run(model)
+
+
+def test_a_plain_solve_reads_the_table_at_the_written_pose() -> None:
+    """A plain solve of a model with a table takes its value at the drive's
+    0: the same answer as that value written as a number; through the
+    motion, the posed model at each step holds the table's value there."""
+    model = jointplay.load(GALLERY / "slider_crank.yaml")
+    table = model.loads[0].force[0]  # type: ignore[index]
+    data = model.model_dump(by_alias=True, exclude_none=True)
+    data["loads"][0]["force"] = [-1500.0, 0, 0]  # the table's first row, at 0 deg
+    plain = model_from_dict(data)
+    assert float(table) == -1500.0
+    ours, theirs = jointplay.solve(model), jointplay.solve(plain)
+    assert ours.potential_energy == pytest.approx(theirs.potential_energy, rel=1e-12)
+    values = np.radians([0.0, 10.0, 225.0, 300.0, 360.0])
+    poses = nominal_poses(model, values)
+    expected = [-1500.0, -950.0, -150.0 - 250.0 * 45 / 90, -400.0 - 600.0 * 30 / 50, -1500.0]
+    for s, force in enumerate(expected):
+        posed = posed_model(model, poses, s)
+        assert posed.motion is None
+        assert posed.loads[0].force == pytest.approx((force, 0.0, 0.0), rel=1e-12)
