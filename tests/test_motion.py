@@ -5,16 +5,22 @@ model's own."""
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 
 import jointplay
 from jointplay.errors import ModelError, MotionError, UnboundedMechanismError
 from jointplay.io.modelfile import model_from_dict
 from jointplay.studies.kinematics import nominal_poses
 from jointplay.studies.motion import Motion, posed_model
+from test_cli import _missing, run
 
 GALLERY = Path(__file__).parent.parent / "examples" / "gallery"
 #: The closed forms are met to this (mm, rad): the brief's kinematic promise.
@@ -23,8 +29,13 @@ TURN = np.linspace(0.0, 2 * np.pi, 73)
 
 
 def _with_motion(path: Path, **motion: object) -> jointplay.Model:
+    """The model at ``path`` with its motion changed, and one constant force
+    on its first load's point in place of its loads (a table over one drive
+    reads nothing over another)."""
     data = jointplay.load(path).model_dump(by_alias=True, exclude_none=True)
     data["motion"] = {**data.get("motion", {}), **motion}
+    first = data["loads"][0]
+    data["loads"] = [{"body": first["body"], "at": first["at"], "force": [-1500.0, 0, 0]}]
     return model_from_dict(data, source=str(path))
 
 
@@ -116,3 +127,437 @@ def test_answer_at_a_pose_is_the_posed_models() -> None:
     )
     assert result.to_dict()["study"] == "motion"
     assert len(result.to_dataframe()) == 5
+
+
+# -- the clearance answer over the motion against closed forms ------------------------
+#: The clearance answer meets a closed form to this (mm): the brief's promise.
+PLAY_TOL = 1e-6
+#: ... and, for an angle, to this (rad).
+PLAY_ANGLE_TOL = 1e-8
+#: A table over a turn: a compressor's gas force (N), always pushing the piston.
+GAS = [["0 deg", -1500], ["20 deg", -400], ["40 deg", -150], ["180 deg", -150],
+       ["270 deg", -400], ["320 deg", -1000], ["345 deg", -1500], ["360 deg", -1500]]  # fmt: skip
+R_CRANK, L_ROD = 40.0, 140.0
+#: Diametral clearances (mm): main bearing, crank pin, wrist pin, guide.
+SC_PLAYS = (0.020, 0.030, 0.024, 0.036)
+
+
+def _slider_crank(h: float, force: object, steps: int = 37) -> jointplay.Model:
+    """Crank R_CRANK, rod L_ROD, the guide's axis at offset ``h`` along x; the
+    crank driven at its main bearing without backlash; one force along the
+    guide at the wrist pin (N, or a table): the rod carries no load of its own."""
+    xb = R_CRANK + float(np.sqrt(L_ROD**2 - h**2))
+    wrist = [xb, h, 0.0]
+    o, a, b, g = SC_PLAYS
+    pin = {"type": "revolute", "axis": [0, 0, 1], "length": 20, "axial_clearance": 0.1}
+    return model_from_dict(
+        {
+            "bodies": [
+                {"name": "frame", "ground": True},
+                {"name": "crank"},
+                {"name": "rod"},
+                {"name": "piston"},
+            ],
+            "joints": [
+                {
+                    **pin,
+                    "name": "main bearing",
+                    "between": ["frame", "crank"],
+                    "at": [0, 0, 0],
+                    "clearance": o,
+                    "backlash": 0,
+                },
+                {
+                    **pin,
+                    "name": "crank pin",
+                    "between": ["crank", "rod"],
+                    "at": [R_CRANK, 0, 0],
+                    "clearance": a,
+                },
+                {
+                    **pin,
+                    "name": "wrist pin",
+                    "between": ["rod", "piston"],
+                    "at": wrist,
+                    "clearance": b,
+                },
+                {
+                    "name": "guide",
+                    "type": "prismatic",
+                    "between": ["frame", "piston"],
+                    "at": wrist,
+                    "axis": [1, 0, 0],
+                    "up": [0, 1, 0],
+                    "length": 40,
+                    "width": 40,
+                    "height": 40,
+                    "clearance": g,
+                },
+            ],
+            "loads": [{"body": "piston", "at": wrist, "force": [force, 0, 0]}],
+            "points": [{"name": "piston top", "body": "piston", "at": [xb + 20, h, 0]}],
+            "motion": {"drive": "main bearing", "range": ["0 deg", "360 deg"], "steps": steps},
+        },
+        source="slider_crank",
+    )
+
+
+@pytest.mark.parametrize("h", [0.0, 10.0, -25.0])
+@pytest.mark.parametrize(
+    "force", [-1500.0, 800.0, {"table": GAS}], ids=["compressed", "pulled", "gas table"]
+)
+def test_slider_crank_play_closes_along_the_rod(h: float, force: object) -> None:
+    """The rod carries no load: a two-force member, its force N along its
+    direction u = (cos phi, sin phi) from the crank pin to the wrist pin,
+    sin phi = (h - r sin t) / l. In compression (F < 0) every pin's play
+    closes against N: the crank (held in rotation by the drive) shifts by
+    -e_O u in the main bearing, the rod's end at the crank pin by a further
+    -e_A u, the piston at the wrist pin by a further -e_B u (e: radial plays,
+    half the clearances). The guide pushes the piston across with -N sin phi,
+    so the piston's offset is dy = e_G sign(sin phi) (e_G half the guide's
+    clearance); it turns nothing, the force being at the guide's centre. The
+    rod is rigid along u: u . d_piston = u . d_rod(crank pin) - e_B, so
+    dx cos phi + dy sin phi = -(e_O + e_A + e_B), and
+
+        dx = -(e_O + e_A + e_B + e_G |sin phi|) / cos phi.
+
+    In tension every play closes the other way: the same with the signs
+    turned. The gas table pushes at every step: the compressed answer. The
+    drive holds M = -F dx_nominal/dt = F r (sin t - cos t tan phi)
+    (virtual work on the nominal geometry, the table's force at t)."""
+    model = _slider_crank(h, force)
+    result = Motion().run(model)
+    t = result.values
+    sin_phi = (h - R_CRANK * np.sin(t)) / L_ROD
+    cos_phi = np.sqrt(1.0 - sin_phi**2)
+    e_o, e_a, e_b, e_g = (c / 2 for c in SC_PLAYS)
+    gas = isinstance(force, dict)
+    F = np.interp(t, [np.radians(float(x.split()[0])) for x, _ in GAS], [y for _, y in GAS])
+    F = F if gas else np.full_like(t, float(force))  # type: ignore[arg-type]
+    sign = np.sign(F)
+    dx = sign * (e_o + e_a + e_b + e_g * np.abs(sin_phi)) / cos_phi
+    d = result.displacement[:, 0]
+    assert np.max(np.abs(d[:, 0] - dx)) < PLAY_TOL
+    across = np.abs(sin_phi) > 1e-9  # where the guide pushes, the piston's offset
+    assert np.max(np.abs(d[across, 1] + sign[across] * e_g * np.sign(sin_phi[across]))) < (PLAY_TOL)
+    assert np.max(np.abs(d[:, 2])) < PLAY_TOL
+    M = F * R_CRANK * (np.sin(t) - np.cos(t) * sin_phi / cos_phi)
+    assert np.max(np.abs(result.drive_reaction - M)) < 1e-8 * np.max(np.abs(M))
+
+
+#: The four-bar: crank a from O2 = 0, coupler b, rocker c to O4 = (d, 0).
+FB_A, FB_B_AT, FB_D = 60.0, (150.0, 110.0), 200.0
+#: Diametral clearances (mm): O2 (the motor's bearing), A, B, O4.
+FB_PLAYS = (0.010, 0.024, 0.020, 0.030)
+
+
+def _four_bar(torque: float, drive: str = "motor", turn: object = "360 deg") -> jointplay.Model:
+    """The gallery's four-bar's geometry, its crank driven without backlash,
+    a torque on the rocker (N*mm): the coupler carries no load of its own.
+    ``drive``: "pivot" drives the rocker instead, from 0 to ``turn``."""
+    bx, by = FB_B_AT
+    o2, a, b, o4 = FB_PLAYS
+    pin = {"type": "revolute", "axis": [0, 0, 1], "length": 12, "axial_clearance": 0.05}
+    data: dict[str, Any] = {
+        "bodies": [
+            {"name": "frame", "ground": True},
+            {"name": "crank"},
+            {"name": "coupler"},
+            {"name": "rocker"},
+        ],
+        "joints": [
+            {
+                **pin,
+                "name": "motor",
+                "between": ["frame", "crank"],
+                "at": [0, 0, 0],
+                "clearance": o2,
+            },
+            {
+                **pin,
+                "name": "pin A",
+                "between": ["crank", "coupler"],
+                "at": [0, FB_A, 0],
+                "clearance": a,
+            },
+            {
+                **pin,
+                "name": "pin B",
+                "between": ["coupler", "rocker"],
+                "at": [bx, by, 0],
+                "clearance": b,
+            },
+            {
+                **pin,
+                "name": "pivot",
+                "between": ["frame", "rocker"],
+                "at": [FB_D, 0, 0],
+                "clearance": o4,
+            },
+        ],
+        "loads": [{"body": "rocker", "torque": [0, 0, torque]}],
+        "points": [
+            {"name": "rocker pivot", "body": "rocker", "at": [FB_D, 0, 0]},
+            {"name": "rocker tip", "body": "rocker", "at": [bx, by, 0]},
+        ],
+        "motion": {"drive": drive, "range": [0, turn], "steps": 37},
+    }
+    data["joints"][["motor", "pivot"].index(drive) * 3]["backlash"] = 0
+    return model_from_dict(data, source="four_bar")
+
+
+@pytest.mark.parametrize("torque", [2000.0, -3000.0], ids=["counter-clockwise", "clockwise"])
+def test_four_bar_play_as_a_coupler_length(torque: float) -> None:
+    """The coupler carries no load: a two-force member along u (from pin A to
+    pin B). Whatever the sign of its force, each play closes along u: the
+    crank (held in rotation by the drive) shifts by its bearing's radial
+    play e_1 along u, the coupler by e_2 more at A; at B and at the rocker's
+    pivot the plays e_3, e_4 close along u too, so for the rocker's rotation
+    the four add up as a change of the coupler's length by E = e_1 + e_2 +
+    e_3 + e_4 (a compressed coupler acts shortened, a pulled one
+    lengthened). The torque T turns the rocker its way, so its rotation is
+    E |d theta_4 / d b| at fixed theta_2, from Freudenstein's equation
+    f = K1 cos th4 - K2 cos th2 + K3 - cos(th2 - th4) = 0 with
+    K3 = (a^2 - b^2 + c^2 + d^2) / (2 a c):
+    d th4/d b = -(df/db) / (df/dth4) = (b / (a c)) / (-K1 sin th4 - sin(th2 - th4)).
+    The rocker's pivot shifts by e_4 along u, against the coupler's force on
+    the rocker: -sign(T) sign(d th4/d b) e_4 u."""
+    model = _four_bar(torque)
+    result = Motion().run(model)
+    t = result.values
+    bx, by = FB_B_AT
+    a, b, c, d = FB_A, float(np.hypot(bx, by - FB_A)), float(np.hypot(bx - FB_D, by)), FB_D
+    e = [p / 2 for p in FB_PLAYS]
+    nominal = result.nominal  # (S, 2, 3): the pivot, the tip (pin B)
+    pin_b = nominal[:, 1, :2]
+    pin_a = np.stack([-FB_A * np.sin(t), FB_A * np.cos(t)], axis=1)
+    th2 = np.pi / 2 + t
+    th4 = np.arctan2(pin_b[:, 1], pin_b[:, 0] - d)
+    K1 = d / a
+    sensitivity = (b / (a * c)) / (-K1 * np.sin(th4) - np.sin(th2 - th4))
+    turn = np.sign(torque) * sum(e) * np.abs(sensitivity)
+    arm = pin_b - [d, 0.0]
+    moved = result.displacement[:, 1, :2] - result.displacement[:, 0, :2]
+    rotation = (arm[:, 0] * moved[:, 1] - arm[:, 1] * moved[:, 0]) / np.sum(arm**2, axis=1)
+    assert np.max(np.abs(rotation - turn)) < PLAY_ANGLE_TOL
+    u = (pin_b - pin_a) / np.linalg.norm(pin_b - pin_a, axis=1)[:, None]
+    pivot = -np.sign(torque) * np.sign(sensitivity)[:, None] * e[3] * u
+    assert np.max(np.abs(result.displacement[:, 0, :2] - pivot)) < PLAY_TOL
+    assert np.max(np.abs(result.displacement[:, :, 2])) < PLAY_TOL
+    # the rigid rocker: the tip moves as the pivot's shift and the rotation say
+    tip = pivot + turn[:, None] * np.stack([-arm[:, 1], arm[:, 0]], axis=1)
+    assert np.max(np.abs(result.displacement[:, 1, :2] - tip)) < PLAY_TOL
+
+
+def _four_bar_file(tmp_path: Path, model: jointplay.Model) -> Path:
+    path = tmp_path / "four_bar.yaml"
+    path.write_text(yaml.safe_dump(model.model_dump(by_alias=True, exclude_none=True)))
+    return path
+
+
+def _toggle_turn(sign: float = 1.0) -> float:
+    """How far the rocker turns from the written pose to a toggle with the
+    crank and coupler in line (rad): there |O2 B| = b + a (``sign`` 1, the
+    rocker turned clockwise) or b - a (-1, counter-clockwise), so
+    d^2 + c^2 + 2 d c cos th4 = (b + sign a)^2."""
+    bx, by = FB_B_AT
+    b, c = float(np.hypot(bx, by - FB_A)), float(np.hypot(bx - FB_D, by))
+    th4 = np.arccos(((b + sign * FB_A) ** 2 - FB_D**2 - c**2) / (2 * FB_D * c))
+    return float(th4 - np.arctan2(by, bx - FB_D))
+
+
+def test_a_four_bar_driven_through_its_toggle_stops_at_the_dead_point(tmp_path: Path) -> None:
+    """Driven by its rocker through the rocker's extreme (a step on it), the
+    four-bar stops there: "dead point", the step and the loop's joints; from
+    the command line, one line and exit 2."""
+    model = _four_bar(1000.0, drive="pivot", turn=2 * _toggle_turn())
+    with pytest.raises(MotionError, match="dead point") as err:
+        nominal_poses(model, np.linspace(0.0, 2 * _toggle_turn(), 3))
+    assert err.value.kind == "dead point" and err.value.step == 1 and err.value.exit_code == 2
+    assert {"motor", "pin A", "pin B"} <= set(err.value.joints)
+    proc = run("motion", str(_four_bar_file(tmp_path, model)), "--steps", "3")
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert "dead point: at step 1" in proc.stderr and "'pin A'" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_a_grashof_rocker_turned_a_full_turn_is_out_of_reach(tmp_path: Path) -> None:
+    """The crank-rocker driven by its rocker through 360 deg: the rocker
+    swings only between its toggles, so a step past one is "unreachable",
+    naming the step and the joints; from the command line exit 2."""
+    model = _four_bar(1000.0, drive="pivot", turn="360 deg")
+    with pytest.raises(MotionError, match="unreachable") as err:
+        Motion().run(model)
+    swing = _toggle_turn(-1.0)  # the counter-clockwise toggle; steps of 10 deg
+    assert err.value.kind == "unreachable" and err.value.step == int(
+        np.ceil(swing / np.radians(10))
+    )
+    assert "pivot" in err.value.joints
+    proc = run("motion", str(_four_bar_file(tmp_path, model)))
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert f"unreachable: at step {err.value.step}" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("force", [-1500.0, 800.0], ids=["compressed", "pulled"])
+def test_a_shared_deviation_turns_with_its_body(force: float) -> None:
+    """The crank's features made in one setup ('deviations', on the crank):
+    its crank pin's seat off by t along the crank (the frame's z, 'up' along
+    the crank as written). Carried with the crank, it makes the crank longer
+    by t at every angle, so the piston moves by t dx/dr = t (cos t + sin t
+    tan phi) besides the plays' closed form (the rod's force, along u, does
+    not move the seat: the deviation centres the play, the play still
+    closes along u)."""
+    h, offset = 10.0, 0.004
+    data = _slider_crank(h, force, steps=13).model_dump(by_alias=True, exclude_none=True)
+    data["deviations"] = [
+        {
+            "name": "crank setup",
+            "body": "crank",
+            "at": [R_CRANK, 0, 0],
+            "axis": [0, 0, 1],
+            "up": [1, 0, 0],
+            "position": {"diameter": "10 um", "mean": [0, 0, offset]},
+        }
+    ]
+    data["joints"][1]["deviation"] = "crank setup"
+    result = Motion().run(model_from_dict(data, source="slider_crank"))
+    t = result.values
+    sin_phi = (h - R_CRANK * np.sin(t)) / L_ROD
+    cos_phi = np.sqrt(1.0 - sin_phi**2)
+    e_o, e_a, e_b, e_g = (c / 2 for c in SC_PLAYS)
+    plays = np.sign(force) * (e_o + e_a + e_b + e_g * np.abs(sin_phi)) / cos_phi
+    longer = offset * (np.cos(t) + np.sin(t) * sin_phi / cos_phi)
+    assert np.max(np.abs(result.displacement[:, 0, 0] - plays - longer)) < PLAY_TOL
+
+
+def _motion_numbers(doc: dict[str, Any]) -> list[float]:
+    """The numbers of a motion's --json that its text prints to 6 digits:
+    the drive's values and reactions, the requirements' worst measures."""
+    wanted = [step["drive"] for step in doc["steps"]]
+    wanted += [step["drive_reaction"] for step in doc["steps"]]
+    return wanted + [q["measured"] for q in doc["requirements"]]
+
+
+@pytest.mark.parametrize("columns", ["80", "200"])
+def test_piped_motion_text_keeps_every_number_whole(columns: str) -> None:
+    """Piped (a CI log, a file), the motion's table is one line a step at any
+    COLUMNS: every number --json gives that the text prints is whole, and
+    every touching contact's joint and name are on its step's line."""
+    import os
+
+    env = {**os.environ, "COLUMNS": columns}
+    args = ["motion", str(GALLERY / "slider_crank.yaml"), "--steps", "13"]
+
+    def call(*extra: str) -> str:
+        proc = subprocess.run(
+            [sys.executable, "-m", "jointplay.cli", *args, *extra],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env=env,
+        )
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout
+
+    doc = json.loads(call("--json"))
+    text = call()
+    assert not _missing(_motion_numbers(doc), text), text
+    assert "…" not in text
+    rows = [line for line in text.splitlines() if "│" in line]
+    assert len(rows) == len(doc["steps"])
+    for row, step in zip(rows, doc["steps"], strict=True):
+        touching = [name.split(".", 1) for name in step["touching"]]
+        assert all(joint in row and contact in row for joint, contact in touching)
+
+
+def test_a_narrow_terminal_keeps_the_motion_numbers_whole() -> None:
+    """In an 80-column terminal the motion's wide table is printed row by
+    row as a list: every line fits, every number whole."""
+    import io
+
+    from rich.console import Console
+
+    from jointplay.present.textreport import render_motion
+
+    result = Motion(steps=5).run(jointplay.load(GALLERY / "slider_crank.yaml"))
+    buf = io.StringIO()
+    render_motion(result, "slider_crank.yaml", Console(file=buf, width=80, markup=False))
+    text = buf.getvalue()
+    assert all(len(line) <= 80 for line in text.splitlines())
+    assert not _missing(_motion_numbers(json.loads(json.dumps(result.to_dict()))), text)
+
+
+# -- load tables over the drive's value -----------------------------------------------
+@pytest.mark.parametrize(
+    ("table", "words"),
+    [
+        ([["0 deg", -200]], "table: expected at least 2 rows"),
+        ([["0 deg", -200], "oops"], "table row 1: expected [drive, value]"),
+        ([["0 deg", -200], ["180 deg", -1500], ["90 deg", -200]], "increasing order"),
+        ([["0 deg", -200], ["360 mm", -200]], "mix angles and lengths"),
+        ([["0 deg", -200], ["360 deg", "2 mm"]], "table row 1: the value: expected a force"),
+        ([["0 deg", -200], ["360 deg", "lots"]], "table row 1: the value"),
+        ([["0 deg", -200], ["a while", -200]], "neither an angle"),
+        ([["10 deg", -200], ["360 deg", -200]], "extend it to 0"),
+        ([["0 mm", -200], ["360 mm", -200]], "give them in deg"),
+        ([["0 deg", -200], ["180 deg", -200]], "extend the table over the motion's range"),
+        ([[0, -200], [3.0, -200]], "extend the table over the motion's range"),  # rad
+    ],
+)
+def test_bad_load_tables(table: list[Any], words: str) -> None:
+    """Each names the file, the load and the component, and says the fix."""
+    data = jointplay.load(GALLERY / "slider_crank.yaml").model_dump(
+        by_alias=True, exclude_none=True
+    )
+    data["loads"][0]["force"] = [{"table": table}, 0, 0]
+    with pytest.raises(ModelError) as err:
+        model_from_dict(data, source="crank.yaml")
+    assert err.value.exit_code == 2
+    message = str(err.value)
+    assert "crank.yaml" in message and "loads[0]" in message and "component x" in message
+    assert words in message, message
+
+
+def test_a_load_table_needs_a_motion(tmp_path: Path) -> None:
+    """Without a motion a table has no drive to be read against: exit 2 with
+    the fix, one line, from Python and from the command line."""
+    data = yaml.safe_load((GALLERY / "slider_crank.yaml").read_text())
+    del data["motion"]
+    data["loads"][0]["force"] = [{"table": GAS}, 0, 0]
+    with pytest.raises(ModelError, match="has no 'motion' section; add motion:"):
+        model_from_dict(data, source="crank.yaml")
+    path = tmp_path / "crank.yaml"
+    path.write_text(yaml.safe_dump(data))
+    proc = run("solve", str(path))
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert "loads[0]" in proc.stderr and "add motion:" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_a_motion_range_past_the_table_is_refused() -> None:
+    """--range (Motion(range=...)) past a load's table: the same message."""
+    model = jointplay.load(GALLERY / "slider_crank.yaml")
+    with pytest.raises(ModelError, match="the motion runs from 0 deg to 720 deg; extend"):
+        Motion(range=("0 deg", "720 deg")).run(model)
+
+
+def test_a_plain_solve_reads_the_table_at_the_written_pose() -> None:
+    """A plain solve of a model with a table takes its value at the drive's
+    0: the same answer as that value written as a number; through the
+    motion, the posed model at each step holds the table's value there."""
+    model = jointplay.load(GALLERY / "slider_crank.yaml")
+    table = model.loads[0].force[0]  # type: ignore[index]
+    data = model.model_dump(by_alias=True, exclude_none=True)
+    data["loads"][0]["force"] = [-1500.0, 0, 0]  # the table's first row, at 0 deg
+    plain = model_from_dict(data)
+    assert float(table) == -1500.0
+    ours, theirs = jointplay.solve(model), jointplay.solve(plain)
+    assert ours.potential_energy == pytest.approx(theirs.potential_energy, rel=1e-12)
+    values = np.radians([0.0, 10.0, 225.0, 300.0, 360.0])
+    poses = nominal_poses(model, values)
+    expected = [-1500.0, -950.0, -150.0 - 250.0 * 45 / 90, -400.0 - 600.0 * 30 / 50, -1500.0]
+    for s, force in enumerate(expected):
+        posed = posed_model(model, poses, s)
+        assert posed.motion is None
+        assert posed.loads[0].force == pytest.approx((force, 0.0, 0.0), rel=1e-12)

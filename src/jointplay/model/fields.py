@@ -18,6 +18,7 @@ from pydantic import (
     WithJsonSchema,
 )
 
+from jointplay.model.tables import DriveTable, is_table, parse_table, table_schema
 from jointplay.model.tolerance import parse_angular_play, parse_play, parse_scattered
 from jointplay.units import BASE_UNITS, NUMBER_FIRST, UNIT_EXAMPLES, shown, to_base
 
@@ -33,10 +34,18 @@ def _scalar(dimension: str) -> Callable[[Any], float]:
 
 def _vector(dimension: str, scatter: bool = False) -> Callable[[Any], Vec3]:
     """``scatter``: a component may be ``{min, max, distribution}`` (a load
-    that varies in a Monte Carlo study; see ``tolerance.parse_scattered``)."""
+    that varies in a Monte Carlo study; see ``tolerance.parse_scattered``),
+    or ``{table: ...}`` (a load that varies over the motion; see
+    ``tables.parse_table``)."""
 
     def read(component: Any) -> float:
-        return parse_scattered(component, dimension) if scatter else to_base(component, dimension)
+        if not scatter:
+            return to_base(component, dimension)
+        if isinstance(component, DriveTable):
+            return component
+        if is_table(component):
+            return parse_table(component, dimension)
+        return parse_scattered(component, dimension)
 
     def parse(value: Any) -> Vec3:
         if not isinstance(value, list | tuple) or len(value) != 3:
@@ -148,7 +157,7 @@ def _quantity(dimension: str) -> WithJsonSchema:
 def _vector_of(dimension: str, scatter: bool = False) -> WithJsonSchema:
     item = _quantity_schema(dimension)
     if scatter:
-        item = {"anyOf": [item, _range_schema(dimension)]}
+        item = {"anyOf": [item, _range_schema(dimension), table_schema(dimension, item)]}
     return WithJsonSchema(_vector_schema(item))
 
 
@@ -212,8 +221,8 @@ Direction = Annotated[
     _vector_of("length"),
 ]
 #: A load's vectors: a component may vary in Monte Carlo studies (kept as a
-#: ``Toleranced``, hence a plain validator: a before-validator's float
-#: subclass would be turned into a float).
+#: ``Toleranced``) or over the motion (a ``DriveTable``), hence a plain
+#: validator: a before-validator's float subclass would be turned into a float.
 ForceVector = Annotated[
     Vec3, PlainValidator(_vector("force", scatter=True)), _vector_of("force", scatter=True)
 ]

@@ -45,7 +45,8 @@ from jointplay.model.fields import (
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.joints.base import Coordinate
-from jointplay.model.motion import MotionSection, coordinate_of, range_of
+from jointplay.model.motion import DIMENSION, MotionSection, coordinate_of, range_of
+from jointplay.model.tables import DriveTable
 from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced, play_unit
 from jointplay.units import shown
 
@@ -341,6 +342,7 @@ class Model(BaseModel):
         found += _check_smallest_plays(self)
         found += _check_shared_deviations(self)
         found += _check_motion(self)
+        found += _check_load_tables(self, sections)
         # with no ground, or a joint to an unknown body, it would only repeat those
         unreached = (
             _unreached_from_ground(names, grounds, [j.between for j in self.joints])
@@ -613,15 +615,69 @@ def _check_motion(model: Model) -> list[EntryError]:
         model.motion_drive()
     except ValueError as exc:
         return [EntryError("motion", str(exc))]
-    if model.deviations:
-        return [
-            EntryError(
-                "motion",
-                "the model has shared deviations ('deviations'), whose frames a motion does "
-                "not carry yet; give each joint its own deviation, or remove 'motion'",
-            )
-        ]
     return []
+
+
+def _check_load_tables(model: Model, sections: list[tuple[str, Load]]) -> list[EntryError]:
+    """A load's table over the drive's value: the model has a motion, the
+    table's first column is in the drive's unit, and its rows reach over the
+    motion's range."""
+    found = []
+    for entry, load in sections:
+        for key in ("force", "torque"):
+            for i, table in enumerate(getattr(load, key) or ()):
+                if not isinstance(table, DriveTable):
+                    continue
+                where = f"{key}: component {'xyz'[i]}: table"
+                if model.motion is None:
+                    found.append(
+                        EntryError(
+                            entry,
+                            f"{where}: a table is read against the drive's value, and the model "
+                            "has no 'motion' section; add motion: {drive: JOINT, range: "
+                            "['0 deg', '360 deg']}, or give the component as a number",
+                        )
+                    )
+                    continue
+                try:
+                    joint, coordinate, start, stop = model.motion_drive()
+                except (KeyError, ValueError):
+                    continue  # the motion section's own message says what is wrong
+                dimension = DIMENSION[coordinate]
+                unit = "deg" if coordinate == "spin" else "mm"
+                if table.dimension not in (None, dimension):
+                    found.append(
+                        EntryError(
+                            entry,
+                            f"{where}: its drive's values are {table.dimension}s, but the drive "
+                            f"'{joint.name}' is a {coordinate} (its value {_article(dimension)}); "
+                            f"give them in {unit}",
+                        )
+                    )
+                    continue
+                low, high = min(start, stop), max(start, stop)
+                if table.drive[0] > low or table.drive[-1] < high:
+                    show = _shown_in(coordinate)
+                    found.append(
+                        EntryError(
+                            entry,
+                            f"{where}: its rows run from {show(table.drive[0])} to "
+                            f"{show(table.drive[-1])}, but the motion runs from {show(start)} "
+                            f"to {show(stop)}; extend the table over the motion's range",
+                        )
+                    )
+    return found
+
+
+def _shown_in(coordinate: Coordinate) -> Any:
+    """A drive's value (rad or mm) as written: '90 deg' or '25 mm'."""
+    if coordinate == "spin":
+        return lambda v: f"{math.degrees(v):g} deg"
+    return lambda v: f"{v:g} mm"
+
+
+def _article(dimension: str) -> str:
+    return f"{'an' if dimension[0] in 'aeiou' else 'a'} {dimension}"
 
 
 def check_case(model: Model, case: str | None, source: str) -> None:

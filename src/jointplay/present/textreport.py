@@ -468,7 +468,7 @@ def render_motion(result: Any, source: str, console: Console) -> None:
         cells = [str(s), f"{result.shown_value(s):.6g}"]
         for k in range(len(result.point_names)):
             cells += [_vec(result.nominal[s, k], 6), _vec(result.displacement[s, k], 4)]
-        cells += [f"{result.drive_reaction[s]:.6g}", ", ".join(result.touching[s]) or "-"]
+        cells += [f"{result.drive_reaction[s]:.6g}", _touching_by_joint(result.results[s])]
         table.add_row(*cells)
     tail = Text()
     for q, name in enumerate(result.requirement_names):
@@ -484,6 +484,16 @@ def render_motion(result: Any, source: str, console: Console) -> None:
             f"{result.measured[s, q]:.6g} mm of {result.limits[q]:g} mm\n"
         )
     console.print(_fit(console, head, table, tail))
+
+
+def _touching_by_joint(result: Any) -> str:
+    """The touching contacts, grouped by joint: 'pin (end-, end+), guide (x-)'."""
+    groups = []
+    for name, joint in result.joints.items():
+        touching = [c.name for c in joint.contacts if c.in_contact]
+        if touching:
+            groups.append(f"{name} ({', '.join(touching)})")
+    return ", ".join(groups) or "-"
 
 
 def _bar(percent: float, width: int = 10) -> str:

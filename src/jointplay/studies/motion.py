@@ -3,9 +3,10 @@
 ``Motion(...).run(model)`` finds every body's pose at each step
 (``kinematics.nominal_poses``), builds the model as posed there (joints'
 centres carried by their second body and axes by their first, functional
-points, loads' points, centres of mass and outlines moved with their
-bodies; a load's force and torque keep their global directions unless it
-``follows: body``; gravity stays global) and solves the clearance
+points, loads' points, centres of mass, outlines and shared deviations'
+points and frames moved with their bodies; a load's force and torque keep
+their global directions unless it ``follows: body``, and its tables are
+read at the step's drive value; gravity stays global) and solves the clearance
 equilibrium of that posed model with ``jointplay.solve``, one solve a pose.
 """
 
@@ -19,6 +20,7 @@ import numpy as np
 from jointplay.geometry import FloatArray
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model
+from jointplay.model.tables import DriveTable
 from jointplay.result import Result
 from jointplay.settings import MOTION, MotionSettings
 from jointplay.studies.kinematics import Poses, nominal_poses
@@ -28,8 +30,10 @@ if TYPE_CHECKING:
 
 
 def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") -> Model:
-    """``model`` placed as its bodies are at ``step``, without its motion."""
+    """``model`` placed as its bodies are at ``step``, without its motion;
+    its loads' tables read at the step's drive value."""
     data = model.model_dump(by_alias=True, exclude_none=True)
+    drive = float(poses.values[step])
     data.pop("motion", None)
 
     def at(body: str, X: Any) -> list[float]:
@@ -51,6 +55,12 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
             entry["center_of_mass"] = at(body.name, body.center_of_mass)
         if body.outline is not None:
             entry["outline"] = [at(body.name, X) for X in body.outline]
+    for dev, entry in zip(model.deviations, data.get("deviations", []), strict=True):
+        # features made together on one body: their point and frame move with it
+        entry["at"] = at(dev.body, dev.at)
+        for key in ("axis", "up"):
+            if entry.get(key) is not None:
+                entry[key] = turned(dev.body, getattr(dev, key))
     groups = [(model.loads, data.get("loads", []))]
     for case, loads in (model.load_cases or {}).items():
         groups.append((loads, data["load_cases"][case]))
@@ -58,11 +68,15 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
         for load, entry in zip(loads, entries, strict=True):
             if load.at is not None:
                 entry["at"] = at(load.body, load.at)
-            if load.follows == "body":
-                for key in ("force", "torque"):
-                    value = getattr(load, key)
-                    if value is not None:
-                        entry[key] = turned(load.body, [float(c) for c in value])
+            for key in ("force", "torque"):
+                value = getattr(load, key)
+                if value is None:
+                    continue
+                # a table over the drive's value, read at this step's value
+                value = [c.at(drive) if isinstance(c, DriveTable) else c for c in value]
+                if load.follows == "body":
+                    value = turned(load.body, [float(c) for c in value])
+                entry[key] = value
     return model_from_dict(data, source=source)
 
 
