@@ -522,6 +522,15 @@ def motion(
         typer.Option("--csv", metavar="FILE", help="Write the table (one row per step) as CSV."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print every step as JSON.")] = False,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot",
+            metavar="FILE",
+            help="Draw each point's displacement against the drive and its path, and each "
+            "joint's force with its contacts' switches, in one figure (.png, .svg or .pdf).",
+        ),
+    ] = None,
 ) -> None:
     """Drive MODEL through its motion (its 'motion' section, or --drive and
     --range): every body's pose by its ideal joints, and at every pose the
@@ -540,15 +549,14 @@ def motion(
                     f"--range {span}: expected START:STOP, e.g. '0 deg:360 deg'", source=source
                 )
             bounds = (_number_or_text(parts[0]), _number_or_text(parts[1]))
-        if csv is not None:
-            _check_outputs(csv, None)
+        _check_outputs(csv, plot)
         model = load(model_path)
         result = Motion(drive=drive, range=bounds, steps=steps, case=case).run(model, source)
         _finish_study(
             result,
             csv,
-            None,
-            lambda: None,
+            plot,
+            lambda: _motion_plots().motion_figure(result),
             as_json,
             lambda: render_motion(result, source, _console()),
         )
@@ -839,6 +847,12 @@ def _plots() -> Any:
     from jointplay.present import plot
 
     return plot
+
+
+def _motion_plots() -> Any:
+    from jointplay.present import motion_plots
+
+    return motion_plots
 
 
 def _check_outputs(csv: Path | None, plot: Path | None) -> None:

@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from jointplay.studies.contributions import ContributionsResult
     from jointplay.studies.envelope import EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarloResult
+    from jointplay.studies.motion import MotionResult
     from jointplay.studies.sweep import Sweep, SweepResult
     from jointplay.studies.tolerances import RequirementTolerances
 
@@ -104,6 +105,11 @@ class Report:
         for case, result in results.items():
             say(f"drawing {'the solution' if case is None else repr(case)}")
             page.solution(model, result, case, self.magnify)
+        if model.motion is not None:
+            from jointplay.studies.motion import Motion
+
+            say(f"the motion, {model.motion.steps} poses")
+            page.motion(model, Motion(case=self.case).run(model, source))
         if self.studies or self.sweep is not None:
             page.section("Studies")
         if self.studies:
@@ -286,6 +292,183 @@ def scene_figure(scene: Scene, title: str = "") -> go.Figure:
         margin={"l": 0, "r": 0, "t": 40, "b": 0},
         height=620,
         legend={"itemsizing": "constant"},
+    )
+    return fig
+
+
+def motion_view(model: Model, mr: MotionResult) -> go.Figure:
+    """The mechanism at each pose beside its first point's displacement
+    curve, a slider stepping through the poses (it moves the bodies' lines,
+    the joints' centres, the points and the curve's marker)."""
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    from jointplay.present.motion_plots import (
+        displacement_series,
+        drawn_plane,
+        joint_centres,
+        posed_lines,
+        shown_points,
+    )
+    from jointplay.present.plot import BODY_COLOURS, INITIAL, POINT, TOUCHING
+
+    h, v = drawn_plane(model, mr)
+    names = "XYZ"
+    points = shown_points(mr)
+    series = displacement_series(mr, points[0]) if points else None
+    fig = make_subplots(rows=1, cols=2, column_widths=[0.55, 0.45], horizontal_spacing=0.08)
+
+    def joined(paths: Iterable[FloatArray], axis: int) -> list[float | None]:
+        out: list[float | None] = []
+        for P in paths:
+            out += [*P[:, axis].tolist(), None]
+        return out
+
+    def frame(s: int) -> tuple[list[list[float | None]], list[list[float | None]]]:
+        """x and y of each moving trace at step ``s``, in the traces' order."""
+        lines = posed_lines(model, mr, s)
+        xs = [joined(paths, h) for paths in lines.values()]
+        ys = [joined(paths, v) for paths in lines.values()]
+        C = joint_centres(model, mr, s)
+        xs.append(C[:, h].tolist())
+        ys.append(C[:, v].tolist())
+        if points:
+            P = mr.nominal[s, [mr.point_names.index(n) for n in points]]
+            xs.append(P[:, h].tolist())
+            ys.append(P[:, v].tolist())
+        if series is not None:
+            xs.append([float(series.drive[s])])
+            ys.append([float(series.curves[0][1][s])])
+        return xs, ys
+
+    for name in points:  # each point's whole path, under the moving traces
+        P = mr.nominal[:, mr.point_names.index(name)]
+        fig.add_trace(
+            go.Scatter(
+                x=P[:, h],
+                y=P[:, v],
+                mode="lines",
+                name=f"path of '{name}'",
+                line={"color": INITIAL, "width": 1, "dash": "dot"},
+            ),
+            row=1,
+            col=1,
+        )
+    moving = len(fig.data)
+    xs, ys = frame(0)
+    for i, body in enumerate(posed_lines(model, mr, 0)):
+        fig.add_trace(
+            go.Scatter(
+                x=xs[i],
+                y=ys[i],
+                mode="lines",
+                name=body,
+                line={"color": BODY_COLOURS[i % len(BODY_COLOURS)], "width": 3},
+            ),
+            row=1,
+            col=1,
+        )
+    k = len(fig.data) - moving
+    fig.add_trace(
+        go.Scatter(
+            x=xs[k],
+            y=ys[k],
+            mode="markers",
+            name="joint centres",
+            text=[j.name for j in model.joints],
+            hoverinfo="text",
+            marker={"color": "#333333", "size": 7},
+        ),
+        row=1,
+        col=1,
+    )
+    if points:
+        fig.add_trace(
+            go.Scatter(
+                x=xs[k + 1],
+                y=ys[k + 1],
+                mode="markers+text",
+                name="functional points",
+                text=points,
+                textposition="top center",
+                marker={"color": POINT, "size": 8, "symbol": "diamond"},
+            ),
+            row=1,
+            col=1,
+        )
+    if series is not None:
+        label, values = series.curves[0]
+        fig.add_trace(
+            go.Scatter(
+                x=series.drive,
+                y=values,
+                mode="lines",
+                name=f"'{series.point}': {label} (mm)",
+                line={"color": "#1f77b4", "width": 2},
+            ),
+            row=1,
+            col=2,
+        )
+        if series.limit is not None:
+            for sign in (1.0, -1.0) if series.along is not None else (1.0,):
+                fig.add_hline(
+                    y=sign * series.limit, line={"color": TOUCHING, "width": 1}, row=1, col=2
+                )
+        fig.add_trace(
+            go.Scatter(
+                x=xs[-1],
+                y=ys[-1],
+                mode="markers",
+                name="this pose",
+                marker={"color": TOUCHING, "size": 10},
+            ),
+            row=1,
+            col=2,
+        )
+    # the moving traces: the bodies, the centres, the points, then the marker
+    traces = list(range(moving, moving + len(xs) - (series is not None)))
+    if series is not None:
+        traces.append(len(fig.data) - 1)
+    steps = []
+    for s in range(mr.steps):
+        xs, ys = frame(s)
+        steps.append(
+            {
+                "method": "restyle",
+                "label": f"{mr.shown_value(s):g}",
+                "args": [{"x": xs, "y": ys}, traces],
+            }
+        )
+    every = np.vstack(
+        [P for s in range(mr.steps) for paths in posed_lines(model, mr, s).values() for P in paths]
+        + [joint_centres(model, mr, s) for s in range(mr.steps)]
+        + [np.asarray(mr.nominal).reshape(-1, 3)]
+    )
+    lo, hi = every.min(axis=0), every.max(axis=0)
+    pad = 0.05 * float(np.max(hi - lo))
+    fig.update_xaxes(range=[lo[h] - pad, hi[h] + pad], title_text=f"{names[h]} (mm)", row=1, col=1)
+    fig.update_yaxes(
+        range=[lo[v] - pad, hi[v] + pad],
+        title_text=f"{names[v]} (mm)",
+        scaleanchor="x",
+        scaleratio=1,
+        row=1,
+        col=1,
+    )
+    fig.update_xaxes(title_text=f"{mr.drive} ({mr.unit})", row=1, col=2)
+    fig.update_yaxes(title_text="mm", row=1, col=2)
+    fig.update_layout(
+        title={"text": f"{mr.steps} poses driven by '{mr.drive}'", "font": {"size": 14}},
+        sliders=[
+            {
+                "active": 0,
+                "currentvalue": {"prefix": f"{mr.drive} ({mr.unit}): "},
+                "pad": {"t": 40},
+                "steps": steps,
+            }
+        ],
+        margin={"l": 40, "r": 20, "t": 50, "b": 20},
+        height=620,
     )
     return fig
 
@@ -843,6 +1026,37 @@ class _Page:
             if r.beyond_bound:
                 words = f"{r.requirement.describe()}: {r.beyond_words(samples)}."
                 self.parts.append(f"<p><strong>{html.escape(words)}</strong></p>")
+
+    def motion(self, model: Model, mr: MotionResult) -> None:
+        from jointplay.present.motion_plots import motion_figure, poses_figure
+
+        self.section("Motion")
+        self.paragraph(
+            f"The mechanism driven by '{mr.drive}' from {mr.shown_value(0):g} to "
+            f"{mr.shown_value(mr.steps - 1):g} {mr.unit} in {mr.steps} poses, the clearance "
+            "equilibrium solved at each. The table of every step: jointplay motion MODEL "
+            "--csv FILE; these figures: jointplay motion MODEL --plot FILE."
+        )
+        if mr.requirement_names:
+            rows = []
+            for q, name in enumerate(mr.requirement_names):
+                worst = mr.worst_step(q)
+                measured = float(mr.measured[worst, q])
+                rows.append(
+                    (
+                        name,
+                        _num(mr.limits[q]),
+                        f"{worst} ({mr.shown_value(worst):g} {mr.unit})",
+                        _num(measured),
+                        "passed" if np.all(mr.measured[:, q] <= mr.limits[q]) else "FAILED",
+                    )
+                )
+            head = ["point", "limit (mm)", "worst step", "measured there (mm)", "over the motion"]
+            self.parts.append(_table(head, rows, "Requirements at every pose"))
+        self.parts.append(_svg(motion_figure(mr)))
+        self.parts.append(_svg(poses_figure(model, mr)))
+        self.paragraph("Move the slider to step through the poses.")
+        self.view(motion_view(model, mr))
 
     def sweep(self, model: Model, sw: SweepResult, source: str) -> None:
         from jointplay.present.plot import sweep_figure

@@ -209,6 +209,13 @@ def mechanism_scene(
     return Scene(m, scale, size, tuple(lines), tuple(markers), drawn, largest)
 
 
+def body_lines(model: Model, case: str | None = None) -> dict[str, list[FloatArray]]:
+    """Each moving body's lines at rest (mm, global), as the mechanism's
+    picture draws them: its outline, else the line of its joints."""
+    loads = model.loads_of(case)
+    return {b.name: _body_paths(model, loads, b) for b in model.moving_bodies}
+
+
 def _body_nodes(model: Model, loads: tuple[Load, ...], body: str) -> list[FloatArray]:
     """The points that draw a body: its joints' centres and the ends of their
     engagement on the axis, its load points, functional points and centre
