@@ -549,10 +549,10 @@ class MotionEnvelopeResult:
             return np.zeros(self.steps), upper
         u = np.asarray(direction, dtype=float)
         u = u / np.linalg.norm(u)
-        along = [row[k].hull @ u for row in self.envelopes]
+        along = [row[k].hull @ u for row in self.envelopes]  # none held: NaN
         return (
-            np.array([float(a.min(initial=0.0)) for a in along]),
-            np.array([float(a.max(initial=0.0)) for a in along]),
+            np.array([float(a.min()) if a.size else np.nan for a in along]),
+            np.array([float(a.max()) if a.size else np.nan for a in along]),
         )
 
     def worst_step(self, q: int) -> int:
