@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
 from jointplay.errors import MotionError, UnboundedMechanismError
-from jointplay.geometry import FloatArray, describe_motion, left_jacobian, rotation_matrix
+from jointplay.geometry import FloatArray, describe_motion
 from jointplay.model.joints.base import Coordinate, Ideal
 from jointplay.model.mechanism import Model
 from jointplay.settings import MOTION, MotionSettings
@@ -47,6 +47,27 @@ class Poses:
         if body not in self.bodies:
             return np.eye(3)
         return np.asarray(self.R[step, self.bodies.index(body)])
+
+
+def _rotations(w: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(B, 3, 3) ``exp([w]x)`` of each row of ``w`` (Rodrigues) and the left
+    Jacobians ``J_l`` (``geometry.rotation_matrix``, ``left_jacobian``),
+    all at once; below 1e-4 rad by their series, exact there to round-off."""
+    theta = np.linalg.norm(w, axis=1)
+    K = np.zeros((len(w), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
+    K2 = K @ K
+    small = theta < 1e-4
+    t = np.where(small, 1.0, theta)
+    t2 = theta * theta
+    sin_t = np.where(small, 1.0 - t2 / 6.0, np.sin(t) / t)
+    one_cos = np.where(small, 0.5 - t2 / 24.0, (1.0 - np.cos(t)) / t**2)
+    t_sin = np.where(small, 1.0 / 6.0 - t2 / 120.0, (t - np.sin(t)) / t**3)
+    eye = np.eye(3)[None]
+    R = eye + sin_t[:, None, None] * K + one_cos[:, None, None] * K2
+    J = eye + one_cos[:, None, None] * K + t_sin[:, None, None] * K2
+    return R, J
 
 
 def _cross(u: FloatArray, v: FloatArray) -> FloatArray:
@@ -126,14 +147,18 @@ class _Equations:
         )
         self.offset_rows = _Rows.of(self, "offset")
         self.axes_rows = _Rows.of(self, "axes")
+        o, x = self.offset_rows, self.axes_rows
+        #: the row of each gradient block ``evaluate`` stacks, in its order
+        self.gradient_rows = np.concatenate(
+            [o.rows, o.rows, x.rows, x.rows, [len(self.rows)] * 2]
+        ).astype(np.intp)
 
     def _pose(
         self, R0: FloatArray, p0: FloatArray, z: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         w = z.reshape(-1, 6)
-        R = np.array([rotation_matrix(w[i, :3]) @ R0[i] for i in range(len(R0))]).reshape(-1, 3, 3)
-        J = np.array([left_jacobian(w[i, :3]) for i in range(len(R0))]).reshape(-1, 3, 3)
-        return R, p0 + w[:, 3:], J
+        turn, Jl = _rotations(w[:, :3])
+        return turn @ R0, p0 + w[:, 3:], Jl
 
     def evaluate(
         self, R: FloatArray, p: FloatArray, Jl: FloatArray, value: float
@@ -145,54 +170,57 @@ class _Equations:
         Rx = np.concatenate([R, np.eye(3)[None]])
         px = np.concatenate([p, np.zeros((1, 3))])
         Jx = np.concatenate([Jl, np.zeros((1, 3, 3))])  # a ground body's gradients vanish
+        o, x = self.offset_rows, self.axes_rows
+        a, b = (i if i >= 0 else B for i in self.rows_drive_bodies)
+        F, c = self.frames[self.drive_index]
+        # offset rows: u_a . (c_b - c_a); axes rows: ell u_a . v_b
+        u = np.einsum("rij,rj->ri", Rx[o.a], o.axis_a)
+        rb = np.einsum("rij,rj->ri", Rx[o.b], o.centre)
+        pa = px[o.a]
+        arm = rb + px[o.b] - pa  # c_b - p_a
+        ca = np.einsum("rij,rj->ri", Rx[o.a], o.centre)
+        ua = np.einsum("rij,rj->ri", Rx[x.a], x.axis_a)
+        vb = np.einsum("rij,rj->ri", Rx[x.b], x.axis_b)
+        if self.drive == "slide":  # the drive's offset along its axis x, less the value
+            du = (Rx[a] @ F[:, 0])[None]
+            drb = (Rx[b] @ c)[None]
+            darm = drb + px[b] - px[a]
+            d_res = float(du[0] @ (darm[0] - Rx[a] @ c)) - value
+            left, right = (np.vstack([u, rb, ua, du, drb]), np.vstack([arm, u, vb, darm, du]))
+        else:  # ell sin(phi - value), R_rel[2, 1] = sin(phi), R_rel[1, 1] = cos(phi)
+            cos, sin = np.cos(value), np.sin(value)
+            du = np.array([Rx[a] @ F[:, 2], Rx[a] @ F[:, 1]])
+            dv = np.array([Rx[b] @ F[:, 1], Rx[b] @ F[:, 1]])
+            weights = ell * np.array([cos, -sin])
+            d_res = float(weights @ np.einsum("ri,ri->r", du, dv))
+            left, right = np.vstack([u, rb, ua, du]), np.vstack([arm, u, vb, dv])
+        crossed = _cross(left, right)
+        no, nx = len(o.rows), len(x.rows)
+        g_a, g_b, g_axes = crossed[:no], crossed[no : 2 * no], ell * crossed[2 * no : 2 * no + nx]
+        zero = np.zeros((nx, 3))
+        if self.drive == "slide":
+            g_da, g_db = crossed[2 * no + nx][None], crossed[2 * no + nx + 1][None]
+            s_da, s_db = -du, du
+        else:
+            g_da = (weights @ crossed[2 * no + nx :])[None]
+            g_db, s_da, s_db = -g_da, np.zeros((1, 3)), np.zeros((1, 3))
+        g_rot = np.vstack([g_a, g_b, g_axes, -g_axes, g_da, g_db])
+        g_shift = np.vstack([-u, u, zero, zero, s_da, s_db])
+        bodies = self.gradient_bodies(a, b)
         m = len(self.rows) + 1
         res = np.zeros(m)
+        res[o.rows] = np.einsum("ri,ri->r", u, arm - ca)
+        res[x.rows] = ell * np.einsum("ri,ri->r", ua, vb)
+        res[m - 1] = d_res
         jac = np.zeros((m, 6 * B + 6))  # the ground's six columns are dropped at the end
-
-        def add(rows: IntArray, body: IntArray, g_rot: FloatArray, g_shift: FloatArray) -> None:
-            # a row meets each body once: no entry is written twice in one call
-            cols = 6 * body[:, None] + np.arange(6)
-            jac[rows[:, None], cols] += np.hstack(
-                [np.einsum("ri,rij->rj", g_rot, Jx[body]), g_shift]
-            )
-
-        o = self.offset_rows
-        if len(o.rows):
-            u = np.einsum("rij,rj->ri", Rx[o.a], o.axis_a)
-            rb = np.einsum("rij,rj->ri", Rx[o.b], o.centre)
-            cb = rb + px[o.b]
-            ca = np.einsum("rij,rj->ri", Rx[o.a], o.centre) + px[o.a]
-            res[o.rows] = np.einsum("ri,ri->r", u, cb - ca)
-            add(o.rows, o.a, _cross(u, cb - px[o.a]), -u)
-            add(o.rows, o.b, _cross(rb, u), u)
-        x = self.axes_rows
-        if len(x.rows):
-            u = np.einsum("rij,rj->ri", Rx[x.a], x.axis_a)
-            v = np.einsum("rij,rj->ri", Rx[x.b], x.axis_b)
-            res[x.rows] = ell * np.einsum("ri,ri->r", u, v)
-            g = ell * _cross(u, v)
-            add(x.rows, x.a, g, np.zeros_like(g))
-            add(x.rows, x.b, -g, np.zeros_like(g))
-        row = np.array([m - 1])
-        a, b = (np.array([i if i >= 0 else B]) for i in self.rows_drive_bodies)
-        F, c = self.frames[self.drive_index]
-        if self.drive == "slide":
-            u = (Rx[a[0]] @ F[:, 0])[None]
-            rb = (Rx[b[0]] @ c)[None]
-            cb = rb + px[b]
-            ca = (Rx[a[0]] @ c)[None] + px[a]
-            res[m - 1] = float(u[0] @ (cb - ca)[0]) - value
-            add(row, a, _cross(u, cb - px[a]), -u)
-            add(row, b, _cross(rb, u), u)
-        else:  # sin(phi - value) with R_rel[2, 1] = sin(phi), R_rel[1, 1] = cos(phi)
-            cos, sin = np.cos(value), np.sin(value)
-            for j, k, weight in ((2, 1, cos), (1, 1, -sin)):
-                u, v = (Rx[a[0]] @ F[:, j])[None], (Rx[b[0]] @ F[:, k])[None]
-                res[m - 1] += ell * weight * float(u[0] @ v[0])
-                g = ell * weight * _cross(u, v)
-                add(row, a, g, np.zeros_like(g))
-                add(row, b, -g, np.zeros_like(g))
+        blocks = np.hstack([np.einsum("ri,rij->rj", g_rot, Jx[bodies]), g_shift])
+        np.add.at(jac, (self.gradient_rows[:, None], 6 * bodies[:, None] + np.arange(6)), blocks)
         return res, jac[:, : 6 * B]
+
+    def gradient_bodies(self, a: int, b: int) -> IntArray:
+        """The body of each gradient block ``evaluate`` stacks, in its order."""
+        o, x = self.offset_rows, self.axes_rows
+        return np.concatenate([o.a, o.b, x.a, x.b, [a], [b]]).astype(np.intp)
 
     @property
     def rows_drive_bodies(self) -> tuple[int, int]:
