@@ -240,3 +240,26 @@ def test_cli_motion_samples_on_a_model_where_nothing_varies(tmp_path: Path) -> N
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr
     assert "fixed.yaml" in proc.stderr and "the same" in proc.stderr
+
+
+def test_a_slide_drive_places_the_piston_and_closes_the_loop() -> None:
+    # the kinematics the studies pose their models by, driven by a slide:
+    # the piston at the drive's value, the crank pin r from the main bearing
+    # and l from the wrist pin (closed forms, 1e-9 mm)
+    data = jointplay.load(GALLERY / "slider_crank.yaml").model_dump(
+        by_alias=True, exclude_none=True
+    )
+    data["motion"] = {"drive": "guide", "range": ["0 mm", "-30 mm"], "steps": 7}
+    for joint in data["joints"]:
+        joint.pop("backlash", None)  # the motor's backlash would hold the crank
+    model = model_from_dict(data, source="slide")
+    slide = np.linspace(0.0, -30.0, 7)
+    poses = nominal_poses(model, slide)
+    wrist, crank_pin = np.array([179.6424, 10.0, 0.0]), np.array([40.0, 0.0, 0.0])
+    for s, value in enumerate(slide):
+        C = poses.place(s, "piston", wrist)
+        B = poses.place(s, "crank", crank_pin)
+        assert np.max(np.abs(C - (wrist + [value, 0.0, 0.0]))) < 1e-9
+        assert abs(np.linalg.norm(B) - 40.0) < 1e-9
+        assert abs(np.linalg.norm(C - B) - np.linalg.norm(wrist - crank_pin)) < 1e-9
+        assert abs(poses.place(s, "rod", crank_pin)[2]) < 1e-9
