@@ -259,7 +259,7 @@ def test_a_slide_drive_places_the_piston_and_closes_the_loop() -> None:
     for s, value in enumerate(slide):
         C = poses.place(s, "piston", wrist)
         B = poses.place(s, "crank", crank_pin)
-        assert np.max(np.abs(C - (wrist + [value, 0.0, 0.0]))) < 1e-9
+        assert np.max(np.abs(C - wrist - np.array([value, 0.0, 0.0]))) < 1e-9
         assert abs(np.linalg.norm(B) - 40.0) < 1e-9
         assert abs(np.linalg.norm(C - B) - np.linalg.norm(wrist - crank_pin)) < 1e-9
         assert abs(poses.place(s, "rod", crank_pin)[2]) < 1e-9
