@@ -372,7 +372,7 @@ class MotionMonteCarloResult:
                     out.append(t)  # type: ignore[arg-type]
         return out
 
-    def _percentiles(self, point: str, direction: Any) -> dict[str, list[float]]:
+    def _percentiles(self, point: str, direction: Any) -> dict[str, list[float | None]]:
         out = {}
         for lo in (p for p in PERCENTILES if p < 50):
             hi = 100.0 - lo
@@ -458,8 +458,14 @@ def _along(u: Any) -> str:
     return "along [" + ", ".join(f"{c:.4g}" for c in u) + "]"
 
 
-def _floats(v: FloatArray) -> list[float]:
-    return [float(c) + 0.0 for c in v]
+def _values(v: FloatArray) -> list[float]:
+    return [float(c) for c in v]
+
+
+def _floats(v: FloatArray) -> list[float | None]:
+    """JSON numbers; None where there is no value (no part assembled at a
+    step, no probe held)."""
+    return [float(c) + 0.0 if np.isfinite(c) else None for c in v]
 
 
 # -- worst-case envelope at every pose -------------------------------------------
@@ -732,13 +738,13 @@ class MotionStudiesResult:
             label, u = self.shown_direction(name)
             if self.monte_carlo is not None:
                 lo, hi = self.monte_carlo.band(name, 2.5, 97.5, u)
-                out[f"{name} {label} p2.5 (mm)"] = _floats(lo)
-                out[f"{name} {label} p97.5 (mm)"] = _floats(hi)
+                out[f"{name} {label} p2.5 (mm)"] = _values(lo)
+                out[f"{name} {label} p97.5 (mm)"] = _values(hi)
             if self.envelope is not None:
                 lo, hi = self.envelope.extent(name, u)
                 if u is not None:  # a size's least is no bound worth a column
-                    out[f"{name} {label} envelope min (mm)"] = _floats(lo)
-                out[f"{name} {label} envelope max (mm)"] = _floats(hi)
+                    out[f"{name} {label} envelope min (mm)"] = _values(lo)
+                out[f"{name} {label} envelope max (mm)"] = _values(hi)
         if self.contributions is not None:
             for k, measure in enumerate(self.contributions.measures):
                 share = self.contributions.worst_case(k)
