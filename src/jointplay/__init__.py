@@ -38,6 +38,15 @@ if TYPE_CHECKING:
     from jointplay.studies.envelope import Envelope, EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
     from jointplay.studies.motion import Motion, MotionResult
+    from jointplay.studies.motion_studies import (
+        MotionContributions,
+        MotionContributionsResult,
+        MotionEnvelope,
+        MotionEnvelopeResult,
+        MotionMonteCarlo,
+        MotionMonteCarloResult,
+        MotionStudiesResult,
+    )
     from jointplay.studies.sweep import RotateLoad, Sweep, SweepResult, Vary
     from jointplay.studies.tolerances import Tolerances, TolerancesResult
 
@@ -67,6 +76,13 @@ _LAZY = {
     "Workspace": "solver.workspace",
     "Motion": "studies.motion",
     "MotionResult": "studies.motion",
+    "MotionMonteCarlo": "studies.motion_studies",
+    "MotionMonteCarloResult": "studies.motion_studies",
+    "MotionEnvelope": "studies.motion_studies",
+    "MotionEnvelopeResult": "studies.motion_studies",
+    "MotionContributions": "studies.motion_studies",
+    "MotionContributionsResult": "studies.motion_studies",
+    "MotionStudiesResult": "studies.motion_studies",
     "MonteCarlo": "studies.montecarlo",
     "MonteCarloResult": "studies.montecarlo",
     "Envelope": "studies.envelope",
@@ -137,7 +153,14 @@ __all__ = [
     "MonteCarlo",
     "MonteCarloResult",
     "Motion",
+    "MotionContributions",
+    "MotionContributionsResult",
+    "MotionEnvelope",
+    "MotionEnvelopeResult",
+    "MotionMonteCarlo",
+    "MotionMonteCarloResult",
     "MotionResult",
+    "MotionStudiesResult",
     "OptionError",
     "Report",
     "RequirementResult",

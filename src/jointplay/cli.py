@@ -531,13 +531,39 @@ def motion(
             "joint's force with its contacts' switches, in one figure (.png, .svg or .pdf).",
         ),
     ] = None,
+    samples: Annotated[
+        int | None,
+        typer.Option(
+            "--samples",
+            "-n",
+            min=1,
+            help="Monte Carlo: sets of parts, each carried through the whole motion.",
+        ),
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", min=0, help="Monte Carlo: random seed.")] = 0,
+    workers: WorkersOption = None,
+    envelope: Annotated[
+        bool, typer.Option("--envelope", help="Each point's worst-case envelope at every pose.")
+    ] = False,
+    contributions: Annotated[
+        bool,
+        typer.Option("--contributions", help="Which play drives each measure, at every pose."),
+    ] = False,
 ) -> None:
     """Drive MODEL through its motion (its 'motion' section, or --drive and
     --range): every body's pose by its ideal joints, and at every pose the
-    clearance equilibrium; a line per step."""
+    clearance equilibrium; a line per step. With --samples, a Monte Carlo over
+    the motion (each set of parts through every pose); --envelope and
+    --contributions add those studies at every pose."""
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render_motion
     from jointplay.studies.motion import Motion
+    from jointplay.studies.motion_studies import (
+        MotionContributions,
+        MotionEnvelope,
+        MotionMonteCarlo,
+        MotionStudiesResult,
+    )
 
     def run() -> None:
         source = str(model_path)
@@ -551,14 +577,31 @@ def motion(
             bounds = (_number_or_text(parts[0]), _number_or_text(parts[1]))
         _check_outputs(csv, plot)
         model = load(model_path)
-        result = Motion(drive=drive, range=bounds, steps=steps, case=case).run(model, source)
+        settings = Motion(drive=drive, range=bounds, steps=steps, case=case)
+        nominal = settings.run(model, source)
+        studies = MotionStudiesResult(
+            nominal,
+            None
+            if samples is None
+            else MotionMonteCarlo(samples=samples, seed=seed, motion=settings).run(
+                model, workers=workers, source=source
+            ),
+            MotionEnvelope(motion=settings).run(model, source=source) if envelope else None,
+            MotionContributions(motion=settings).run(model, source=source)
+            if contributions
+            else None,
+        )
         _finish_study(
-            result,
+            studies,
             csv,
             plot,
-            lambda: _motion_plots().motion_figure(result),
+            lambda: _motion_plots().motion_figure(
+                nominal, _motion_plots().MotionPictures(*studies.picture_extras())
+            ),
             as_json,
-            lambda: render_motion(result, source, _console()),
+            lambda: render_motion(
+                nominal, source, _console(), studies.columns(), studies.findings()
+            ),
         )
 
     _guarded(run, as_json)

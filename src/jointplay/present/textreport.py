@@ -3,6 +3,7 @@ vectorial sets per joint, and which contacts touch."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -446,9 +447,16 @@ def render_sweep(
     console.print(_fit(console, *parts))
 
 
-def render_motion(result: Any, source: str, console: Console) -> None:
+def render_motion(
+    result: Any,
+    source: str,
+    console: Console,
+    columns: Mapping[str, Sequence[float] | Sequence[str]] | None = None,
+    findings: Sequence[str] = (),
+) -> None:
     """The report of ``jointplay motion``: one line per step, then each
-    requirement's worst step."""
+    requirement's worst step. ``columns``: more cells per step (the studies
+    over the motion: numbers in mm, or names); ``findings``: their sentences."""
     head = Text()
     head.append(
         f"{result.model_name or source}: motion of {result.steps} steps, drive "
@@ -464,11 +472,18 @@ def render_motion(result: Any, source: str, console: Console) -> None:
         table.add_column(f"d {name} (mm)", justify="right")
     table.add_column(f"drive reaction ({result.reaction_unit})", justify="right")
     table.add_column("touching")
+    extra = dict(columns or {})
+    for header in extra:
+        table.add_column(header, justify="right")
     for s in range(result.steps):
         cells = [str(s), f"{result.shown_value(s):.6g}"]
         for k in range(len(result.point_names)):
             cells += [_vec(result.nominal[s, k], 6), _vec(result.displacement[s, k], 4)]
         cells += [f"{result.drive_reaction[s]:.6g}", _touching_by_joint(result.results[s])]
+        cells += [
+            value if isinstance(value, str) else f"{value:.4g}"
+            for value in (values[s] for values in extra.values())
+        ]
         table.add_row(*cells)
     tail = Text()
     for q, name in enumerate(result.requirement_names):
@@ -483,6 +498,8 @@ def render_motion(result: Any, source: str, console: Console) -> None:
             f"; worst at step {s} (drive {result.shown_value(s):.6g} {result.unit}): "
             f"{result.measured[s, q]:.6g} mm of {result.limits[q]:g} mm\n"
         )
+    for sentence in findings:
+        tail.append(sentence + "\n")
     console.print(_fit(console, head, table, tail))
 
 

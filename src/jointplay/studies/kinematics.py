@@ -15,13 +15,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
 from jointplay.errors import MotionError, UnboundedMechanismError
-from jointplay.geometry import FloatArray, describe_motion, left_jacobian, rotation_matrix
+from jointplay.geometry import FloatArray, describe_motion
 from jointplay.model.joints.base import Coordinate, Ideal
 from jointplay.model.mechanism import Model
 from jointplay.settings import MOTION, MotionSettings
+
+IntArray = NDArray[np.intp]
 
 
 @dataclass(frozen=True)
@@ -44,6 +47,75 @@ class Poses:
         if body not in self.bodies:
             return np.eye(3)
         return np.asarray(self.R[step, self.bodies.index(body)])
+
+
+def _rotations(w: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(B, 3, 3) ``exp([w]x)`` of each row of ``w`` (Rodrigues) and the left
+    Jacobians ``J_l`` (``geometry.rotation_matrix``, ``left_jacobian``),
+    all at once; below 1e-4 rad by their series, exact there to round-off."""
+    theta = np.linalg.norm(w, axis=1)
+    K = np.zeros((len(w), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
+    K2 = K @ K
+    small = theta < 1e-4
+    t = np.where(small, 1.0, theta)
+    t2 = theta * theta
+    sin_t = np.where(small, 1.0 - t2 / 6.0, np.sin(t) / t)
+    one_cos = np.where(small, 0.5 - t2 / 24.0, (1.0 - np.cos(t)) / t**2)
+    t_sin = np.where(small, 1.0 / 6.0 - t2 / 120.0, (t - np.sin(t)) / t**3)
+    eye = np.eye(3)[None]
+    R = eye + sin_t[:, None, None] * K + one_cos[:, None, None] * K2
+    J = eye + one_cos[:, None, None] * K + t_sin[:, None, None] * K2
+    return R, J
+
+
+def _cross(u: FloatArray, v: FloatArray) -> FloatArray:
+    """Row-wise cross products of (r, 3) arrays (``np.cross`` costs ten
+    times more on small arrays)."""
+    return np.stack(
+        [
+            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
+        ],
+        axis=1,
+    )
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """The equations of one kind as arrays: their rows, bodies (a ground body
+    is ``B``, the last of the stacked poses) and the written vectors they
+    turn: a's axis, and b's axis (``axes``) or the joint's centre (``offset``)."""
+
+    rows: IntArray
+    a: IntArray
+    b: IntArray
+    axis_a: FloatArray
+    axis_b: FloatArray
+    centre: FloatArray
+
+    @classmethod
+    def of(cls, eqs: _Equations, kind: str) -> _Rows:
+        B = len(eqs.bodies)
+        picked = [(r, row) for r, row in enumerate(eqs.rows) if row[3].kind == kind]
+        F = [eqs.frames[jdx][0] for _, (jdx, _, _, _) in picked]
+        return cls(
+            np.array([r for r, _ in picked], dtype=np.intp),
+            np.array([a if a >= 0 else B for _, (_, a, _, _) in picked], dtype=np.intp),
+            np.array([b if b >= 0 else B for _, (_, _, b, _) in picked], dtype=np.intp),
+            np.array(
+                [
+                    f[:, eq.j if kind == "axes" else eq.k]
+                    for f, (_, (_, _, _, eq)) in zip(F, picked, strict=True)
+                ]
+            ).reshape(-1, 3),
+            np.array([f[:, eq.k] for f, (_, (_, _, _, eq)) in zip(F, picked, strict=True)]).reshape(
+                -1, 3
+            ),
+            np.array([eqs.frames[jdx][1] for _, (jdx, _, _, _) in picked]).reshape(-1, 3),
+        )
 
 
 class _Equations:
@@ -73,70 +145,82 @@ class _Equations:
             index.get(joint.between[0], -1),
             index.get(joint.between[1], -1),
         )
+        self.offset_rows = _Rows.of(self, "offset")
+        self.axes_rows = _Rows.of(self, "axes")
+        o, x = self.offset_rows, self.axes_rows
+        #: the row of each gradient block ``evaluate`` stacks, in its order
+        self.gradient_rows = np.concatenate(
+            [o.rows, o.rows, x.rows, x.rows, [len(self.rows)] * 2]
+        ).astype(np.intp)
 
     def _pose(
         self, R0: FloatArray, p0: FloatArray, z: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         w = z.reshape(-1, 6)
-        R = np.array([rotation_matrix(w[i, :3]) @ R0[i] for i in range(len(R0))]).reshape(-1, 3, 3)
-        J = np.array([left_jacobian(w[i, :3]) for i in range(len(R0))]).reshape(-1, 3, 3)
-        return R, p0 + w[:, 3:], J
+        turn, Jl = _rotations(w[:, :3])
+        return turn @ R0, p0 + w[:, 3:], Jl
 
     def evaluate(
         self, R: FloatArray, p: FloatArray, Jl: FloatArray, value: float
     ) -> tuple[FloatArray, FloatArray]:
         """Residuals (mm) and their Jacobian w.r.t. ``z`` (per body: the
-        rotation vector's increment, then the shift)."""
-        ell = self.ell
-        eye, zero = np.eye(3), np.zeros(3)
-
-        def pose(i: int) -> tuple[FloatArray, FloatArray]:
-            return (R[i], p[i]) if i >= 0 else (eye, zero)
-
+        rotation vector's increment, then the shift), all rows at once: a
+        ground body is the last of the stacked poses, with no unknowns."""
+        ell, B = self.ell, len(p)
+        Rx = np.concatenate([R, np.eye(3)[None]])
+        px = np.concatenate([p, np.zeros((1, 3))])
+        Jx = np.concatenate([Jl, np.zeros((1, 3, 3))])  # a ground body's gradients vanish
+        o, x = self.offset_rows, self.axes_rows
+        a, b = (i if i >= 0 else B for i in self.rows_drive_bodies)
+        F, c = self.frames[self.drive_index]
+        # offset rows: u_a . (c_b - c_a); axes rows: ell u_a . v_b
+        u = np.einsum("rij,rj->ri", Rx[o.a], o.axis_a)
+        rb = np.einsum("rij,rj->ri", Rx[o.b], o.centre)
+        pa = px[o.a]
+        arm = rb + px[o.b] - pa  # c_b - p_a
+        ca = np.einsum("rij,rj->ri", Rx[o.a], o.centre)
+        ua = np.einsum("rij,rj->ri", Rx[x.a], x.axis_a)
+        vb = np.einsum("rij,rj->ri", Rx[x.b], x.axis_b)
+        if self.drive == "slide":  # the drive's offset along its axis x, less the value
+            du = (Rx[a] @ F[:, 0])[None]
+            drb = (Rx[b] @ c)[None]
+            darm = drb + px[b] - px[a]
+            d_res = float(du[0] @ (darm[0] - Rx[a] @ c)) - value
+            left, right = (np.vstack([u, rb, ua, du, drb]), np.vstack([arm, u, vb, darm, du]))
+        else:  # ell sin(phi - value), R_rel[2, 1] = sin(phi), R_rel[1, 1] = cos(phi)
+            cos, sin = np.cos(value), np.sin(value)
+            du = np.array([Rx[a] @ F[:, 2], Rx[a] @ F[:, 1]])
+            dv = np.array([Rx[b] @ F[:, 1], Rx[b] @ F[:, 1]])
+            weights = ell * np.array([cos, -sin])
+            d_res = float(weights @ np.einsum("ri,ri->r", du, dv))
+            left, right = np.vstack([u, rb, ua, du]), np.vstack([arm, u, vb, dv])
+        crossed = _cross(left, right)
+        no, nx = len(o.rows), len(x.rows)
+        g_a, g_b, g_axes = crossed[:no], crossed[no : 2 * no], ell * crossed[2 * no : 2 * no + nx]
+        zero = np.zeros((nx, 3))
+        if self.drive == "slide":
+            g_da, g_db = crossed[2 * no + nx][None], crossed[2 * no + nx + 1][None]
+            s_da, s_db = -du, du
+        else:
+            g_da = (weights @ crossed[2 * no + nx :])[None]
+            g_db, s_da, s_db = -g_da, np.zeros((1, 3)), np.zeros((1, 3))
+        g_rot = np.vstack([g_a, g_b, g_axes, -g_axes, g_da, g_db])
+        g_shift = np.vstack([-u, u, zero, zero, s_da, s_db])
+        bodies = self.gradient_bodies(a, b)
         m = len(self.rows) + 1
         res = np.zeros(m)
-        jac = np.zeros((m, self.n))
+        res[o.rows] = np.einsum("ri,ri->r", u, arm - ca)
+        res[x.rows] = ell * np.einsum("ri,ri->r", ua, vb)
+        res[m - 1] = d_res
+        jac = np.zeros((m, 6 * B + 6))  # the ground's six columns are dropped at the end
+        blocks = np.hstack([np.einsum("ri,rij->rj", g_rot, Jx[bodies]), g_shift])
+        np.add.at(jac, (self.gradient_rows[:, None], 6 * bodies[:, None] + np.arange(6)), blocks)
+        return res, jac[:, : 6 * B]
 
-        def add(row: int, body: int, g_rot: FloatArray, g_shift: FloatArray) -> None:
-            if body >= 0:
-                jac[row, 6 * body : 6 * body + 3] += g_rot @ Jl[body]
-                jac[row, 6 * body + 3 : 6 * body + 6] += g_shift
-
-        def joint_parts(jdx: int, a: int, b: int) -> tuple[FloatArray, ...]:
-            F, c = self.frames[jdx]
-            Ra, pa = pose(a)
-            Rb, pb = pose(b)
-            return Ra @ F, Rb @ F, Ra @ c + pa, Rb @ c, Rb @ c + pb, pa
-
-        for row, (jdx, a, b, eq) in enumerate(self.rows):
-            ua, ub, ca, rb, cb, pa = joint_parts(jdx, a, b)
-            if eq.kind == "offset":
-                u = ua[:, eq.k]
-                d = cb - ca
-                res[row] = u @ d
-                add(row, a, np.cross(u, cb - pa), -u)
-                add(row, b, np.cross(rb, u), u)
-            else:
-                u, v = ua[:, eq.j], ub[:, eq.k]
-                res[row] = ell * (u @ v)
-                add(row, a, ell * np.cross(u, v), zero)
-                add(row, b, ell * np.cross(v, u), zero)
-        row = m - 1
-        a_name, b_name = self.rows_drive_bodies
-        ua, ub, ca, rb, cb, pa = joint_parts(self.drive_index, a_name, b_name)
-        if self.drive == "slide":
-            u = ua[:, 0]
-            res[row] = u @ (cb - ca) - value
-            add(row, a_name, np.cross(u, cb - pa), -u)
-            add(row, b_name, np.cross(rb, u), u)
-        else:  # sin(phi - value) with R_rel[2, 1] = sin(phi), R_rel[1, 1] = cos(phi)
-            cos, sin = np.cos(value), np.sin(value)
-            for j, k, weight in ((2, 1, cos), (1, 1, -sin)):
-                u, v = ua[:, j], ub[:, k]
-                res[row] += ell * weight * (u @ v)
-                add(row, a_name, ell * weight * np.cross(u, v), zero)
-                add(row, b_name, ell * weight * np.cross(v, u), zero)
-        return res, jac
+    def gradient_bodies(self, a: int, b: int) -> IntArray:
+        """The body of each gradient block ``evaluate`` stacks, in its order."""
+        o, x = self.offset_rows, self.axes_rows
+        return np.concatenate([o.a, o.b, x.a, x.b, [a], [b]]).astype(np.intp)
 
     @property
     def rows_drive_bodies(self) -> tuple[int, int]:
@@ -179,10 +263,18 @@ def nominal_poses(
     limit = settings.largest_step * (1.0 if eqs.drive == "spin" else eqs.ell)
     out_R, out_p = [], []
     current = 0.0  # the pose written in the file
+    # the last two steps' changes of pose per unit of the drive: each step's
+    # least squares start from their extrapolation
+    rates: list[FloatArray] = []
     for s, value in enumerate(values):
         parts = max(1, int(np.ceil(abs(float(value) - current) / limit)))
+        last = current
         for part in np.linspace(current, float(value), parts + 1)[1:]:
-            R, p = _solve_step(eqs, R, p, float(part), current, s, source)
+            guess = np.zeros(eqs.n) if not rates else 2 * rates[-1] - rates[0]
+            R, p, z = _solve_step(eqs, R, p, float(part), current, s, source, guess * (part - last))
+            if part != last:
+                rates = [*rates[-1:], z / (part - last)]
+            last = float(part)
         current = float(value)
         out_R.append(R)
         out_p.append(p)
@@ -197,17 +289,28 @@ def _solve_step(
     previous: float,
     step: int,
     source: str | None,
-) -> tuple[FloatArray, FloatArray]:
+    z0: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The pose at drive ``value`` from the pose ``(R0, p0)`` at ``previous``,
+    least squares starting at the change ``z0`` (the last step's, in
+    proportion: the same closure from fewer evaluations); with the change found."""
     settings = eqs.settings
     tol = max(settings.solve_tolerance, float(np.finfo(float).eps))
+    seen: dict[bytes, tuple[FloatArray, FloatArray]] = {}
+
+    def evaluated(z: FloatArray) -> tuple[FloatArray, FloatArray]:
+        key = z.tobytes()  # least squares asks for the residuals and the Jacobian at each point
+        if key not in seen:
+            seen.clear()
+            seen[key] = eqs.evaluate(*eqs._pose(R0, p0, z), value)
+        return seen[key]
 
     def fun(z: FloatArray) -> FloatArray:
-        return eqs.evaluate(*eqs._pose(R0, p0, z), value)[0]
+        return evaluated(z)[0]
 
     def jac(z: FloatArray) -> FloatArray:
-        return eqs.evaluate(*eqs._pose(R0, p0, z), value)[1]
+        return evaluated(z)[1]
 
-    z0 = np.zeros(eqs.n)
     m = len(eqs.rows) + 1
     fit = least_squares(
         fun,
@@ -252,7 +355,7 @@ def _solve_step(
             joints=joints,
             source=source,
         )
-    return R, p
+    return R, p, fit.x
 
 
 def _column_scale(eqs: _Equations) -> FloatArray:

@@ -1,0 +1,823 @@
+"""Studies over the motion: Monte Carlo, worst-case envelope and contributions at every pose.
+
+``MotionMonteCarlo(samples=..., seed=...).run(model)`` draws each set of
+parts once (its plays from their limits or ISO fits, its varying load
+components, its deviations: as ``MonteCarlo`` draws them, chunk ``i`` from
+``numpy.random.default_rng([seed, i])``) and carries the same parts through
+the whole cycle: at every pose the posed model (``motion.posed_model``) is
+assembled once and all the parts are solved there in one batch
+(``Workspace.solve_batch``, every sample certified on its own). Per step it
+gives percentile bands of each functional point's displacement, along a
+direction or as its size, and the fraction of parts that miss a requirement
+anywhere in the cycle.
+
+``MotionEnvelope().run(model)`` takes each point's worst-case envelope
+(``Envelope``) on the posed model at every step; ``MotionContributions()``
+takes the contributions (``Contributions``) at every step, and names the
+play that drives each measure where it is worst.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from jointplay.assembly import assemble
+from jointplay.errors import StudyError
+from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Model, Requirement, check_case
+from jointplay.proven import Resolution, proven
+from jointplay.solver.batch import solved_start
+from jointplay.solver.workspace import Workspace
+from jointplay.studies.kinematics import Poses, nominal_poses
+from jointplay.studies.montecarlo import PERCENTILES
+from jointplay.studies.motion import Motion, MotionResult, posed_model
+from jointplay.studies.parallel import run_chunks
+from jointplay.studies.variation import deviation_map, load_map, nothing_varies, play_map
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from jointplay.studies.contributions import ContributionsResult
+    from jointplay.studies.envelope import EnvelopeResult
+
+
+@dataclass(frozen=True)
+class _Cycle:
+    """A model resolved for its motion, with every body's pose per step."""
+
+    model: Model
+    drive: str
+    coordinate: str
+    values: FloatArray
+    poses: Poses
+    source: str
+
+    @classmethod
+    def of(cls, motion: Motion, model: Model, source: str) -> _Cycle:
+        model = motion.resolve(model, source)
+        assert model.motion is not None  # resolve gives one or raises
+        joint, coordinate, start, stop = model.motion_drive()
+        values = np.linspace(start, stop, model.motion.steps)
+        poses = nominal_poses(model, values, settings=motion.settings, source=source)
+        return cls(model, joint.name, coordinate, values, poses, source)
+
+    @property
+    def steps(self) -> int:
+        return len(self.values)
+
+    def posed(self, step: int) -> Model:
+        return posed_model(self.model, self.poses, step, self.source)
+
+
+def _shown(coordinate: str, value: float) -> float:
+    return float(np.degrees(value)) if coordinate == "spin" else float(value)
+
+
+def _unit(coordinate: str) -> str:
+    return "deg" if coordinate == "spin" else "mm"
+
+
+# -- Monte Carlo over the motion -------------------------------------------------
+
+
+@dataclass(frozen=True)
+class MotionMonteCarlo:
+    """Settings of a Monte Carlo over the motion; ``run`` returns a
+    ``MotionMonteCarloResult``. ``samples``: sets of parts; ``seed`` and
+    ``chunk`` fix the random streams as in ``MonteCarlo`` (the same seed
+    draws the same parts); ``motion``: the drive, range, steps and load case
+    (``Motion``; default: the model's ``motion`` section and loads)."""
+
+    samples: int = 1000
+    seed: int = 0
+    chunk: int = 10_000
+    motion: Motion = field(default_factory=Motion)
+
+    def __post_init__(self) -> None:
+        if self.samples < 1:
+            raise ValueError("samples: at least 1")
+        if self.chunk < 1:
+            raise ValueError("chunk: at least 1")
+
+    def run(
+        self, model: Model, *, workers: int | None = 1, source: str | None = None
+    ) -> MotionMonteCarloResult:
+        """Draw the parts and solve them at every pose. ``workers``: local
+        processes, each solving whole poses (None: one per core; 1: this
+        process). ``source``: the model file's name, for messages."""
+        cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
+        first = cycle.posed(0)
+        _check_inputs(first, self.motion.case, cycle.source)
+        asm = assemble(first)
+        pmap, lmap, dmap = (
+            play_map(asm, cycle.source),
+            load_map(asm, self.motion.case),
+            deviation_map(asm),
+        )
+        drawn = []
+        left, index = self.samples, 0
+        while left > 0:
+            n = min(self.chunk, left)
+            rng = np.random.default_rng([self.seed, index])
+            # plays, then loads, then deviations: as MonteCarlo draws them
+            drawn.append((pmap.sample(rng, n), lmap.sample(rng, n), dmap.sample(rng, n)))
+            left, index = left - n, index + 1
+        plays, loads, deviations = (np.concatenate(part) for part in zip(*drawn, strict=True))
+        return self._solved(cycle, plays, loads, deviations, workers)
+
+    def run_parts(
+        self,
+        model: Model,
+        plays: FloatArray,
+        loads: FloatArray | None = None,
+        deviations: FloatArray | None = None,
+        *,
+        workers: int | None = 1,
+        source: str | None = None,
+    ) -> MotionMonteCarloResult:
+        """The given sets of parts (rows; columns as ``play_labels``,
+        ``load_labels`` and ``deviation_labels`` of a result; default: the
+        loads' and deviations' nominal values) through the motion."""
+        cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
+        first = cycle.posed(0)
+        if not first.points:
+            raise _no_points(cycle.source)
+        asm = assemble(first)
+        lmap, dmap = load_map(asm, self.motion.case), deviation_map(asm)
+        plays = np.atleast_2d(np.asarray(plays, dtype=float))
+        n = len(plays)
+        loads = np.tile(lmap.nominal, (n, 1)) if loads is None else np.atleast_2d(loads)
+        if deviations is None:
+            deviations = np.zeros((n, len(dmap.labels)))
+        return self._solved(cycle, plays, loads, np.atleast_2d(deviations), workers)
+
+    def _solved(
+        self,
+        cycle: _Cycle,
+        plays: FloatArray,
+        loads: FloatArray,
+        deviations: FloatArray,
+        workers: int | None,
+    ) -> MotionMonteCarloResult:
+        shared = (cycle, plays, loads, deviations, self.motion.case)
+        tasks = [(s,) for s in range(cycle.steps)]
+        solved = sorted(run_chunks(_solve_pose, shared, tasks, workers, None), key=lambda p: p.step)
+        first = cycle.posed(0)
+        asm = assemble(first)
+        pmap, lmap, dmap = (
+            play_map(asm, cycle.source),
+            load_map(asm, self.motion.case),
+            deviation_map(asm),
+        )
+        return MotionMonteCarloResult(
+            self,
+            cycle.model.name,
+            cycle.drive,
+            cycle.coordinate,
+            cycle.values,
+            tuple(p.name for p in first.points),
+            tuple(first.requirements),
+            pmap.labels,
+            plays,
+            lmap.labels,
+            loads,
+            dmap.labels,
+            deviations,
+            np.array([p.displacement for p in solved]),
+            sum(p.batched for p in solved),
+            sum(p.full_solves for p in solved),
+            max(p.feasibility_mm for p in solved),
+            max(p.equilibrium_residual for p in solved),
+        )
+
+
+def _no_points(source: str) -> StudyError:
+    return StudyError(
+        "a Monte Carlo study measures functional points, and the model has none; add "
+        "'points: [{name: tip, body: ..., at: [x, y, z]}]'",
+        source=source,
+        entry="points",
+    )
+
+
+def _check_inputs(model: Model, case: str | None, source: str) -> None:
+    check_case(model, case, source)
+    asm = assemble(model)
+    if (
+        not play_map(asm, source).variables
+        and not load_map(asm, case).variables
+        and not deviation_map(asm).variables
+    ):
+        raise nothing_varies("every set of parts would be the same at every pose", source)
+    if not model.points:
+        raise _no_points(source)
+
+
+@dataclass(frozen=True)
+class _Pose:
+    step: int
+    displacement: FloatArray  # (N, P, 3) mm
+    batched: int
+    full_solves: int
+    feasibility_mm: float
+    equilibrium_residual: float
+
+
+def _solve_pose(
+    shared: tuple[_Cycle, FloatArray, FloatArray, FloatArray, str | None], step: int
+) -> _Pose:
+    """Every set of parts at pose ``step``: the posed model assembled once,
+    the parts' radii, loads and centres from its maps, one batch."""
+    cycle, plays, loads, deviations, case = shared
+    model = cycle.posed(step)
+    asm = assemble(model)
+    pmap, lmap, dmap = play_map(asm, cycle.source), load_map(asm, case), deviation_map(asm)
+    n = len(plays)
+    work = lmap.work(loads) if lmap.variables else np.tile(lmap.g0, (n, 1))
+    ws = Workspace(asm)
+    radii, centres = pmap.radii(plays), None
+    if dmap.variables:
+        radii = radii + dmap.radii_shift(deviations)
+        centres = dmap.centres(deviations)
+    nominal = solved_start(ws, lmap.g0)  # the model's own parts start the batch's Newton
+    batch = ws.solve_batch(
+        work, radii, centres, forces=False, starts=() if nominal is None else (nominal,)
+    )
+    displacement = np.zeros((n, len(model.points), 3))
+    length = Resolution.of(asm.s, asm.ell, settings=ws.settings).length
+    for k, point in enumerate(model.points):
+        motion = batch.body_displacement(point.body)
+        at = np.asarray(point.at)
+        displacement[:, k] = proven(motion[:, :3] + np.cross(motion[:, 3:], at), length)
+    displacement[~batch.assembled] = np.nan  # parts that cannot be put together at this pose
+    return _Pose(
+        step,
+        displacement,
+        int(np.sum(batch.batched)),
+        batch.full_solves,
+        float(np.max(batch.feasibility_mm, initial=0.0)),
+        float(np.max(batch.equilibrium_residual, initial=0.0)),
+    )
+
+
+@dataclass(frozen=True)
+class MotionMonteCarloResult:
+    """Every set of parts at every step: ``displacement`` (S, N, P, 3) mm,
+    global axes (NaN where a set cannot be assembled at that pose), with
+    the parts drawn (``plays`` (N, nv) mm, ``loads``, ``deviations``)."""
+
+    settings: MotionMonteCarlo
+    model_name: str | None
+    drive: str
+    coordinate: str  # "spin" or "slide"
+    values: FloatArray  # (S,) rad or mm
+    point_names: tuple[str, ...]
+    requirements: tuple[Requirement, ...]
+    play_labels: tuple[str, ...]
+    plays: FloatArray
+    load_labels: tuple[str, ...]
+    loads: FloatArray
+    deviation_labels: tuple[str, ...]
+    deviations: FloatArray
+    displacement: FloatArray
+    batched: int  # samples the batched Newton solved, over every pose
+    full_solves: int
+    feasibility_mm: float  # worst over every sample and pose
+    equilibrium_residual: float
+
+    @property
+    def steps(self) -> int:
+        return len(self.values)
+
+    @property
+    def samples(self) -> int:
+        return int(self.plays.shape[0])
+
+    @property
+    def unit(self) -> str:
+        return _unit(self.coordinate)
+
+    def shown_value(self, s: int) -> float:
+        return _shown(self.coordinate, float(self.values[s]))
+
+    def measure(self, point: str, direction: Any = None) -> FloatArray:
+        """(S, N) mm: each part's displacement of ``point`` per step, along
+        ``direction`` (global, any length; signed), or its size (None)."""
+        d = self.displacement[:, :, self._point(point)]
+        if direction is None:
+            return np.asarray(np.linalg.norm(d, axis=-1))
+        u = np.asarray(direction, dtype=float)
+        return np.asarray(d @ (u / np.linalg.norm(u)))
+
+    def band(
+        self, point: str, lower_pct: float, upper_pct: float, direction: Any = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """The ``lower_pct`` and ``upper_pct`` percentiles (in %) per step
+        (mm) of ``point``'s displacement along ``direction``, or of its size
+        (None), over the parts that can be assembled at that step."""
+        if not 0 <= lower_pct <= upper_pct <= 100:
+            raise ValueError("percentiles: 0 <= lower <= upper <= 100")
+        values = self.measure(point, direction)
+        lower, upper = np.full(self.steps, np.nan), np.full(self.steps, np.nan)
+        for s in range(self.steps):
+            row = values[s][~np.isnan(values[s])]
+            if row.size:
+                lower[s], upper[s] = np.percentile(row, [lower_pct, upper_pct])
+        return lower, upper
+
+    def failing(self, q: int) -> FloatArray:
+        """(N,) bool: the parts that miss requirement ``q`` at some step (or
+        cannot be assembled at some step)."""
+        req = self.requirements[q]
+        d = self.displacement[:, :, self._point(req.point)]
+        with np.errstate(invalid="ignore"):
+            out = (req.measure(d) > req.max_displacement) | np.isnan(d[..., 0])
+        return np.asarray(np.any(out, axis=0))
+
+    def fraction_failing(self, q: int) -> float:
+        """The fraction of parts that miss requirement ``q`` anywhere in the cycle."""
+        return float(np.mean(self.failing(q)))
+
+    def failing_per_step(self, q: int) -> FloatArray:
+        """(S,) the fraction of parts that miss requirement ``q`` at each step."""
+        req = self.requirements[q]
+        d = self.displacement[:, :, self._point(req.point)]
+        with np.errstate(invalid="ignore"):
+            out = (req.measure(d) > req.max_displacement) | np.isnan(d[..., 0])
+        return np.asarray(np.mean(out, axis=1))
+
+    @property
+    def unassembled(self) -> int:
+        """Sets of parts that cannot be assembled at some step."""
+        if not self.point_names:
+            return 0
+        return int(np.sum(np.any(np.isnan(self.displacement[:, :, 0, 0]), axis=0)))
+
+    def _point(self, name: str) -> int:
+        if name not in self.point_names:
+            raise ValueError(f"point {name!r}: not one of {', '.join(self.point_names)}")
+        return self.point_names.index(name)
+
+    def _directions(self, point: str) -> list[tuple[float, float, float]]:
+        """The distinct directions of the requirements on ``point``."""
+        out: list[tuple[float, float, float]] = []
+        for req in self.requirements:
+            if req.point == point and req.along is not None:
+                u = np.asarray(req.along, dtype=float)
+                t = tuple(float(c) for c in u / np.linalg.norm(u))
+                if t not in out:
+                    out.append(t)  # type: ignore[arg-type]
+        return out
+
+    def _percentiles(self, point: str, direction: Any) -> dict[str, list[float | None]]:
+        out = {}
+        for lo in (p for p in PERCENTILES if p < 50):
+            hi = 100.0 - lo
+            a, b = self.band(point, lo, hi, direction)
+            out[f"{lo:g}"], out[f"{hi:g}"] = _floats(a), _floats(b)
+        median, _ = self.band(point, 50.0, 50.0, direction)
+        out["50"] = _floats(median)
+        return {k: out[k] for k in sorted(out, key=float)}
+
+    def to_dict(self) -> dict[str, Any]:
+        """Per point, per percentile, the value at each step (mm), of the
+        size and along each requirement's direction; per requirement the
+        parts that miss it anywhere in the cycle."""
+        points = {}
+        for name in self.point_names:
+            points[name] = {
+                "size": self._percentiles(name, None),
+                "along": [
+                    {"direction": list(u), "percentiles": self._percentiles(name, u)}
+                    for u in self._directions(name)
+                ],
+            }
+        return {
+            "study": "motion_monte_carlo",
+            "model": self.model_name,
+            "samples": self.samples,
+            "seed": self.settings.seed,
+            "chunk": self.settings.chunk,
+            "drive": {"joint": self.drive, "coordinate": self.coordinate, "unit": self.unit},
+            "values": [self.shown_value(s) for s in range(self.steps)],
+            "unassembled": self.unassembled,
+            "points": points,
+            "requirements": [
+                {
+                    "point": req.point,
+                    "max_displacement": req.max_displacement,
+                    "along": None if req.along is None else list(req.along),
+                    "outside": int(np.sum(self.failing(q))),
+                    "fraction_outside": self.fraction_failing(q),
+                    "fraction_outside_per_step": _floats(self.failing_per_step(q)),
+                }
+                for q, req in enumerate(self.requirements)
+            ],
+            "certificate": {
+                "feasibility_mm": self.feasibility_mm,
+                "equilibrium_residual": self.equilibrium_residual,
+                "batched": self.batched,
+                "full_solves": self.full_solves,
+            },
+        }
+
+    def band_columns(self) -> dict[str, FloatArray]:
+        """Per step (mm): each point's size at the 2.5, 50 and 97.5
+        percentiles, and its component along each requirement's direction
+        at the same, keyed by column name."""
+        out: dict[str, FloatArray] = {}
+        for name in self.point_names:
+            for label, u in (("|d|", None), *((_along(u), u) for u in self._directions(name))):
+                lo, hi = self.band(name, 2.5, 97.5, u)
+                median, _ = self.band(name, 50.0, 50.0, u)
+                out[f"{name} {label} p2.5 (mm)"] = lo
+                out[f"{name} {label} p50 (mm)"] = median
+                out[f"{name} {label} p97.5 (mm)"] = hi
+        return out
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """One row per step: the drive's value and the band columns."""
+        import pandas as pd
+
+        columns: dict[str, Any] = {
+            "step": np.arange(self.steps),
+            f"drive ({self.unit})": [self.shown_value(s) for s in range(self.steps)],
+        }
+        columns.update(self.band_columns())
+        for q, req in enumerate(self.requirements):
+            columns[f"{req.point} fraction outside (req {q})"] = self.failing_per_step(q)
+        return pd.DataFrame(columns)
+
+    to_frame = to_dataframe
+
+
+def _along(u: Any) -> str:
+    return "along [" + ", ".join(f"{c:.4g}" for c in u) + "]"
+
+
+def _values(v: FloatArray) -> list[float]:
+    return [float(c) for c in v]
+
+
+def _floats(v: FloatArray) -> list[float | None]:
+    """JSON numbers; None where there is no value (no part assembled at a
+    step, no probe held)."""
+    return [float(c) + 0.0 if np.isfinite(c) else None for c in v]
+
+
+# -- worst-case envelope at every pose -------------------------------------------
+
+
+@dataclass(frozen=True)
+class MotionEnvelope:
+    """Settings of the worst-case envelope at every pose (``Envelope`` on
+    each posed model, for every functional point); ``run`` returns a
+    ``MotionEnvelopeResult``."""
+
+    directions: int = 200
+    plays: Literal["max", "mean"] = "max"
+    loads: Literal["auto", "model", "probes"] = "auto"
+    motion: Motion = field(default_factory=Motion)
+
+    def run(self, model: Model, *, source: str | None = None) -> MotionEnvelopeResult:
+        from jointplay.studies.envelope import Envelope
+
+        cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
+        names = tuple(p.name for p in cycle.model.points)
+        if not names:
+            raise StudyError(
+                "an envelope is a functional point's; the model has none: add "
+                "'points: [{name: tip, body: ..., at: [x, y, z]}]'",
+                source=cycle.source,
+                entry="points",
+            )
+        found: list[tuple[EnvelopeResult, ...]] = []
+        for s in range(cycle.steps):
+            posed = cycle.posed(s)
+            found.append(
+                tuple(
+                    Envelope(name, self.directions, self.plays, self.loads).run(
+                        posed, source=cycle.source
+                    )
+                    for name in names
+                )
+            )
+        return MotionEnvelopeResult(
+            self,
+            cycle.model.name,
+            cycle.drive,
+            cycle.coordinate,
+            cycle.values,
+            names,
+            tuple(cycle.model.requirements),
+            tuple(found),
+        )
+
+
+@dataclass(frozen=True)
+class MotionEnvelopeResult:
+    """Per step, per point, its ``EnvelopeResult`` on the posed model."""
+
+    settings: MotionEnvelope
+    model_name: str | None
+    drive: str
+    coordinate: str
+    values: FloatArray
+    point_names: tuple[str, ...]
+    requirements: tuple[Requirement, ...]
+    envelopes: tuple[tuple[EnvelopeResult, ...], ...]  # (S, P)
+
+    @property
+    def steps(self) -> int:
+        return len(self.values)
+
+    @property
+    def unit(self) -> str:
+        return _unit(self.coordinate)
+
+    def shown_value(self, s: int) -> float:
+        return _shown(self.coordinate, float(self.values[s]))
+
+    def at(self, step: int, point: str) -> EnvelopeResult:
+        return self.envelopes[step][self.point_names.index(point)]
+
+    def extent(self, point: str, direction: Any = None) -> tuple[FloatArray, FloatArray]:
+        """Per step (mm): the least and the greatest component of ``point``'s
+        envelope along ``direction`` (over its support points: exact along
+        the global axes and over the model's loads), or, with None, 0 and
+        its largest displacement."""
+        k = self.point_names.index(point)
+        if direction is None:
+            upper = np.array([row[k].largest for row in self.envelopes], dtype=float)
+            return np.zeros(self.steps), upper
+        u = np.asarray(direction, dtype=float)
+        u = u / np.linalg.norm(u)
+        along = [row[k].hull @ u for row in self.envelopes]  # none held: NaN
+        return (
+            np.array([float(a.min()) if a.size else np.nan for a in along]),
+            np.array([float(a.max()) if a.size else np.nan for a in along]),
+        )
+
+    def worst_step(self, q: int) -> int:
+        """The step where the envelope goes farthest against requirement ``q``."""
+        req = self.requirements[q]
+        lower, upper = self.extent(req.point, req.along)
+        return int(np.argmax(np.maximum(np.abs(lower), np.abs(upper))))
+
+    def to_dict(self) -> dict[str, Any]:
+        points = {}
+        for name in self.point_names:
+            k = self.point_names.index(name)
+            _, upper = self.extent(name)
+            entry: dict[str, Any] = {
+                "largest": _floats(upper),
+                "extent": {
+                    axis: [
+                        [float(row[k].extent[i, 0]), float(row[k].extent[i, 1])]
+                        for row in self.envelopes
+                    ]
+                    for i, axis in enumerate("xyz")
+                },
+                "along": [],
+            }
+            for req in self.requirements:
+                if req.point == name and req.along is not None:
+                    lo, hi = self.extent(name, req.along)
+                    entry["along"].append(
+                        {"direction": list(req.along), "lower": _floats(lo), "upper": _floats(hi)}
+                    )
+            points[name] = entry
+        return {
+            "study": "motion_envelope",
+            "model": self.model_name,
+            "plays": self.settings.plays,
+            "loads": self.envelopes[0][0].over if self.envelopes and self.envelopes[0] else "",
+            "values": [self.shown_value(s) for s in range(self.steps)],
+            "points": points,
+            "requirements": [
+                {
+                    "point": req.point,
+                    "worst_step": self.worst_step(q),
+                    "drive": self.shown_value(self.worst_step(q)),
+                }
+                for q, req in enumerate(self.requirements)
+            ],
+        }
+
+
+# -- contributions at every pose -------------------------------------------------
+
+
+@dataclass(frozen=True)
+class MotionContributions:
+    """Settings of the contributions at every pose (``Contributions`` on
+    each posed model, linear shares only); ``run`` returns a
+    ``MotionContributionsResult``."""
+
+    step: float = 1e-3
+    motion: Motion = field(default_factory=Motion)
+
+    def run(self, model: Model, *, source: str | None = None) -> MotionContributionsResult:
+        from jointplay.studies.contributions import Contributions
+
+        cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
+        study = Contributions(step=self.step, case=self.motion.case, variance="never")
+        found = tuple(study.run(cycle.posed(s), source=cycle.source) for s in range(cycle.steps))
+        return MotionContributionsResult(
+            self, cycle.model.name, cycle.drive, cycle.coordinate, cycle.values, found
+        )
+
+
+@dataclass(frozen=True)
+class MotionContributionsResult:
+    """Per step, the ``ContributionsResult`` of the posed model."""
+
+    settings: MotionContributions
+    model_name: str | None
+    drive: str
+    coordinate: str
+    values: FloatArray
+    results: tuple[ContributionsResult, ...] = field(default=())
+
+    @property
+    def steps(self) -> int:
+        return len(self.values)
+
+    @property
+    def measures(self) -> tuple[str, ...]:
+        return self.results[0].measures if self.results else ()
+
+    @property
+    def plays(self) -> tuple[str, ...]:
+        return self.results[0].plays if self.results else ()
+
+    def shown_value(self, s: int) -> float:
+        return _shown(self.coordinate, float(self.values[s]))
+
+    def worst_case(self, k: int) -> FloatArray:
+        """(S, nv) % of measure ``k``'s arithmetic stack per step and play."""
+        return np.array([r.worst_case[k] for r in self.results])
+
+    def spread(self, k: int) -> FloatArray:
+        """(S,) mm: measure ``k``'s linear worst-case spread ``sum |s| T`` per step."""
+        return np.array([float(r.worst_case_range[k]) for r in self.results])
+
+    def worst_step(self, k: int) -> int:
+        """The step where measure ``k``'s worst-case spread is largest."""
+        return int(np.argmax(self.spread(k)))
+
+    def leading(self, k: int, step: int | None = None) -> str:
+        """The play with the largest worst-case share of measure ``k`` at
+        ``step`` (default: its worst step)."""
+        s = self.worst_step(k) if step is None else step
+        return self.plays[int(np.argmax(self.results[s].worst_case[k]))]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "study": "motion_contributions",
+            "model": self.model_name,
+            "values": [self.shown_value(s) for s in range(self.steps)],
+            "plays": list(self.plays),
+            "measures": [
+                {
+                    "measure": name,
+                    "spread": _floats(self.spread(k)),
+                    "worst_case_percent": {
+                        play: _floats(self.worst_case(k)[:, i]) for i, play in enumerate(self.plays)
+                    },
+                    "worst_step": self.worst_step(k),
+                    "leading": self.leading(k),
+                    "leading_per_step": [self.leading(k, s) for s in range(self.steps)],
+                }
+                for k, name in enumerate(self.measures)
+            ],
+        }
+
+
+# -- the motion with its studies -------------------------------------------------
+
+
+@dataclass(frozen=True)
+class MotionStudiesResult:
+    """The nominal motion (``MotionResult``) with the studies taken over it
+    (each None when not asked for): one document, one table."""
+
+    motion: MotionResult
+    monte_carlo: MotionMonteCarloResult | None = None
+    envelope: MotionEnvelopeResult | None = None
+    contributions: MotionContributionsResult | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        doc = self.motion.to_dict()
+        for key, study in (
+            ("monte_carlo", self.monte_carlo),
+            ("envelope", self.envelope),
+            ("contributions", self.contributions),
+        ):
+            if study is not None:
+                doc[key] = study.to_dict()
+        return doc
+
+    def shown_direction(self, point: str) -> tuple[str, Any]:
+        """What the table shows of ``point``: its component along its first
+        requirement's direction, or its size."""
+        for req in self.motion.results[0].requirements if self.motion.results else ():
+            if req.requirement.point == point and req.requirement.along is not None:
+                return _along(req.requirement.along), req.requirement.along
+        return "|d|", None
+
+    def columns(self) -> dict[str, list[float] | list[str]]:
+        """Per step, the studies' columns: each point's 2.5-97.5 % band and
+        its envelope's extent (mm, as ``shown_direction``), each measure's
+        leading play and its worst-case share."""
+        out: dict[str, list[float] | list[str]] = {}
+        for name in self.motion.point_names:
+            label, u = self.shown_direction(name)
+            if self.monte_carlo is not None:
+                lo, hi = self.monte_carlo.band(name, 2.5, 97.5, u)
+                out[f"{name} {label} p2.5 (mm)"] = _values(lo)
+                out[f"{name} {label} p97.5 (mm)"] = _values(hi)
+            if self.envelope is not None:
+                lo, hi = self.envelope.extent(name, u)
+                if u is not None:  # a size's least is no bound worth a column
+                    out[f"{name} {label} envelope min (mm)"] = _values(lo)
+                out[f"{name} {label} envelope max (mm)"] = _values(hi)
+        if self.contributions is not None:
+            for k, measure in enumerate(self.contributions.measures):
+                share = self.contributions.worst_case(k)
+                out[f"{measure} leading play"] = [
+                    self.contributions.leading(k, s) for s in range(self.motion.steps)
+                ]
+                out[f"{measure} leading share (%)"] = [float(row.max()) for row in share]
+        return out
+
+    def picture_extras(
+        self,
+    ) -> tuple[
+        dict[str, list[tuple[str, FloatArray, FloatArray]]],
+        dict[str, tuple[FloatArray, FloatArray]],
+    ]:
+        """Per point, the Monte Carlo's bands (0.135-99.865 % and 2.5-97.5 %:
+        label, lower, upper per step) and the envelope's extent, as
+        ``shown_direction``: what the motion's figure draws."""
+        bands: dict[str, list[tuple[str, FloatArray, FloatArray]]] = {}
+        envelopes: dict[str, tuple[FloatArray, FloatArray]] = {}
+        for name in self.motion.point_names:
+            _, u = self.shown_direction(name)
+            if self.monte_carlo is not None:
+                bands[name] = [
+                    (f"{lo:g}-{100 - lo:g} %", *self.monte_carlo.band(name, lo, 100 - lo, u))
+                    for lo in (0.135, 2.5)
+                ]
+            if self.envelope is not None:
+                envelopes[name] = self.envelope.extent(name, u)
+        return bands, envelopes
+
+    def findings(self) -> list[str]:
+        """A sentence per requirement and study: how many parts miss it
+        anywhere in the cycle, where the envelope goes farthest, which play
+        drives each measure where its spread is largest."""
+        out = []
+        mc, env, con = self.monte_carlo, self.envelope, self.contributions
+        for q, req in enumerate(mc.requirements if mc is not None else ()):
+            assert mc is not None
+            failing = int(np.sum(mc.failing(q)))
+            per_step = mc.failing_per_step(q)
+            s = int(np.argmax(per_step))
+            out.append(
+                f"Monte Carlo ({mc.samples:,} sets of parts, seed {mc.settings.seed}): "
+                f"{failing:,} ({100 * failing / mc.samples:.4g} %) miss the requirement on "
+                f"{req.point} somewhere in the cycle; most at step {s} (drive "
+                f"{mc.shown_value(s):.6g} {mc.unit}): {100 * per_step[s]:.4g} %"
+            )
+        for q, req in enumerate(env.requirements if env is not None else ()):
+            assert env is not None
+            s = env.worst_step(q)
+            lo, hi = env.extent(req.point, req.along)
+            what = "size" if req.along is None else _along(req.along)
+            out.append(
+                f"envelope of {req.point} ({what}): farthest at step {s} (drive "
+                f"{env.shown_value(s):.6g} {env.unit}): {lo[s]:.6g} to {hi[s]:.6g} mm"
+            )
+        for k, measure in enumerate(con.measures if con is not None else ()):
+            assert con is not None
+            s = con.worst_step(k)
+            share = float(np.max(con.worst_case(k)[s]))
+            out.append(
+                f"contributions to {measure}: largest worst-case spread "
+                f"{con.spread(k)[s]:.6g} mm at step {s} (drive {con.shown_value(s):.6g} "
+                f"{_unit(con.coordinate)}), driven by {con.leading(k)} ({share:.3g} %)"
+            )
+        return out
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """The motion's table (one row per step) with the studies' columns."""
+        frame = self.motion.to_dataframe()
+        for key, values in self.columns().items():
+            frame[key] = values
+        return frame
+
+    to_frame = to_dataframe

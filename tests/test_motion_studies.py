@@ -1,0 +1,265 @@
+"""Studies over the motion: each set of parts carried through the cycle gives,
+at every pose, the answer of a direct motion of a model built with those
+parts; the nominal parts give the motion's own answer; the bands hold it; a
+seed reproduces the parts; the fraction failing is the direct count; the
+envelope and the contributions at a pose are those of the posed model."""
+
+from __future__ import annotations
+
+import json
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import jointplay
+from jointplay.assembly import assemble
+from jointplay.io.modelfile import model_from_dict
+from jointplay.studies.contributions import Contributions
+from jointplay.studies.envelope import Envelope
+from jointplay.studies.kinematics import nominal_poses
+from jointplay.studies.motion import Motion, posed_model
+from jointplay.studies.motion_studies import (
+    MotionContributions,
+    MotionEnvelope,
+    MotionMonteCarlo,
+)
+from jointplay.studies.variation import load_map, play_map
+
+GALLERY = Path(__file__).parent.parent / "examples" / "gallery"
+#: Two routes to one answer agree to this fraction of the largest value.
+AGREE = 1e-8
+#: Steps of the motions solved here: a full turn in 60-degree steps.
+STEPS = 7
+ALONG_X = (1.0, 0.0, 0.0)
+
+
+def _load(name: str, **changes: Any) -> jointplay.Model:
+    data = jointplay.load(GALLERY / name).model_dump(by_alias=True, exclude_none=True)
+    data.update(changes)
+    return model_from_dict(data, source=name)
+
+
+def _close(a: Any, b: Any) -> None:
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    scale = max(float(np.max(np.abs(a))), float(np.max(np.abs(b))), 1e-300)
+    assert np.max(np.abs(a - b)) <= AGREE * scale
+
+
+def _with_plays(model: jointplay.Model, labels: tuple[str, ...], plays: Any) -> jointplay.Model:
+    """``model`` built with one set of parts: each play (``joint.field``) as a length."""
+    data = model.model_dump(by_alias=True, exclude_none=True)
+    for label, value in zip(labels, plays, strict=True):
+        joint, field = label.rsplit(".", 1)
+        [entry] = [j for j in data["joints"] if j["name"] == joint]
+        entry[field] = float(value)
+    return model_from_dict(data, source="parts")
+
+
+@pytest.fixture(scope="module")
+def slider_crank() -> jointplay.Model:
+    # a limit the parts fall on both sides of (their worst error: 0.064 to 0.081 mm)
+    return _load(
+        "slider_crank.yaml",
+        requirements=[{"point": "piston top", "max_displacement": 0.07, "along": list(ALONG_X)}],
+    )
+
+
+@pytest.fixture(scope="module")
+def crank_parts(slider_crank: jointplay.Model) -> jointplay.MotionMonteCarloResult:
+    study = MotionMonteCarlo(samples=12, seed=3, motion=Motion(steps=STEPS))
+    return study.run(slider_crank)
+
+
+def test_each_set_of_parts_is_a_direct_motion_of_its_model(
+    slider_crank: jointplay.Model, crank_parts: jointplay.MotionMonteCarloResult
+) -> None:
+    r = crank_parts
+    assert r.displacement.shape == (STEPS, 12, 1, 3)
+    assert r.play_labels == ("crank pin.clearance", "wrist pin.clearance")
+    failing = []
+    for i in range(r.samples):
+        direct = Motion(steps=STEPS).run(_with_plays(slider_crank, r.play_labels, r.plays[i]))
+        _close(r.displacement[:, i], direct.displacement)
+        failing.append(bool(np.any(direct.measured[:, 0] > direct.limits[0])))
+    assert 0 < sum(failing) < r.samples  # the limit splits the parts
+    assert list(r.failing(0)) == failing
+    assert r.fraction_failing(0) == pytest.approx(sum(failing) / r.samples, abs=0)
+    assert 0.0 <= r.fraction_failing(0) <= 1.0
+    per_step = r.failing_per_step(0)
+    assert np.all((per_step >= 0) & (per_step <= r.fraction_failing(0)))
+
+
+def test_bands_hold_the_nominal_parts_answer(
+    slider_crank: jointplay.Model, crank_parts: jointplay.MotionMonteCarloResult
+) -> None:
+    nominal = Motion(steps=STEPS).run(slider_crank)
+    d = nominal.displacement[:, 0]
+    for direction, value in ((ALONG_X, d[:, 0]), (None, np.linalg.norm(d, axis=1))):
+        lower, upper = crank_parts.band("piston top", 0.0, 100.0, direction)
+        assert lower.shape == upper.shape == (STEPS,)
+        assert np.all(lower <= value) and np.all(value <= upper)
+        inner = crank_parts.band("piston top", 2.5, 97.5, direction)
+        assert np.all(lower <= inner[0]) and np.all(inner[0] <= inner[1])
+        assert np.all(inner[1] <= upper)
+
+
+def test_nominal_parts_give_the_motion_answer() -> None:
+    model = _load("four_bar.yaml")
+    asm = assemble(model)
+    plays, loads = play_map(asm).nominal, load_map(asm).nominal
+    study = MotionMonteCarlo(motion=Motion(steps=STEPS))
+    r = study.run_parts(model, plays[None], loads[None])
+    nominal = Motion(steps=STEPS).run(model)
+    _close(r.displacement[:, 0], nominal.displacement)
+    assert r.samples == 1 and r.steps == STEPS
+
+
+def test_a_seed_reproduces_the_parts_and_another_draws_others() -> None:
+    model = _load("four_bar.yaml")
+    motion = Motion(steps=3)
+    a = MotionMonteCarlo(samples=20, seed=5, motion=motion).run(model)
+    b = MotionMonteCarlo(samples=20, seed=5, motion=motion).run(model, workers=2)
+    c = MotionMonteCarlo(samples=20, seed=6, motion=motion).run(model)
+    assert np.array_equal(a.plays, b.plays) and np.array_equal(a.loads, b.loads)
+    assert np.array_equal(a.displacement, b.displacement, equal_nan=True)
+    assert not np.array_equal(a.plays, c.plays)
+    # the parts MonteCarlo draws with the same seed, solved at the same pose
+    poses = nominal_poses(model, np.linspace(0.0, 2 * np.pi, 3))
+    posed = posed_model(model, poses, 1)
+    one = jointplay.MonteCarlo(samples=20, seed=5).run(posed)
+    assert np.array_equal(one.plays, a.plays) and np.array_equal(one.loads, a.loads)
+    _close(one.displacement, a.displacement[1])
+
+
+def test_result_converts_and_pickles(crank_parts: jointplay.MotionMonteCarloResult) -> None:
+    doc = json.loads(json.dumps(crank_parts.to_dict()))
+    size = doc["points"]["piston top"]["size"]
+    assert set(size) == {"0.135", "2.5", "50", "97.5", "99.865"}
+    assert all(len(v) == STEPS for v in size.values())
+    [along] = doc["points"]["piston top"]["along"]
+    assert along["direction"] == list(ALONG_X)
+    [req] = doc["requirements"]
+    assert req["outside"] == int(np.sum(crank_parts.failing(0)))
+    frame = crank_parts.to_frame()
+    assert len(frame) == STEPS
+    lower, _ = crank_parts.band("piston top", 2.5, 97.5, ALONG_X)
+    assert np.array_equal(frame["piston top along [1, 0, 0] p2.5 (mm)"].to_numpy(), lower)
+    again = pickle.loads(pickle.dumps(crank_parts))
+    assert np.array_equal(again.displacement, crank_parts.displacement)
+    with pytest.raises(ValueError, match="percentiles"):
+        crank_parts.band("piston top", 60, 40)
+
+
+def test_envelope_at_a_pose_is_the_posed_models_envelope() -> None:
+    model = _load("four_bar.yaml")
+    motion = Motion(steps=3)
+    result = MotionEnvelope(directions=24, motion=motion).run(model)
+    poses = nominal_poses(model, np.linspace(0.0, 2 * np.pi, 3))
+    for s in range(3):
+        direct = Envelope("fingertip", directions=24).run(posed_model(model, poses, s))
+        found = result.at(s, "fingertip")
+        _close(found.h, direct.h)
+        _close(found.hull, direct.hull)
+        lower, upper = result.extent("fingertip", ALONG_X)
+        assert lower[s] == pytest.approx(float(direct.hull[:, 0].min()), abs=0)
+        assert upper[s] == pytest.approx(float(direct.hull[:, 0].max()), abs=0)
+        assert result.extent("fingertip")[1][s] == direct.largest
+    json.loads(json.dumps(result.to_dict()))
+
+
+def test_contributions_per_step_are_the_posed_models() -> None:
+    model = _load("four_bar.yaml")
+    result = MotionContributions(motion=Motion(steps=3)).run(model)
+    poses = nominal_poses(model, np.linspace(0.0, 2 * np.pi, 3))
+    for s in range(3):
+        direct = Contributions(variance="never").run(posed_model(model, poses, s))
+        _close(result.results[s].sensitivity, direct.sensitivity)
+        k = int(np.argmax(direct.worst_case[0]))
+        assert result.leading(0, s) == direct.plays[k]
+    worst = result.worst_step(0)
+    assert result.spread(0)[worst] == max(r.worst_case_range[0] for r in result.results)
+    json.loads(json.dumps(result.to_dict()))
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "jointplay.cli", *args], capture_output=True, text=True, timeout=300
+    )
+
+
+def test_cli_motion_with_studies_json_and_csv(tmp_path: Path) -> None:
+    csv = tmp_path / "motion.csv"
+    proc = run_cli(
+        "motion",
+        str(GALLERY / "four_bar.yaml"),
+        "--steps",
+        "3",
+        "--samples",
+        "16",
+        "--seed",
+        "2",
+        "--workers",
+        "1",
+        "--envelope",
+        "--contributions",
+        "--json",
+        "--csv",
+        str(csv),
+    )
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["study"] == "motion" and len(doc["steps"]) == 3
+    assert doc["monte_carlo"]["samples"] == 16 and doc["monte_carlo"]["seed"] == 2
+    assert len(doc["monte_carlo"]["points"]["fingertip"]["size"]["2.5"]) == 3
+    assert len(doc["envelope"]["points"]["fingertip"]["largest"]) == 3
+    assert doc["contributions"]["measures"][0]["leading"] in doc["contributions"]["plays"]
+    header = csv.read_text().splitlines()[0]
+    assert "fingertip |d| p97.5 (mm)" in header and "leading play" in header
+
+
+def test_cli_motion_with_samples_prints_band_columns_and_the_fraction() -> None:
+    proc = run_cli("motion", str(GALLERY / "slider_crank.yaml"), "--steps", "3", "--samples", "8")
+    assert proc.returncode == 0, proc.stderr
+    assert "piston top along [1, 0, 0] p97.5 (mm)" in proc.stdout
+    assert "Monte Carlo (8 sets of parts, seed 0):" in proc.stdout
+    assert "somewhere in the cycle" in proc.stdout
+
+
+def test_cli_motion_samples_on_a_model_where_nothing_varies(tmp_path: Path) -> None:
+    import re
+
+    text = (GALLERY / "slider_crank.yaml").read_text()
+    path = tmp_path / "fixed.yaml"
+    path.write_text(re.sub(r"clearance: \{fit: [^}]*\}", 'clearance: "20 um"', text))
+    proc = run_cli("motion", str(path), "--steps", "3", "--samples", "8")
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert "fixed.yaml" in proc.stderr and "the same" in proc.stderr
+
+
+def test_a_slide_drive_places_the_piston_and_closes_the_loop() -> None:
+    # the kinematics the studies pose their models by, driven by a slide:
+    # the piston at the drive's value, the crank pin r from the main bearing
+    # and l from the wrist pin (closed forms, 1e-9 mm)
+    data = jointplay.load(GALLERY / "slider_crank.yaml").model_dump(
+        by_alias=True, exclude_none=True
+    )
+    data["motion"] = {"drive": "guide", "range": ["0 mm", "-30 mm"], "steps": 7}
+    for joint in data["joints"]:
+        joint.pop("backlash", None)  # the motor's backlash would hold the crank
+    model = model_from_dict(data, source="slide")
+    slide = np.linspace(0.0, -30.0, 7)
+    poses = nominal_poses(model, slide)
+    wrist, crank_pin = np.array([179.6424, 10.0, 0.0]), np.array([40.0, 0.0, 0.0])
+    for s, value in enumerate(slide):
+        C = poses.place(s, "piston", wrist)
+        B = poses.place(s, "crank", crank_pin)
+        assert np.max(np.abs(C - wrist - np.array([value, 0.0, 0.0]))) < 1e-9
+        assert abs(np.linalg.norm(B) - 40.0) < 1e-9
+        assert abs(np.linalg.norm(C - B) - np.linalg.norm(wrist - crank_pin)) < 1e-9
+        assert abs(poses.place(s, "rod", crank_pin)[2]) < 1e-9
