@@ -20,13 +20,13 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from jointplay.assembly import Assembly, BallStack, IntArray
+from jointplay.assembly import Assembly, IntArray
 from jointplay.errors import SolverError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
-from jointplay.numerics.linalg import Matrix, solve_rows
+from jointplay.numerics.linalg import Matrix
 from jointplay.settings import DEFAULT, TINY, SolverSettings
-from jointplay.solver import certificate, faces, forces, held, pipeline
+from jointplay.solver import certificate, faces, forces, held, newton, pipeline
 
 BoolArray = NDArray[np.bool_]
 
@@ -476,7 +476,7 @@ def _newton_batch(
             )
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
-    # (the same positions); the forces are split afterwards
+    # (the same positions), the others masked out; the forces are split after
     kept = (
         None
         if tie is not None
@@ -484,34 +484,32 @@ def _newton_batch(
     )
     redundant = kept is not None
     s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
-    sub = face.stack.take(s_keep)
-    sub_rows = face.stack.rows_of(s_keep)
-    lam_s = np.zeros((B, na))
-    lam_start = lam_first[:, list(surface)][:, s_keep]
-    lam_k = lam_start.copy()
+    mask = np.zeros((B, na + ne), dtype=bool)
+    mask[:, s_keep], mask[:, na + e_keep] = True, True
+    lam_s = lam_first[:, list(surface)].copy()
     nu = np.zeros((B, ne))
-    nu_k = np.zeros((B, len(e_keep)))
-    soft_s = sigma[:, list(surface)][:, s_keep]
-    conv = _newton_rows(
-        sub,
-        r_surface[:, s_keep],
-        c_surface[:, sub_rows],
-        Eq[e_keep],
-        e_rows[:, e_keep],
-        eq_soft[:, e_keep],
+    conv = newton.newton(
+        None,
         -g_hat,
-        soft_s,
+        Eq,
+        e_rows,
+        face.stack,
         x,
-        lam_k,
-        nu_k,
+        lam_s,
+        nu,
         ws.settings,
-    )
+        r=r_surface,
+        c=c_surface,
+        soft=sigma[:, list(surface)],
+        eq_soft=eq_soft,
+        active=mask,
+        accept=ws.settings.newton_accept,
+    ).converged
     # a row that did not converge is no answer (``ok`` below needs ``conv``):
-    # its start stands in for it, so that a diverged row's overflow reaches
-    # no check (a far start on the lathe slide's probes: inf, then NaN)
+    # its start stands in for it, so that a diverged row reaches no check
     lost = ~conv
-    x[lost], lam_k[lost], nu_k[lost] = x0[lost], lam0[:, list(surface)][:, s_keep][lost], 0.0
-    lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
+    x[lost], lam_s[lost], nu[lost] = x0[lost], lam0[:, list(surface)][lost], 0.0
+    lam_s[:, ~mask[0, :na]] = 0.0
 
     lam[:, list(surface)] = lam_s
     v, rho = face.stack.norms(x, c_surface)
@@ -704,93 +702,6 @@ def _predicted(
         M, moved = rest, moved[:, plain]
     step = np.hstack([moved, e_rows - e_near]) @ np.linalg.pinv(M).T
     return np.asarray(x0 + step)
-
-
-def _newton_rows(
-    sub: BallStack,
-    r: FloatArray,
-    c_rows: FloatArray,
-    Eq: FloatArray,
-    e: FloatArray,
-    eq_soft: FloatArray,
-    q: FloatArray,
-    soft: FloatArray,
-    x: FloatArray,
-    lam: FloatArray,
-    nu: FloatArray,
-    settings: SolverSettings,
-) -> BoolArray:
-    """Newton on the KKT equations (see ``newton.newton``), rows in place,
-    each row with its own radii ``r`` (B, na), centres ``c_rows`` (B, rows of
-    ``sub``) and right sides ``e`` (B, ne); returns the converged mask."""
-    B, m = q.shape
-    A, start, k, Bo = sub.A, sub.start, sub.k, sub.B
-    na, ne = len(k), Eq.shape[0]
-    n = m + na + ne
-    # each cone's rows as one matrix, so that per-row sums over a cone's rows
-    # are one product: ``u @ T`` is every cone's ``u_i^T A_i`` (B, na * m),
-    # and ``c @ AA`` every ``sum_i c_i A_i^T A_i`` (B, m * m)
-    cone_of = np.repeat(np.arange(na), k)
-    T = np.zeros((A.shape[0], na, m))
-    T[np.arange(A.shape[0]), cone_of] = A
-    T = T.reshape(A.shape[0], na * m)
-    AA = (A[:, :, None] * A[:, None, :]).reshape(A.shape[0], m * m)
-    K0 = np.zeros((n, n))
-    K0[:m, m + na :] = Eq.T
-    K0[m + na :, :m] = Eq
-    todo = np.arange(B)
-    conv = np.zeros(B, dtype=bool)
-    # a row that diverges from a far start overflows: its error is then inf
-    # or NaN, which fails both tests below, and the row leaves
-    with np.errstate(over="ignore", invalid="ignore"):
-        for it in range(settings.batch_newton_steps + 1):
-            xs = x[todo]
-            v = xs @ A.T - c_rows[todo]
-            rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
-            directed = np.all(rho > 0, axis=1)
-            if not np.all(directed):  # a contact at its centre has no direction: full solver
-                todo, xs, v, rho = todo[directed], xs[directed], v[directed], rho[directed]
-            ls = lam[todo]
-            u = v / np.repeat(rho, k, axis=1) if na else v
-            Ju = (u @ T).reshape(-1, na, m) if na else None
-            grad = q[todo] + nu[todo] @ Eq
-            if Ju is not None:
-                grad += np.einsum("bi,bim->bm", ls, Ju) + ls @ Bo
-            F = np.concatenate(
-                [
-                    grad,
-                    rho + xs @ Bo.T - r[todo] - soft[todo] * ls,
-                    xs @ Eq.T - e[todo] - eq_soft[todo] * nu[todo],
-                ],
-                axis=1,
-            )
-            err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
-            done = err <= settings.round_off
-            conv[todo[done]] = True
-            keep = ~done
-            if it >= settings.batch_give_up:  # far from quadratic convergence: a wrong start or set
-                keep &= err <= settings.batch_continue
-            if not np.any(keep):
-                break
-            todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
-            Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
-            Kb[:, m + np.arange(na), m + np.arange(na)] = -soft[todo]
-            Kb[:, m + na + np.arange(ne), m + na + np.arange(ne)] = -eq_soft[todo]
-            if Ju is not None:
-                Ju = Ju[keep]
-                c = ls / rho
-                AtCA = (np.repeat(c, k, axis=1) @ AA).reshape(-1, m, m)
-                Kb[:, :m, :m] = AtCA - (Ju * c[:, :, None]).transpose(0, 2, 1) @ Ju
-                J = Ju + Bo
-                Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
-                Kb[:, m : m + na, :m] = J
-            step, regular = solve_rows(Kb, -F)
-            todo, step = todo[regular], step[regular]  # a singular row is left to the full solver
-            x[todo] += step[:, :m]
-            lam[todo] += step[:, m : m + na]
-            nu[todo] += step[:, m + na :]
-    # rows still in ``todo`` did not converge
-    return conv
 
 
 def _pinned(
