@@ -511,36 +511,12 @@ def _newton_batch(
     x[lost], lam_s[lost], nu[lost] = x0[lost], lam0[:, list(surface)][lost], 0.0
     lam_s[:, ~mask[0, :na]] = 0.0
 
-    lam[:, list(surface)] = lam_s
-    v, rho = face.stack.norms(x, c_surface)
-    f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
-    lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
-    f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
-    faces.rimless_forces(stack, list(linear), lam, f)
+    lam, f = newton.face_forces(ws, face, x, lam_s, nu[:, ne0:], c_surface)
     st = ws.settings
-
-    def pushing(on_surface: list[int], at_apex: list[int]) -> BoolArray:
-        """Newton's forces on these cones, each strictly positive (a face's
-        strictly inside its rim)."""
-        lam_a = lam[:, on_surface + at_apex]
-        positive = st.positive_force
-        if not lam_a.shape[1]:
-            return np.ones(B, dtype=bool)
-        out = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1)
-        if at_apex:
-            lin = stack.take(at_apex)
-            f_norm = np.sqrt(lin.segment_sum(f[:, stack.rows_of(at_apex)] ** 2))
-            inside = (f_norm < (1.0 - positive) * lam[:, at_apex]) | ~lin.has_rim
-            out &= np.all(inside, axis=1)
-        return np.asarray(out)
-
-    strict = pushing(list(surface), list(linear))
+    weak = newton.weak_rows(ws, lam, f, key)
+    strict = ~np.any(weak, axis=1)
     # a redundant set's: those of its independent part (the others carry none)
-    e_kept = set(e_keep.tolist())
-    kept_strict = pushing(
-        [surface[i] for i in s_keep],
-        [linear[j] for j in range(len(linear)) if ne0 + face.lam_rows[j] in e_kept],
-    )
+    kept_strict = ~np.any(weak[:, np.r_[s_keep, na + _kept_linear(face, e_keep, ne0)]], axis=1)
     # contacts that touch outside the set (unloaded in the neighbour's split)
     # may share the load: the split rule decides, as when the set is redundant
     in_set = np.zeros(len(ws.balls), dtype=bool)
@@ -604,6 +580,11 @@ def _newton_batch(
         ok[rows] &= pins
         wrong_set[rows] &= pins
     return ok, x, lam, f, checks, wrong_set
+
+
+def _kept_linear(face: Face, e_keep: IntArray, ne0: int) -> IntArray:
+    """The linear cones of ``face`` whose equalities ``e_keep`` keeps."""
+    return np.flatnonzero(np.isin(ne0 + face.lam_rows, e_keep))
 
 
 def _load_predicted(

@@ -31,19 +31,21 @@ if TYPE_CHECKING:
 def weak_forces(ws: Workspace, point: faces.Point, key: faces.FaceKey) -> IntArray:
     """The cones of ``key`` whose force is not strictly positive (or, at
     the apex of a face, not strictly inside its cone)."""
+    both = np.array([*key[0], *key[1]], dtype=np.intp)
+    return np.asarray(both[weak_rows(ws, point.lam[None], point.f[None], key)[0]])
+
+
+def weak_rows(ws: Workspace, lam: FloatArray, f: FloatArray, key: faces.FaceKey) -> BoolArray:
+    """(B, cones of ``key``): ``weak_forces`` of each row's forces."""
     surface, linear = key
-    both = np.array([*surface, *linear], dtype=np.intp)
-    lam_a = point.lam[both]
-    if not len(lam_a):
-        return both
+    lam_a = lam[:, [*surface, *linear]]
     strict = ws.settings.positive_force
-    weak = lam_a <= strict * float(np.max(lam_a))
+    weak: BoolArray = lam_a <= strict * np.max(lam_a, axis=1, keepdims=True, initial=0.0)
     if linear:
         lin = ws.stack.take(linear)
-        f_norm = np.sqrt(lin.segment_sum(point.f[ws.stack.rows_of(linear)] ** 2))
-        at_apex = lin.has_rim
-        weak[len(surface) :] |= at_apex & (f_norm >= (1.0 - strict) * point.lam[list(linear)])
-    return both[weak]
+        f_norm = np.sqrt(lin.segment_sum(f[:, ws.stack.rows_of(linear)] ** 2))
+        weak[:, len(surface) :] |= lin.has_rim & (f_norm >= (1.0 - strict) * lam[:, list(linear)])
+    return weak
 
 
 def kkt_point(
@@ -107,17 +109,32 @@ def assemble_point(
     method: str,
     iterations: int,
 ) -> faces.Point:
-    """The full multipliers from a face's: ``lam`` and ``f`` of every cone."""
+    """The point of a face's multipliers: ``lam`` and ``f`` of every cone."""
+    lam, f = face_forces(ws, face, x[None], lam_surface[None], nu_linear[None])
+    return faces.Point(x, lam[0], f[0], method, iterations, active=face.key)
+
+
+def face_forces(
+    ws: Workspace,
+    face: faces.Face,
+    x: FloatArray,
+    lam_surface: FloatArray,
+    nu_linear: FloatArray,
+    c_surface: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """Rows' full multipliers from a face's (its surface cones' forces, its
+    equalities' multipliers past the workspace's own): ``lam`` and ``f`` of
+    every cone; ``c_surface``: each row's centres of the surface cones."""
     surface, linear = face.key
-    lam = np.zeros(len(ws.balls))
-    f = np.zeros(ws.stack.A.shape[0])
-    lam[list(surface)] = lam_surface
-    v, rho = face.stack.norms(x)
-    f[face.surface_rows] = face.stack.surface_forces(v, rho, lam_surface)
-    lam[list(linear)] = nu_linear[face.lam_rows]
-    f[face.linear_rows] = nu_linear[face.f_rows]
+    lam = np.zeros((len(x), len(ws.balls)))
+    f = np.zeros((len(x), ws.stack.A.shape[0]))
+    lam[:, list(surface)] = lam_surface
+    v, rho = face.stack.norms(x, c_surface)
+    f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_surface)
+    lam[:, list(linear)] = nu_linear[:, face.lam_rows]
+    f[:, face.linear_rows] = nu_linear[:, face.f_rows]
     faces.rimless_forces(ws.stack, list(linear), lam, f)
-    return faces.Point(x, lam, f, method, iterations, active=face.key)
+    return lam, f
 
 
 class Run(NamedTuple):
