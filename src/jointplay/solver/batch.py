@@ -187,26 +187,9 @@ def _solve_batch(
         raise ValueError("work has non-finite entries")
     _check_driven(ws, work, norms)
     n_balls = len(ws.balls)
-    if radii is None:
-        r = np.broadcast_to(ws.stack.r, (B, n_balls))
-        varied = False
-    else:
-        r = np.asarray(radii, dtype=float)
-        if r.shape != (B, n_balls):
-            raise ValueError(f"radii must have shape ({B}, {n_balls}), not {r.shape}")
-        if not np.all(np.isfinite(r)):  # < 0: a limit a deviation moved in past its play
-            raise ValueError("radii must be finite")
-        varied = True
-    n_rows = ws.stack.A.shape[0]
-    if centres is None:
-        c = np.broadcast_to(ws.stack.centres(), (B, n_rows))
-    else:
-        c = np.asarray(centres, dtype=float)
-        if c.shape != (B, n_rows):
-            raise ValueError(f"centres must have shape ({B}, {n_rows}), not {c.shape}")
-        if not np.all(np.isfinite(c)):
-            raise ValueError("centres must be finite")
-        varied = True
+    r = _per_row("radii", radii, ws.stack.r, B)  # < 0: a limit a deviation moved in past its play
+    c = _per_row("centres", centres, ws.stack.centres(), B)
+    varied = radii is not None or centres is not None
     # each row's loads divided by their size, or by the preload of springs
     # its deviations press, if larger (pipeline.load_scale): one preload for
     # the model's own plays; with varied ones, an unloaded row's own now and
@@ -364,6 +347,18 @@ def _solve_batch(
         full_solves=full,
         assembled=assembled,
     )
+
+
+def _per_row(name: str, given: FloatArray | None, default: FloatArray, B: int) -> FloatArray:
+    """Each row's radii or centres: ``given`` (B, n), checked, or the model's."""
+    if given is None:
+        return np.broadcast_to(default, (B, len(default)))
+    out = np.asarray(given, dtype=float)
+    if out.shape != (B, len(default)):
+        raise ValueError(f"{name} must have shape ({B}, {len(default)}), not {out.shape}")
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{name} must be finite")
+    return out
 
 
 def _preloads(ws: Workspace, norms: FloatArray, r: FloatArray, c: FloatArray) -> FloatArray:
