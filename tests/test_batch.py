@@ -230,7 +230,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
     singular leave the stack and the others go on; the dropped rows get their
     answer later (from another start, or the full solver), the same answer."""
     import jointplay.solver.batch as batch_module
-    from jointplay.numerics import linalg
+    import jointplay.solver.newton as newton_module
 
     data = spherical_shaft()
     forces = rotated_forces(40)
@@ -239,7 +239,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
     work = np.hstack([forces, np.zeros_like(forces)]) @ W.T
     expected = reference.solve_batch(work)
 
-    solve_rows = linalg.solve_rows
+    solve_rows = newton_module.solve_rows
     calls = []
 
     def singular_sometimes(K: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -250,7 +250,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
             regular[[1, 4]] = False
         return step, regular
 
-    monkeypatch.setattr(linalg, "solve_rows", singular_sometimes)
+    monkeypatch.setattr(newton_module, "solve_rows", singular_sometimes)
     # with the loads' prediction the starts are the answers and Newton takes no
     # step: off, it starts from the neighbour's answer and takes several
     monkeypatch.setattr(batch_module, "_load_predicted", lambda face, Eq, x0, lam0, *_: (x0, lam0))

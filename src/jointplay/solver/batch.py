@@ -158,12 +158,9 @@ def solve_batch(
     """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
     cone radii (``Assembly.balls`` order; default: the model's); ``centres``
     (B, rows): each sample's cone centres, stacked like ``stack.A``'s rows
-    (a deviation of the joints' features; default: the model's).
-
-    In one BLAS thread: the work is many small matrices, which more threads
-    only slow down, and a study's processes would compete for the cores
-    (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
-    samples/s against 145,000)."""
+    (a deviation of the joints' features; default: the model's). In one
+    BLAS thread: the work is many small matrices, which more threads only
+    slow down, and a study's processes would compete for the cores."""
     with linalg.one_blas_thread():
         return _solve_batch(ws, work, radii, centres, forces, starts)
 
@@ -285,9 +282,8 @@ def _solve_batch(
                         # a start from before the batch (a study's nominal
                         # answer) is a guess: a set that fails on every row of
                         # its first part is not tried on the rest from it (a
-                        # tilted guide's samples all lie on another set: trying
-                        # each from the nominal one halved the carriage's
-                        # rate); a row solved on the set later may start them
+                        # tilted guide's samples all lie on another set); a
+                        # row solved on the set later may start them
                         start_distance[active][tried[chunk:]] = np.inf
                         break
                     if np.any(ok):
@@ -605,9 +601,8 @@ def _load_predicted(
     without an offset then touches its play along that direction (an offset
     cone keeps its place), and the position moves least to get there (least
     squares over the cones' and the equalities' rows). Where the set's
-    balance fixes its forces, the start is the answer: 6.1.6.1's force
-    turned about the shaft in 360 steps took three Newton passes of up to
-    eight steps from its one solved row, and now one pass of none."""
+    balance fixes its forces, the start is the answer (6.1.6.1's force
+    turned about the shaft: no Newton step)."""
     sub = face.stack
     A, E = linalg.dense(sub.A), linalg.dense(Eq)
     n_rows = A.shape[0]
@@ -651,14 +646,11 @@ def _predicted(
     that each active cone keeps the neighbour's direction of contact while
     its centre and radius become the row's (least squares over the face's
     rows). Where the samples move the clearances' centres (deviations), the
-    contacts' directions follow the loads rather than the positions, and
-    Newton from there takes one or two steps instead of five to seven. A
-    tilting face (on the rim of its offset) is left out where the other
-    contacts span its rows: where on its rim it touches then follows the
-    parts' relative tilt, which they set (a nut's face under a carriage
-    whose guide's tilt is drawn: kept, its direction cost every sample a
-    second Newton step). Where the face itself sets the tilt (a shaft on a
-    tight ball and a face), it stays (left out, Newton took 4.5 steps)."""
+    contacts' directions follow the loads rather than the positions: Newton
+    from there takes one or two steps. A tilting face (on the rim of its
+    offset) is left out where the other contacts span its rows: where on its
+    rim it touches then follows the parts' relative tilt, which they set (a
+    nut's face under a carriage whose guide's tilt is drawn)."""
     r0, c0 = near
     sub = face.stack
     surface, linear = face.key

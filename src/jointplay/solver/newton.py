@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from jointplay.assembly import BallStack, IntArray
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
-from jointplay.numerics.linalg import Matrix
+from jointplay.numerics.linalg import Matrix, solve_rows
 from jointplay.settings import SolverSettings
 from jointplay.solver import faces
 
@@ -352,7 +352,7 @@ def newton(
                     break
                 steps_rows = step[None]
             else:
-                steps_rows, regular = linalg.solve_rows(Kb, -F)
+                steps_rows, regular = solve_rows(Kb, -F)
                 todo, steps_rows = todo[regular], steps_rows[regular]  # a singular row fails alone
             x[todo] += steps_rows[:, :m]
             lam[todo] += steps_rows[:, m : m + na]
