@@ -202,19 +202,25 @@ def newton(
     k, start = stack.k, stack.start
     r = np.broadcast_to(stack.r, (B, na)) if r is None else r
     c = np.broadcast_to(stack.centres(), (B, stack.A.shape[0])) if c is None else c
-    soft = np.zeros((B, na)) if soft is None else soft
-    eq_soft = np.zeros((B, ne)) if eq_soft is None else eq_soft
+    # the multipliers as one (B, na + ne), with their rows' right sides and softness
+    y = np.hstack([lam, nu])
+    target = np.hstack([r, e])
+    softness = np.hstack([np.zeros((B, na)) if soft is None else soft, np.zeros((B, ne))])
+    if eq_soft is not None:
+        softness[:, na:] = eq_soft
     off = None if active is None else ~active
     if off is not None:
-        lam[off[:, :na]], nu[off[:, na:]] = 0.0, 0.0
+        y[off] = 0.0
     if sparse:
         A, Bo, E, Pm = stack.A, stack.B, Eq, P
     else:
         A, Bo, E = linalg.dense(stack.A), linalg.dense(stack.B), linalg.dense(Eq)
         Pm = None if P is None else linalg.dense(P)
+        K0 = np.zeros((n, n))
+        K0[:m, m + na :], K0[m + na :, :m] = E.T, E
     load = np.maximum(1.0, np.linalg.norm(q, axis=1))  # the loads' share of the terms' size
     best = np.full(B, np.inf)
-    best_x, best_lam, best_nu = x.copy(), lam.copy(), nu.copy()
+    best_x, best_y = x.copy(), y.copy()
     history = np.full((B, settings.newton_steps + 1), np.inf)
     todo = np.arange(B)
     factors: linalg.Factors | None = None  # a batch of one's last plain factors
@@ -222,36 +228,35 @@ def newton(
     last: FloatArray | None = None  # a dense batch of one's last system
     failed = False  # its step could not be solved
     steps = 0
+    diag = np.arange(m, n)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         for it in range(settings.newton_steps + 1):
-            xs, ls, ns = x[todo], lam[todo], nu[todo]
-            grad = q[todo] + ns @ E if not sparse else q[todo] + linalg.adjoint(E, ns[0])[None]
-            if Pm is not None:
-                grad = grad + (linalg.times(Pm, xs[0])[None] if sparse else xs @ Pm.T)
+            xs, ys = x[todo], y[todo]
+            ls, ns = ys[:, :na], ys[:, na:]
             v = (linalg.times(A, xs[0])[None] if sparse else xs @ A.T) - c[todo]
             rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
             u = v / np.repeat(np.where(rho > 0, rho, 1.0), k, axis=1)
             if sparse:
                 S = stack.segment_matrix
                 J: Any = sp.csr_matrix(S.T @ sp.diags(u[0]) @ A + Bo)
-                grad = grad + linalg.adjoint(J, ls[0])[None]
-                reach = linalg.times(Bo, xs[0])[None]
-                eq = linalg.times(E, xs[0])[None]
+                grad = q[todo] + (linalg.adjoint(J, ls[0]) + linalg.adjoint(E, ns[0]))[None]
+                if Pm is not None:
+                    grad = grad + linalg.times(Pm, xs[0])[None]
+                reach = np.concatenate([linalg.times(Bo, xs[0]), linalg.times(E, xs[0])])[None]
             else:
                 Ju = np.add.reduceat(u[:, :, None] * A[None], start, axis=1) if na else None
                 J = (Ju if Ju is not None else np.zeros((len(todo), 0, m))) + Bo
-                grad = grad + np.einsum("bi,bim->bm", ls, J)
-                reach, eq = xs @ Bo.T, xs @ E.T
-            F = np.concatenate(
-                [grad, rho + reach - r[todo] - soft[todo] * ls, eq - e[todo] - eq_soft[todo] * ns],
-                axis=1,
-            )
+                grad = q[todo] + ns @ E + (ls[:, None, :] @ J)[:, 0]
+                if Pm is not None:
+                    grad = grad + xs @ Pm.T
+                reach = xs @ np.vstack([Bo, E]).T
+            reach[:, :na] += rho
+            F = np.concatenate([grad, reach - target[todo] - softness[todo] * ys], axis=1)
             lost = np.any(rho == 0, axis=1)  # an active contact at its centre has no direction
             if off is not None:
                 F[:, m:][off[todo]] = 0.0
                 lost = np.any((rho == 0) & ~off[todo, :na], axis=1)
-            force = np.max(np.abs(np.hstack([ls, ns])), axis=1, initial=0.0)
-            force = np.maximum(load[todo], force)
+            force = np.maximum(load[todo], np.max(np.abs(ys), axis=1, initial=0.0))
             if Pm is not None:
                 px = linalg.times(Pm, xs[0])[None] if sparse else xs @ Pm.T
                 force = np.maximum(force, np.max(np.abs(px), axis=1))
@@ -263,12 +268,7 @@ def newton(
             err[lost | ~np.isfinite(err)] = np.inf
             better = err < best[todo]
             won = todo[better]
-            best[won], best_x[won], best_lam[won], best_nu[won] = (
-                err[better],
-                xs[better],
-                ls[better],
-                ns[better],
-            )
+            best[won], best_x[won], best_y[won] = err[better], xs[better], ys[better]
             history[todo, it] = err
             before = np.min(history[todo, max(it - 3, 0) : it], axis=1, initial=np.inf)
             stalled = err > settings.newton_stall * before if it >= 3 else np.zeros_like(err, bool)
@@ -287,14 +287,14 @@ def newton(
                 Kmat = sp.bmat(
                     [
                         [H, J.T, sp.csr_matrix(E).T],
-                        [J, sp.diags(-soft[todo[0]]) if na else None, None],
-                        [sp.csr_matrix(E), None, sp.diags(-eq_soft[todo[0]]) if ne else None],
+                        [J, sp.diags(-softness[todo[0], :na]) if na else None, None],
+                        [sp.csr_matrix(E), None, sp.diags(-softness[todo[0], na:]) if ne else None],
                     ],
                     format="csc",
                 )
             else:
                 J, Ju = J[keep], (Ju[keep] if Ju is not None else None)
-                Kb = np.zeros((len(todo), n, n))
+                Kb = np.repeat(K0[None], len(todo), axis=0)
                 if Ju is not None:
                     Kb[:, :m, :m] = (A.T[None] * np.repeat(w, k, axis=1)[:, None, :]) @ A
                     Kb[:, :m, :m] -= (Ju * w[:, :, None]).transpose(0, 2, 1) @ Ju
@@ -302,10 +302,7 @@ def newton(
                     Kb[:, :m, :m] += Pm
                 Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
                 Kb[:, m : m + na, :m] = J
-                Kb[:, :m, m + na :] = E.T
-                Kb[:, m + na :, :m] = E
-                diag = np.arange(m, n)
-                Kb[:, diag, diag] = -np.hstack([soft[todo], eq_soft[todo]])
+                Kb[:, diag, diag] = -softness[todo]
                 if off is not None:  # a multiplier held at 0: its own row and column
                     held_at_0 = off[todo]
                     Kb[:, m:, :] *= ~held_at_0[:, :, None]
@@ -355,9 +352,8 @@ def newton(
                 steps_rows, regular = solve_rows(Kb, -F)
                 todo, steps_rows = todo[regular], steps_rows[regular]  # a singular row fails alone
             x[todo] += steps_rows[:, :m]
-            lam[todo] += steps_rows[:, m : m + na]
-            nu[todo] += steps_rows[:, m + na :]
-    x[:], lam[:], nu[:] = best_x, best_lam, best_nu
+            y[todo] += steps_rows[:, m:]
+    x[:], lam[:], nu[:] = best_x, best_y[:, :na], best_y[:, na:]
     if factors is None and not failed and last is not None:
         # proximal steps (a tie may be): the last system's own LU, a few
         # microseconds, tells whether it is regular
