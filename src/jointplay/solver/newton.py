@@ -218,6 +218,7 @@ def newton(
         Pm = None if P is None else linalg.dense(P)
         K0 = np.zeros((n, n))
         K0[:m, m + na :], K0[m + na :, :m] = E.T, E
+        BE_T = np.vstack([Bo, E]).T  # each multiplier's row's gradient
     load = np.maximum(1.0, np.linalg.norm(q, axis=1))  # the loads' share of the terms' size
     best = np.full(B, np.inf)
     best_x, best_y = x.copy(), y.copy()
@@ -237,7 +238,7 @@ def newton(
             rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
             u = v / np.repeat(np.where(rho > 0, rho, 1.0), k, axis=1)
             if sparse:
-                S = stack.segment_matrix
+                S, Ju = stack.segment_matrix, None
                 J: Any = sp.csr_matrix(S.T @ sp.diags(u[0]) @ A + Bo)
                 grad = q[todo] + (linalg.adjoint(J, ls[0]) + linalg.adjoint(E, ns[0]))[None]
                 if Pm is not None:
@@ -249,35 +250,38 @@ def newton(
                 grad = q[todo] + ns @ E + (ls[:, None, :] @ J)[:, 0]
                 if Pm is not None:
                     grad = grad + xs @ Pm.T
-                reach = xs @ np.vstack([Bo, E]).T
+                reach = xs @ BE_T
             reach[:, :na] += rho
             F = np.concatenate([grad, reach - target[todo] - softness[todo] * ys], axis=1)
-            lost = np.any(rho == 0, axis=1)  # an active contact at its centre has no direction
+            lost = (rho == 0).any(axis=1)  # an active contact at its centre has no direction
             if off is not None:
                 F[:, m:][off[todo]] = 0.0
-                lost = np.any((rho == 0) & ~off[todo, :na], axis=1)
-            force = np.maximum(load[todo], np.max(np.abs(ys), axis=1, initial=0.0))
+                lost = ((rho == 0) & ~off[todo, :na]).any(axis=1)
+            force = np.maximum(load[todo], np.abs(ys).max(axis=1, initial=0.0))
             if Pm is not None:
                 px = linalg.times(Pm, xs[0])[None] if sparse else xs @ Pm.T
-                force = np.maximum(force, np.max(np.abs(px), axis=1))
-            length = np.maximum(1.0, np.max(np.abs(xs), axis=1))
+                force = np.maximum(force, np.abs(px).max(axis=1))
+            length = np.maximum(1.0, np.abs(xs).max(axis=1))
             err = np.maximum(
-                np.max(np.abs(F[:, :m]), axis=1) / force,
-                np.max(np.abs(F[:, m:]), axis=1, initial=0.0) / length,
+                np.abs(F[:, :m]).max(axis=1) / force,
+                np.abs(F[:, m:]).max(axis=1, initial=0.0) / length,
             )
             err[lost | ~np.isfinite(err)] = np.inf
             better = err < best[todo]
-            won = todo[better]
-            best[won], best_x[won], best_y[won] = err[better], xs[better], ys[better]
+            if better.any():
+                won = todo[better]
+                best[won], best_x[won], best_y[won] = err[better], xs[better], ys[better]
             history[todo, it] = err
-            before = np.min(history[todo, max(it - 3, 0) : it], axis=1, initial=np.inf)
+            before = history[todo, max(it - 3, 0) : it].min(axis=1, initial=np.inf)
             stalled = err > settings.newton_stall * before if it >= 3 else np.zeros_like(err, bool)
             keep = ~((err <= settings.round_off) | stalled | ~np.isfinite(err))
-            if it == settings.newton_steps or not np.any(keep):
+            if it == settings.newton_steps or not keep.any():
                 break
             steps = it + 1
-            todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
-            force, length = force[keep], length[keep]
+            if not keep.all():
+                todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
+                force, length = force[keep], length[keep]
+                J, Ju = J[keep], (Ju[keep] if Ju is not None else None)  # dense: sparse is of one
             w = ls / np.where(rho > 0, rho, 1.0)  # each cone's curvature weight
             if sparse:
                 Ju_s = J - Bo
@@ -293,7 +297,6 @@ def newton(
                     format="csc",
                 )
             else:
-                J, Ju = J[keep], (Ju[keep] if Ju is not None else None)
                 Kb = np.repeat(K0[None], len(todo), axis=0)
                 if Ju is not None:
                     Kb[:, :m, :m] = (A.T[None] * np.repeat(w, k, axis=1)[:, None, :]) @ A
