@@ -196,6 +196,24 @@ def newton(
     """
     B, m = x.shape
     na, ne = len(stack.k), Eq.shape[0]
+    if active is not None and not np.all(np.any(active, axis=0)):
+        # multipliers no row uses: a smaller system, the same steps
+        used = np.any(active, axis=0)
+        cones, eqs = np.flatnonzero(used[:na]), np.flatnonzero(used[na:])
+        rows = stack.rows_of(cones)
+        lam_u, nu_u = lam[:, cones], nu[:, eqs]
+        run = newton(
+            P, q, Eq[eqs], e[:, eqs], stack.take(cones), x, lam_u, nu_u, settings,
+            r=None if r is None else r[:, cones],
+            c=None if c is None else c[:, rows],
+            soft=None if soft is None else soft[:, cones],
+            eq_soft=None if eq_soft is None else eq_soft[:, eqs],
+            active=active[:, used], accept=accept, least_squares=least_squares,
+            prox=prox, repeated_rows=repeated_rows,
+        )  # fmt: skip
+        lam[:], nu[:] = 0.0, 0.0
+        lam[:, cones], nu[:, eqs] = lam_u, nu_u
+        return run
     n = m + na + ne
     sparse = linalg.is_sparse(stack.A) or linalg.is_sparse(Eq) or linalg.is_sparse(P)
     assert B == 1 or not (sparse or least_squares), "a sparse or least-squares batch is of one"
@@ -208,7 +226,7 @@ def newton(
     softness = np.hstack([np.zeros((B, na)) if soft is None else soft, np.zeros((B, ne))])
     if eq_soft is not None:
         softness[:, na:] = eq_soft
-    off = None if active is None else ~active
+    off = None if active is None or np.all(active) else ~active
     if off is not None:
         y[off] = 0.0
     if sparse:
@@ -218,6 +236,15 @@ def newton(
         Pm = None if P is None else linalg.dense(P)
         K0 = np.zeros((n, n))
         K0[:m, m + na :], K0[m + na :, :m] = E.T, E
+        # many rows: each cone's rows as one matrix, so that ``u @ T`` is every
+        # cone's ``u_i^T A_i`` (B, na * m) and ``w @ AA`` every
+        # ``sum_i w_i A_i^T A_i`` (B, m * m), one product each for all rows
+        stacked = B > 1 and na > 0
+        if stacked:
+            T3 = np.zeros((A.shape[0], na, m))
+            T3[np.arange(A.shape[0]), np.repeat(np.arange(na), k)] = A
+            T = T3.reshape(A.shape[0], na * m)
+            AA = (A[:, :, None] * A[:, None, :]).reshape(A.shape[0], m * m)
         BE_T = np.vstack([Bo, E]).T  # each multiplier's row's gradient
     load = np.maximum(1.0, np.linalg.norm(q, axis=1))  # the loads' share of the terms' size
     best = np.full(B, np.inf)
@@ -245,7 +272,10 @@ def newton(
                     grad = grad + linalg.times(Pm, xs[0])[None]
                 reach = np.concatenate([linalg.times(Bo, xs[0]), linalg.times(E, xs[0])])[None]
             else:
-                Ju = np.add.reduceat(u[:, :, None] * A[None], start, axis=1) if na else None
+                if stacked:
+                    Ju = (u @ T).reshape(-1, na, m)
+                else:
+                    Ju = np.add.reduceat(u[:, :, None] * A[None], start, axis=1) if na else None
                 J = (Ju if Ju is not None else np.zeros((len(todo), 0, m))) + Bo
                 grad = q[todo] + ns @ E + (ls[:, None, :] @ J)[:, 0]
                 if Pm is not None:
@@ -299,7 +329,10 @@ def newton(
             else:
                 Kb = np.repeat(K0[None], len(todo), axis=0)
                 if Ju is not None:
-                    Kb[:, :m, :m] = (A.T[None] * np.repeat(w, k, axis=1)[:, None, :]) @ A
+                    if stacked:
+                        Kb[:, :m, :m] = (np.repeat(w, k, axis=1) @ AA).reshape(-1, m, m)
+                    else:
+                        Kb[:, :m, :m] = (A.T[None] * np.repeat(w, k, axis=1)[:, None, :]) @ A
                     Kb[:, :m, :m] -= (Ju * w[:, :, None]).transpose(0, 2, 1) @ Ju
                 if Pm is not None:
                     Kb[:, :m, :m] += Pm
