@@ -208,7 +208,7 @@ def test_a_singular_row_drops_only_itself() -> None:
     """The batched Newton solves its rows' KKT systems together; one exactly
     singular system (a fresh clarabel's answer one ulp off can start a row on
     one) is masked out and the others are still solved, together."""
-    from jointplay.solver.batch import solve_rows
+    from jointplay.numerics.linalg import solve_rows
 
     rng = np.random.default_rng(0)
     K = rng.standard_normal((5, 4, 4))
@@ -230,6 +230,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
     singular leave the stack and the others go on; the dropped rows get their
     answer later (from another start, or the full solver), the same answer."""
     import jointplay.solver.batch as batch_module
+    import jointplay.solver.newton as newton_module
 
     data = spherical_shaft()
     forces = rotated_forces(40)
@@ -238,7 +239,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
     work = np.hstack([forces, np.zeros_like(forces)]) @ W.T
     expected = reference.solve_batch(work)
 
-    solve_rows = batch_module.solve_rows
+    solve_rows = newton_module.solve_rows
     calls = []
 
     def singular_sometimes(K: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -249,7 +250,7 @@ def test_rows_dropped_in_the_middle_of_a_batch_are_solved_after_all(
             regular[[1, 4]] = False
         return step, regular
 
-    monkeypatch.setattr(batch_module, "solve_rows", singular_sometimes)
+    monkeypatch.setattr(newton_module, "solve_rows", singular_sometimes)
     # with the loads' prediction the starts are the answers and Newton takes no
     # step: off, it starts from the neighbour's answer and takes several
     monkeypatch.setattr(batch_module, "_load_predicted", lambda face, Eq, x0, lam0, *_: (x0, lam0))
@@ -264,7 +265,7 @@ def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
     """A start where a contact's relative position is exactly 0 has no
     direction for its force; that row leaves the batch, the others converge."""
     from jointplay.solver import faces, pipeline
-    from jointplay.solver.batch import _newton_rows
+    from jointplay.solver.newton import newton
 
     ws = Workspace.of(model_from_dict(spherical_shaft()))
     forces = rotated_forces(3)
@@ -280,20 +281,19 @@ def test_a_row_that_starts_at_a_contacts_centre_drops_only_itself() -> None:
     x[1] = 0.0  # every contact at its centre
     lam = np.zeros((3, len(surface))) + 1.0
     nu = np.zeros((3, face.Eq.shape[0]))
-    conv = _newton_rows(
-        face.stack,
-        np.repeat(face.stack.r[None, :], 3, axis=0),
-        np.zeros((3, face.stack.A.shape[0])),
+    conv = newton(
+        None,
+        -g_hat,
         face.Eq,
         np.repeat(face.e[None, :], 3, axis=0),
-        np.zeros((3, face.Eq.shape[0])),
-        -g_hat,
-        np.zeros((3, len(surface))),
+        face.stack,
         x,
         lam,
         nu,
         ws.settings,
-    )
+        c=np.zeros((3, face.stack.A.shape[0])),
+        accept=ws.settings.newton_accept,
+    ).converged
     assert conv.tolist() == [True, False, True]
     # from their answers, the others end on them (Newton's point and the
     # batch's may be two routes: to MM, a turn counting as its move at ell)

@@ -598,16 +598,16 @@ def test_newton_starts_each_sample_where_its_contacts_keep_their_directions(
     (``batch._predicted``), Newton takes at most one step per sample, where
     from the neighbour's position it took five to seven (about 7 row solves
     per sample on this example before)."""
-    import jointplay.solver.batch as batch_module
+    import jointplay.solver.newton as newton_module
 
-    real = batch_module.solve_rows
+    real = newton_module.solve_rows
     solved = [0]
 
     def counting(K: Any, F: Any) -> Any:
         solved[0] += len(K)
         return real(K, F)
 
-    monkeypatch.setattr(batch_module, "solve_rows", counting)
+    monkeypatch.setattr(newton_module, "solve_rows", counting)
     mc = MonteCarlo(samples=2_000, seed=3).run(jointplay.load(EXAMPLE))
     assert mc.batched >= 1_990
     assert solved[0] <= mc.batched
@@ -929,16 +929,16 @@ def test_studies_with_deviations_do_not_depend_on_the_global_frame() -> None:
 
 def counting_newton_rows(monkeypatch: Any) -> list[int]:
     """The rows of each batched Newton step, as the batch solves them."""
-    from jointplay.solver import batch
+    from jointplay.solver import newton
 
     solved_rows: list[int] = []
-    solve_rows = batch.solve_rows
+    solve_rows = newton.solve_rows
 
     def counted(K: FloatArray, rhs: FloatArray) -> Any:
         solved_rows.append(len(K))
         return solve_rows(K, rhs)
 
-    monkeypatch.setattr(batch, "solve_rows", counted)
+    monkeypatch.setattr(newton, "solve_rows", counted)
     return solved_rows
 
 
@@ -989,9 +989,10 @@ def test_a_start_from_before_the_batch_is_given_up_only_on_a_part_of_many_rows(
 ) -> None:
     """The rule above reads a whole part's failure as evidence; a part of a
     few rows (a 20-segment string, 9 rows a part) is none. Here its 9 first
-    samples carry loads of their own and the others the nominal load: given
-    up after those 9, the nominal start would leave the others to neighbours
-    solved later, at 2.3 times the Newton row-steps."""
+    samples carry loads of their own, made to fail from any start, and the
+    others the nominal load: given up after those 9, the nominal start would
+    leave the others to neighbours solved later, at twice the Newton
+    row-steps and more."""
     from dataclasses import replace
 
     from jointplay.io.generate import tube_string_dict
@@ -1008,6 +1009,20 @@ def test_a_start_from_before_the_batch_is_given_up_only_on_a_part_of_many_rows(
     model = jointplay.model_from_dict(data)
     B, odd = 120, 9
     steps = {}
+    real = batch_module._newton_batch
+
+    def failing_off(g: FloatArray, newton_batch: Any) -> Any:
+        """The batch's Newton, every row whose load is not along ``g`` failed."""
+
+        def run(ws: Any, key: Any, g_hat: FloatArray, *rest: Any) -> Any:
+            ok, *out = newton_batch(ws, key, g_hat, *rest)
+            along = np.abs(g_hat @ g) >= (1 - 1e-9) * np.linalg.norm(
+                g_hat, axis=1
+            ) * np.linalg.norm(g)
+            return (ok & along, *out)
+
+        return run
+
     default = SolverSettings().batch_guess_rows
     for guess_rows in (default, 1):
         ws = Workspace.of(model)
@@ -1022,6 +1037,7 @@ def test_a_start_from_before_the_batch_is_given_up_only_on_a_part_of_many_rows(
         work[:odd] = own * np.linalg.norm(ws.asm.g)
         nominal = batch_module.solved_start(ws, ws.asm.g)
         solved_rows = counting_newton_rows(monkeypatch)
+        monkeypatch.setattr(batch_module, "_newton_batch", failing_off(ws.asm.g, real))
         result = ws.solve_batch(work, radii, forces=False, starts=[nominal])
         assert result.full_solves == odd and np.all(result.batched[odd:])
         steps[guess_rows] = sum(solved_rows)

@@ -80,6 +80,33 @@ def test_a_face_maps_its_resting_contacts_force_rows(carriage: Workspace) -> Non
     assert faces.face_of(ws, point.active) is face  # built once, then kept
 
 
+def _newton_one(
+    face: Any,
+    g_hat: np.ndarray,
+    x0: np.ndarray,
+    lam0: np.ndarray,
+    accept: float = DEFAULT.newton_accept,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, Any] | None:
+    """``newton.newton`` on a face, as a single solve runs it (a batch of
+    one): (x, lam, nu, steps, factors), or None if it did not converge."""
+    x, lam = x0[None].astype(float), np.asarray(lam0, dtype=float)[None].copy()
+    nu = np.zeros((1, face.Eq.shape[0]))
+    run = newton.newton(
+        None,
+        -g_hat[None],
+        face.Eq,
+        face.e[None],
+        face.stack,
+        x,
+        lam,
+        nu,
+        DEFAULT,
+        accept=accept,
+        least_squares=True,
+    )
+    return (x[0], lam[0], nu[0], run.steps, run.factors) if run.converged[0] else None
+
+
 def test_newton_returns_to_the_optimum_from_a_nearby_start(paper: Workspace) -> None:
     """From a start 1e-3 away (scaled), Newton on the optimum's active set
     comes back in a few steps to the point it finds from the optimum itself,
@@ -95,14 +122,12 @@ def test_newton_returns_to_the_optimum_from_a_nearby_start(paper: Workspace) -> 
     rng = np.random.default_rng(7)
     x0 = point.x + 1e-3 * rng.standard_normal(ws.m)
     lam0 = point.lam * (1 + 0.1 * rng.standard_normal(len(point.lam)))
-    out = newton.newton(None, -g_hat, face.Eq, face.e, face.stack, x0, lam0[list(surface)])
+    out = _newton_one(face, g_hat, x0, lam0[list(surface)])
     assert out is not None
     x, lam, _, iterations, factors = out
     assert iterations <= 8
     assert factors is not None and factors.regular(DEFAULT.free_motion_rcond)
-    home = newton.newton(
-        None, -g_hat, face.Eq, face.e, face.stack, point.x, point.lam[list(surface)]
-    )
+    home = _newton_one(face, g_hat, point.x, point.lam[list(surface)])
     assert home is not None
     # a regular face (its LU's pivots 7.8e-3 and up): Newton's quadratic
     # convergence ends at round-off from any nearby start, on every machine
@@ -124,7 +149,7 @@ def test_newton_gives_up_where_a_contact_has_no_direction(paper: Workspace) -> N
     assert point.active is not None
     face = faces.face_of(ws, point.active)
     lam0 = point.lam[list(point.active[0])]
-    assert newton.newton(None, -g_hat, face.Eq, face.e, face.stack, np.zeros(ws.m), lam0) is None
+    assert _newton_one(face, g_hat, np.zeros(ws.m), lam0) is None
 
 
 def _kkt(duplicate: bool) -> tuple[np.ndarray, int]:
@@ -613,7 +638,7 @@ def test_newton_converges_on_a_bearing_chain_s_active_set() -> None:
     sigma = np.zeros(len(ws.balls))
     start = pipeline.interior_point(ws, g_hat, sigma)
     key = faces.active_set(ws, start.x, start.lam, start.f, ws.stack)
-    found = newton.kkt_point(ws, g_hat, sigma, key, start.x, start.lam, 0, "p", 30, pinned=False)
+    found = newton.kkt_point(ws, g_hat, sigma, key, start.x, start.lam, 0, "p", pinned=False)
     assert found is not None
     _, _, level = ws.stack.levels(found.x)
     on = list(key[0])
@@ -1271,9 +1296,7 @@ def test_a_newton_run_that_ends_on_a_failed_step_hands_on_no_factors(
 
     # the failure is injected at the second step: the same on every machine
     monkeypatch.setattr(newton.linalg, "solve_kkt", second_fails)
-    out = newton.newton(
-        None, -g_hat, face.Eq, face.e, face.stack, x0, point.lam[surface], accept=1.0
-    )
+    out = _newton_one(face, g_hat, x0, point.lam[surface], accept=1.0)
     assert out is not None and len(calls) == 2
     assert out[4] is None
 

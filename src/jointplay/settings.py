@@ -117,8 +117,11 @@ class SolverSettings:
     kkt_plain: float = 1e-8
     kkt_refined: float = 1e-10
     #: Newton has stalled when a step gains less than this factor on the best
-    #: of the three before it (round-off, or a slow mode of a long chain).
+    #: of the three before it (round-off, or a slow mode of a long chain), and
+    #: stops after at most ``newton_steps`` steps (from an interior point or a
+    #: batch neighbour it takes a few; the force split's rows, the same).
     newton_stall: float = 0.5
+    newton_steps: int = 30
     #: A regularized KKT solve's refinement is given up when
     #: ``kkt_refine_window`` rounds together gain less than
     #: ``kkt_refine_stall`` on the best before them (its residual, or a
@@ -196,11 +199,10 @@ class SolverSettings:
     exact_ipm_iterations: int = 400
 
     # -- many loads at once (``batch``) ---------------------------------------
-    #: Newton steps per batch; a row still above ``batch_continue`` after
-    #: ``batch_give_up`` steps leaves for the conic path.
-    batch_newton_steps: int = 12
+    #: A row that failed this many times from an active set's samples leaves
+    #: that set (else every full solve would try every pending row again:
+    #: time quadratic in the samples).
     batch_give_up: int = 6
-    batch_continue: float = 1e-4
     #: A start from before the batch (a Monte Carlo chunk's nominal answer)
     #: is given up when its set fails on every row of its first part, if the
     #: part has this many rows: samples come in random order, and a set that

@@ -20,13 +20,13 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from jointplay.assembly import Assembly, BallStack, IntArray
+from jointplay.assembly import Assembly, IntArray
 from jointplay.errors import SolverError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
-from jointplay.numerics.linalg import Matrix, solve_rows
+from jointplay.numerics.linalg import Matrix
 from jointplay.settings import DEFAULT, TINY, SolverSettings
-from jointplay.solver import certificate, faces, forces, held, pipeline
+from jointplay.solver import certificate, faces, forces, held, newton, pipeline
 
 BoolArray = NDArray[np.bool_]
 
@@ -158,12 +158,9 @@ def solve_batch(
     """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
     cone radii (``Assembly.balls`` order; default: the model's); ``centres``
     (B, rows): each sample's cone centres, stacked like ``stack.A``'s rows
-    (a deviation of the joints' features; default: the model's).
-
-    In one BLAS thread: the work is many small matrices, which more threads
-    only slow down, and a study's processes would compete for the cores
-    (Monte Carlo on shaft_fits.yaml, 2 processes on 2 cores: 255,000
-    samples/s against 145,000)."""
+    (a deviation of the joints' features; default: the model's). In one
+    BLAS thread: the work is many small matrices, which more threads only
+    slow down, and a study's processes would compete for the cores."""
     with linalg.one_blas_thread():
         return _solve_batch(ws, work, radii, centres, forces, starts)
 
@@ -187,26 +184,9 @@ def _solve_batch(
         raise ValueError("work has non-finite entries")
     _check_driven(ws, work, norms)
     n_balls = len(ws.balls)
-    if radii is None:
-        r = np.broadcast_to(ws.stack.r, (B, n_balls))
-        varied = False
-    else:
-        r = np.asarray(radii, dtype=float)
-        if r.shape != (B, n_balls):
-            raise ValueError(f"radii must have shape ({B}, {n_balls}), not {r.shape}")
-        if not np.all(np.isfinite(r)):  # < 0: a limit a deviation moved in past its play
-            raise ValueError("radii must be finite")
-        varied = True
-    n_rows = ws.stack.A.shape[0]
-    if centres is None:
-        c = np.broadcast_to(ws.stack.centres(), (B, n_rows))
-    else:
-        c = np.asarray(centres, dtype=float)
-        if c.shape != (B, n_rows):
-            raise ValueError(f"centres must have shape ({B}, {n_rows}), not {c.shape}")
-        if not np.all(np.isfinite(c)):
-            raise ValueError("centres must be finite")
-        varied = True
+    r = _per_row("radii", radii, ws.stack.r, B)  # < 0: a limit a deviation moved in past its play
+    c = _per_row("centres", centres, ws.stack.centres(), B)
+    varied = radii is not None or centres is not None
     # each row's loads divided by their size, or by the preload of springs
     # its deviations press, if larger (pipeline.load_scale): one preload for
     # the model's own plays; with varied ones, an unloaded row's own now and
@@ -302,9 +282,8 @@ def _solve_batch(
                         # a start from before the batch (a study's nominal
                         # answer) is a guess: a set that fails on every row of
                         # its first part is not tried on the rest from it (a
-                        # tilted guide's samples all lie on another set: trying
-                        # each from the nominal one halved the carriage's
-                        # rate); a row solved on the set later may start them
+                        # tilted guide's samples all lie on another set); a
+                        # row solved on the set later may start them
                         start_distance[active][tried[chunk:]] = np.inf
                         break
                     if np.any(ok):
@@ -364,6 +343,18 @@ def _solve_batch(
         full_solves=full,
         assembled=assembled,
     )
+
+
+def _per_row(name: str, given: FloatArray | None, default: FloatArray, B: int) -> FloatArray:
+    """Each row's radii or centres: ``given`` (B, n), checked, or the model's."""
+    if given is None:
+        return np.broadcast_to(default, (B, len(default)))
+    out = np.asarray(given, dtype=float)
+    if out.shape != (B, len(default)):
+        raise ValueError(f"{name} must have shape ({B}, {len(default)}), not {out.shape}")
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{name} must be finite")
+    return out
 
 
 def _preloads(ws: Workspace, norms: FloatArray, r: FloatArray, c: FloatArray) -> FloatArray:
@@ -476,7 +467,7 @@ def _newton_batch(
             )
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
-    # (the same positions); the forces are split afterwards
+    # (the same positions), the others masked out; the forces are split after
     kept = (
         None
         if tie is not None
@@ -484,65 +475,39 @@ def _newton_batch(
     )
     redundant = kept is not None
     s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
-    sub = face.stack.take(s_keep)
-    sub_rows = face.stack.rows_of(s_keep)
-    lam_s = np.zeros((B, na))
-    lam_start = lam_first[:, list(surface)][:, s_keep]
-    lam_k = lam_start.copy()
+    mask = np.zeros((B, na + ne), dtype=bool)
+    mask[:, s_keep], mask[:, na + e_keep] = True, True
+    lam_s = lam_first[:, list(surface)].copy()
     nu = np.zeros((B, ne))
-    nu_k = np.zeros((B, len(e_keep)))
-    soft_s = sigma[:, list(surface)][:, s_keep]
-    conv = _newton_rows(
-        sub,
-        r_surface[:, s_keep],
-        c_surface[:, sub_rows],
-        Eq[e_keep],
-        e_rows[:, e_keep],
-        eq_soft[:, e_keep],
+    conv = newton.newton(
+        None,
         -g_hat,
-        soft_s,
+        Eq,
+        e_rows,
+        face.stack,
         x,
-        lam_k,
-        nu_k,
+        lam_s,
+        nu,
         ws.settings,
-    )
+        r=r_surface,
+        c=c_surface,
+        soft=sigma[:, list(surface)],
+        eq_soft=eq_soft,
+        active=mask,
+        accept=ws.settings.newton_accept,
+    ).converged
     # a row that did not converge is no answer (``ok`` below needs ``conv``):
-    # its start stands in for it, so that a diverged row's overflow reaches
-    # no check (a far start on the lathe slide's probes: inf, then NaN)
+    # its start stands in for it, so that a diverged row reaches no check
     lost = ~conv
-    x[lost], lam_k[lost], nu_k[lost] = x0[lost], lam0[:, list(surface)][:, s_keep][lost], 0.0
-    lam_s[:, s_keep], nu[:, e_keep] = lam_k, nu_k
+    x[lost], lam_s[lost], nu[lost] = x0[lost], lam0[:, list(surface)][lost], 0.0
+    lam_s[:, ~mask[0, :na]] = 0.0
 
-    lam[:, list(surface)] = lam_s
-    v, rho = face.stack.norms(x, c_surface)
-    f[:, face.surface_rows] = face.stack.surface_forces(v, rho, lam_s)
-    lam[:, list(linear)] = nu[:, ne0 + face.lam_rows]
-    f[:, face.linear_rows] = nu[:, ne0 + face.f_rows]
-    faces.rimless_forces(stack, list(linear), lam, f)
+    lam, f = newton.face_forces(ws, face, x, lam_s, nu[:, ne0:], c_surface)
     st = ws.settings
-
-    def pushing(on_surface: list[int], at_apex: list[int]) -> BoolArray:
-        """Newton's forces on these cones, each strictly positive (a face's
-        strictly inside its rim)."""
-        lam_a = lam[:, on_surface + at_apex]
-        positive = st.positive_force
-        if not lam_a.shape[1]:
-            return np.ones(B, dtype=bool)
-        out = np.min(lam_a, axis=1) > positive * np.max(lam_a, axis=1)
-        if at_apex:
-            lin = stack.take(at_apex)
-            f_norm = np.sqrt(lin.segment_sum(f[:, stack.rows_of(at_apex)] ** 2))
-            inside = (f_norm < (1.0 - positive) * lam[:, at_apex]) | ~lin.has_rim
-            out &= np.all(inside, axis=1)
-        return np.asarray(out)
-
-    strict = pushing(list(surface), list(linear))
+    weak = newton.weak_rows(ws, lam, f, key)
+    strict = ~np.any(weak, axis=1)
     # a redundant set's: those of its independent part (the others carry none)
-    e_kept = set(e_keep.tolist())
-    kept_strict = pushing(
-        [surface[i] for i in s_keep],
-        [linear[j] for j in range(len(linear)) if ne0 + face.lam_rows[j] in e_kept],
-    )
+    kept_strict = ~np.any(weak[:, np.r_[s_keep, na + _kept_linear(face, e_keep, ne0)]], axis=1)
     # contacts that touch outside the set (unloaded in the neighbour's split)
     # may share the load: the split rule decides, as when the set is redundant
     in_set = np.zeros(len(ws.balls), dtype=bool)
@@ -608,6 +573,11 @@ def _newton_batch(
     return ok, x, lam, f, checks, wrong_set
 
 
+def _kept_linear(face: Face, e_keep: IntArray, ne0: int) -> IntArray:
+    """The linear cones of ``face`` whose equalities ``e_keep`` keeps."""
+    return np.flatnonzero(np.isin(ne0 + face.lam_rows, e_keep))
+
+
 def _load_predicted(
     face: Face,
     Eq: Matrix,
@@ -631,9 +601,8 @@ def _load_predicted(
     without an offset then touches its play along that direction (an offset
     cone keeps its place), and the position moves least to get there (least
     squares over the cones' and the equalities' rows). Where the set's
-    balance fixes its forces, the start is the answer: 6.1.6.1's force
-    turned about the shaft in 360 steps took three Newton passes of up to
-    eight steps from its one solved row, and now one pass of none."""
+    balance fixes its forces, the start is the answer (6.1.6.1's force
+    turned about the shaft: no Newton step)."""
     sub = face.stack
     A, E = linalg.dense(sub.A), linalg.dense(Eq)
     n_rows = A.shape[0]
@@ -677,14 +646,11 @@ def _predicted(
     that each active cone keeps the neighbour's direction of contact while
     its centre and radius become the row's (least squares over the face's
     rows). Where the samples move the clearances' centres (deviations), the
-    contacts' directions follow the loads rather than the positions, and
-    Newton from there takes one or two steps instead of five to seven. A
-    tilting face (on the rim of its offset) is left out where the other
-    contacts span its rows: where on its rim it touches then follows the
-    parts' relative tilt, which they set (a nut's face under a carriage
-    whose guide's tilt is drawn: kept, its direction cost every sample a
-    second Newton step). Where the face itself sets the tilt (a shaft on a
-    tight ball and a face), it stays (left out, Newton took 4.5 steps)."""
+    contacts' directions follow the loads rather than the positions: Newton
+    from there takes one or two steps. A tilting face (on the rim of its
+    offset) is left out where the other contacts span its rows: where on its
+    rim it touches then follows the parts' relative tilt, which they set (a
+    nut's face under a carriage whose guide's tilt is drawn)."""
     r0, c0 = near
     sub = face.stack
     surface, linear = face.key
@@ -704,93 +670,6 @@ def _predicted(
         M, moved = rest, moved[:, plain]
     step = np.hstack([moved, e_rows - e_near]) @ np.linalg.pinv(M).T
     return np.asarray(x0 + step)
-
-
-def _newton_rows(
-    sub: BallStack,
-    r: FloatArray,
-    c_rows: FloatArray,
-    Eq: FloatArray,
-    e: FloatArray,
-    eq_soft: FloatArray,
-    q: FloatArray,
-    soft: FloatArray,
-    x: FloatArray,
-    lam: FloatArray,
-    nu: FloatArray,
-    settings: SolverSettings,
-) -> BoolArray:
-    """Newton on the KKT equations (see ``newton.newton``), rows in place,
-    each row with its own radii ``r`` (B, na), centres ``c_rows`` (B, rows of
-    ``sub``) and right sides ``e`` (B, ne); returns the converged mask."""
-    B, m = q.shape
-    A, start, k, Bo = sub.A, sub.start, sub.k, sub.B
-    na, ne = len(k), Eq.shape[0]
-    n = m + na + ne
-    # each cone's rows as one matrix, so that per-row sums over a cone's rows
-    # are one product: ``u @ T`` is every cone's ``u_i^T A_i`` (B, na * m),
-    # and ``c @ AA`` every ``sum_i c_i A_i^T A_i`` (B, m * m)
-    cone_of = np.repeat(np.arange(na), k)
-    T = np.zeros((A.shape[0], na, m))
-    T[np.arange(A.shape[0]), cone_of] = A
-    T = T.reshape(A.shape[0], na * m)
-    AA = (A[:, :, None] * A[:, None, :]).reshape(A.shape[0], m * m)
-    K0 = np.zeros((n, n))
-    K0[:m, m + na :] = Eq.T
-    K0[m + na :, :m] = Eq
-    todo = np.arange(B)
-    conv = np.zeros(B, dtype=bool)
-    # a row that diverges from a far start overflows: its error is then inf
-    # or NaN, which fails both tests below, and the row leaves
-    with np.errstate(over="ignore", invalid="ignore"):
-        for it in range(settings.batch_newton_steps + 1):
-            xs = x[todo]
-            v = xs @ A.T - c_rows[todo]
-            rho = np.sqrt(np.add.reduceat(v * v, start, axis=1)) if na else np.zeros((len(todo), 0))
-            directed = np.all(rho > 0, axis=1)
-            if not np.all(directed):  # a contact at its centre has no direction: full solver
-                todo, xs, v, rho = todo[directed], xs[directed], v[directed], rho[directed]
-            ls = lam[todo]
-            u = v / np.repeat(rho, k, axis=1) if na else v
-            Ju = (u @ T).reshape(-1, na, m) if na else None
-            grad = q[todo] + nu[todo] @ Eq
-            if Ju is not None:
-                grad += np.einsum("bi,bim->bm", ls, Ju) + ls @ Bo
-            F = np.concatenate(
-                [
-                    grad,
-                    rho + xs @ Bo.T - r[todo] - soft[todo] * ls,
-                    xs @ Eq.T - e[todo] - eq_soft[todo] * nu[todo],
-                ],
-                axis=1,
-            )
-            err = np.max(np.abs(F), axis=1) if n else np.zeros(len(todo))
-            done = err <= settings.round_off
-            conv[todo[done]] = True
-            keep = ~done
-            if it >= settings.batch_give_up:  # far from quadratic convergence: a wrong start or set
-                keep &= err <= settings.batch_continue
-            if not np.any(keep):
-                break
-            todo, xs, ls, F, rho = todo[keep], xs[keep], ls[keep], F[keep], rho[keep]
-            Kb = np.broadcast_to(K0, (len(todo), n, n)).copy()
-            Kb[:, m + np.arange(na), m + np.arange(na)] = -soft[todo]
-            Kb[:, m + na + np.arange(ne), m + na + np.arange(ne)] = -eq_soft[todo]
-            if Ju is not None:
-                Ju = Ju[keep]
-                c = ls / rho
-                AtCA = (np.repeat(c, k, axis=1) @ AA).reshape(-1, m, m)
-                Kb[:, :m, :m] = AtCA - (Ju * c[:, :, None]).transpose(0, 2, 1) @ Ju
-                J = Ju + Bo
-                Kb[:, :m, m : m + na] = J.transpose(0, 2, 1)
-                Kb[:, m : m + na, :m] = J
-            step, regular = solve_rows(Kb, -F)
-            todo, step = todo[regular], step[regular]  # a singular row is left to the full solver
-            x[todo] += step[:, :m]
-            lam[todo] += step[:, m : m + na]
-            nu[todo] += step[:, m + na :]
-    # rows still in ``todo`` did not converge
-    return conv
 
 
 def _pinned(

@@ -266,7 +266,7 @@ def _split_newton(
     size = np.max(np.abs(K0), axis=(1, 2), initial=1.0)
     K0[:, nk + np.arange(m), nk + np.arange(m)] = -settings.kkt_round_off * size[:, None]
     polished = False
-    for step in range(settings.batch_newton_steps + 1):
+    for step in range(settings.newton_steps + 1):
         yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
         K = K0.copy()
         grad = (Q @ yk[:, :, None])[:, :, 0] + np.einsum("bmy,bm->by", Gk, mu)
@@ -289,7 +289,7 @@ def _split_newton(
             if polished:
                 break
             polished = True  # one more step: from there quadratic to round-off
-        if step == settings.batch_newton_steps:
+        if step == settings.newton_steps:
             break  # ``ok`` is that of the last step's answer
         z += linalg.solve_stack(K, -F, settings.kkt_plain, settings.lstsq_rcond)
     yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]

@@ -350,7 +350,7 @@ def active_set_steps(
             tuple(sorted(i for i in active if at_apex[i])),
         )
         trial = newton.kkt_point(
-            ws, g_hat, sigma, trial_key, x, lam, point.iterations, "polished", 30, pinned=False
+            ws, g_hat, sigma, trial_key, x, lam, point.iterations, "polished", pinned=False
         )
         if trial is None:
             return None

@@ -148,21 +148,26 @@ def polish_least_norm(
     r = np.where(rest.r > 0, rest.r, ws.max_radius)
     st = ws.settings
     L2, l2 = face_equalities(ws, rest, ((), tuple(linear)), x, rest.r[list(linear)])
-    polished = newton.newton(
+    Eq2 = linalg.vstack([Eq, L2], ws.m)
+    x1, nu = x[None].copy(), np.zeros((1, Eq2.shape[0]))
+    run = newton.newton(
         metric,
-        np.zeros(ws.m),
-        linalg.vstack([Eq, L2], ws.m),
-        np.concatenate([e, l2]),
+        np.zeros((1, ws.m)),
+        Eq2,
+        np.concatenate([e, l2])[None],
         rest.take(list(surface)),
-        x,
-        np.maximum(lam[list(surface)], 0.0),
-        settings=st,
+        x1,
+        np.maximum(lam[None, list(surface)], 0.0),
+        nu,
+        st,
+        accept=st.newton_accept,
+        least_squares=True,
         repeated_rows=face,
     )
-    if polished is not None:
-        _, _, level = rest.levels(polished[0])
+    if run.converged[0]:
+        _, _, level = rest.levels(x1[0])
         if not np.any((level - rest.r) / r > st.feasibility_tolerance):
-            return polished[0]
+            return np.asarray(x1[0])
     if strict:
         raise SolverError(
             "the least-norm point of a tie (an optimum that is not unique) could not "
