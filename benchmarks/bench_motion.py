@@ -86,13 +86,13 @@ def monte_carlo(samples: int, workers: int) -> None:
         )
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--samples", type=int, default=2000)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--no-monte-carlo", action="store_true")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     nominal(args.repeats)
     if not args.no_monte_carlo:
         monte_carlo(args.samples, args.workers)

@@ -8,7 +8,9 @@
 3. ``bench_scaling.py``: chains and closed loops of 10 to 10,000 bodies;
 4. ``bench_montecarlo.py``: Monte Carlo samples per second against SLSQP;
 5. ``bench_startup.py``: a command's wall time against the bare import of
-   the solver's dependencies.
+   the solver's dependencies;
+6. ``bench_motion.py``: the four-bar's and the slider-crank's 73-step motion
+   against one cold solve, and a Monte Carlo over the slider-crank's motion.
 
 Run from the repository root with jointplay installed (CVXPY from the
 ``bench`` extra): ``python benchmarks/run.py`` (``--quick``: fewer repeats,
@@ -25,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_cases
 import bench_montecarlo
+import bench_motion
 import bench_paper
 import bench_scaling
 import bench_startup
@@ -47,6 +50,8 @@ def main(argv: list[str] | None = None) -> int:
     bench_montecarlo.main(["--samples", "200000" if args.quick else "1000000"])
     print("\n" + "=" * 100 + "\n5. Start-up\n" + "=" * 100)
     bench_startup.main(["--runs", "5" if args.quick else "15"])
+    print("\n" + "=" * 100 + "\n6. Motion through the cycle\n" + "=" * 100)
+    bench_motion.main(["--samples", "200" if args.quick else "2000"])
     return 0
 
 
