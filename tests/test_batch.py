@@ -465,3 +465,48 @@ def test_a_touching_contact_outside_the_set_still_gets_the_documented_split() ->
     for i, (x0, y0) in enumerate(at[1:], start=1):
         springs = [100 / 4 * (1 + x0 * x / 120**2 + y0 * y / 80**2) for x, y in feet]
         np.testing.assert_allclose(batch.forces[i], springs, rtol=0, atol=BALANCE * 100)
+
+
+@pytest.mark.parametrize("forces", [False, True])
+def test_a_slider_crank_s_redundant_guide_is_batched_like_single_solves(forces: bool) -> None:
+    """The slider-crank's piston rests on four corners of its guide
+    (redundant: the positions are unique, the forces shared) while nothing
+    sets the rod's axial place in its pins' plays (a tie: the least-norm
+    point). At poses through the cycle, each sample's plays batched from
+    the nominal answer match its own single solve: positions to MM and RAD,
+    contact forces to the balance of the largest."""
+    from pathlib import Path
+
+    from jointplay.assembly import assemble
+    from jointplay.solver.batch import solved_start
+    from jointplay.studies.kinematics import nominal_poses
+    from jointplay.studies.motion import posed_model
+    from jointplay.studies.variation import load_map, play_map
+
+    model = jointplay.load(Path(__file__).parents[1] / "examples/gallery/slider_crank.yaml")
+    _, _, start, stop = model.motion_drive()
+    values = np.linspace(start, stop, 7)
+    poses = nominal_poses(model, values)
+    B = 12
+    for step in range(len(values)):
+        posed = posed_model(model, poses, step)
+        asm = assemble(posed)
+        pmap = play_map(asm, model.name)
+        radii = pmap.radii(pmap.sample(np.random.default_rng(step), B))
+        work = np.tile(load_map(asm, None).g0, (B, 1))
+        ws = Workspace(asm)
+        nominal = solved_start(ws, work[0])
+        assert nominal is not None
+        batch = ws.solve_batch(work, radii, forces=forces, starts=[nominal])
+        for i in range(0, B, 5):
+            ref = ws.with_radii(radii[i]).solve()
+            ref.check()
+            for body in ("crank", "rod", "piston"):
+                moved = batch.body_displacement(body)[i]
+                np.testing.assert_allclose(moved[:3], ref.bodies[body].translation, atol=MM)
+                np.testing.assert_allclose(moved[3:], ref.bodies[body].rotation, atol=RAD)
+            if forces:  # against the single solve's own split (a drive's is a torque there)
+                one = ws.solve_batch(work[i : i + 1], radii[i : i + 1])
+                assert batch.forces is not None and one.forces is not None
+                top = np.max(np.abs(one.forces))
+                assert np.all(np.abs(batch.forces[i] - one.forces[0]) <= BALANCE * top)

@@ -468,15 +468,12 @@ def _newton_batch(
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
     # (the same positions), the others masked out; the forces are split after
-    kept = (
-        None
-        if tie is not None
-        else _independent_rows(ws, face, x0[0], c_surface[0], lam0[0, list(surface)])
-    )
+    kept = _independent_rows(ws, face, x0[0], c_surface[0], lam0[0, list(surface)])
     redundant = kept is not None
     s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
     mask = np.zeros((B, na + ne), dtype=bool)
     mask[:, s_keep], mask[:, na + e_keep] = True, True
+    mask[:, na + face.Eq.shape[0] :] = True  # a tie's rows
     lam_s = lam_first[:, list(surface)].copy()
     nu = np.zeros((B, ne))
     conv = newton.newton(
@@ -550,7 +547,13 @@ def _newton_batch(
             st,
             c[rows],
         )
-        ok[rows] &= split & _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
+        if tie is None:
+            pins = _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
+        else:
+            # a tie's rows pick the least-norm point of its face, which holds
+            # every optimum where the split loads each of its contacts
+            pins = ~np.any(newton.weak_rows(ws, lam[rows], f[rows], key), axis=1)
+        ok[rows] &= split & pins
     ok[~shared] &= (strict | own)[~shared]
     # rigid joints' forces by least squares, for split and own rows alike
     # (the batch reports contact forces only)
