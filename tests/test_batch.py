@@ -138,7 +138,7 @@ def test_a_turned_load_starts_newton_at_its_answer(monkeypatch: pytest.MonkeyPat
     def compared(ws: Any, key: Any, g_hat: np.ndarray, *rest: Any, **kw: Any) -> Any:
         predicted.clear()
         out = real_batch(ws, key, g_hat, *rest, **kw)
-        g_near = rest[8] if len(rest) > 8 else kw.get("g_near")  # after sigma ... split_forces
+        g_near = rest[7] if len(rest) > 7 else kw.get("g_near")  # after sigma ... near
         if predicted and g_near is not None:
             ok, x = out[0], out[1]
             turned = np.flatnonzero(np.any(g_hat != g_near, axis=1))

@@ -272,7 +272,6 @@ def _solve_batch(
                         r[now],
                         c[now],
                         (r[near], c[near]),
-                        split_forces,
                         g_hat[near],
                     )
                     failed[now[~ok]] += 1
@@ -390,16 +389,13 @@ def _newton_batch(
     r: FloatArray,
     c: FloatArray,
     near: tuple[FloatArray, FloatArray] | None = None,
-    split_forces: bool = True,
     g_near: FloatArray | None = None,
 ) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, certificate.Checks | None, BoolArray]:
     """KKT equations of the active set ``key`` for every row of ``g_hat``,
     each from its own start (rows of ``x0``, ``lam0``, ``f0``: the nearest
     solved sample's answer and split) and with its own cone radii (rows of
     ``r``) and centres (rows of ``c``); ``near``: the start's own radii and
-    centres (default: the same as the rows'). ``split_forces``: else the
-    positions alone matter, and a redundant set's rows keep Newton's forces
-    where those certify them.
+    centres (default: the same as the rows').
 
     Returns (accepted mask, x, full multipliers, force vectors, their
     certificate, wrong-set mask); a row is accepted only if it converged
@@ -501,37 +497,23 @@ def _newton_batch(
 
     lam, f = newton.face_forces(ws, face, x, lam_s, nu[:, ne0:], c_surface)
     st = ws.settings
-    weak = newton.weak_rows(ws, lam, f, key)
-    strict = ~np.any(weak, axis=1)
-    # a redundant set's: those of its independent part (the others carry none)
-    kept_strict = ~np.any(weak[:, np.r_[s_keep, na + _kept_linear(face, e_keep, ne0)]], axis=1)
-    # contacts that touch outside the set (unloaded in the neighbour's split)
-    # may share the load: the split rule decides, as when the set is redundant
+    strict = ~np.any(newton.weak_rows(ws, lam, f, key), axis=1)  # Newton's own forces
+    # contacts that touch outside the set may share the load (unloaded in the
+    # neighbour's split): the split rule decides, as when the set is redundant
     in_set = np.zeros(len(ws.balls), dtype=bool)
     in_set[[*surface, *linear]] = True
     used = stack.gap_used(stack.levels(x, c)[2], st.feasibility_tolerance * ws.max_radius, r)
-    touching = (stack.spring == 0) & (used >= st.touching)
-    outside = np.any(touching & ~in_set, axis=1)
+    outside = np.any((stack.spring == 0) & (used >= st.touching) & ~in_set, axis=1)
     if tie is not None:
         # the least-norm point of the face's affine hull is the tie's answer only
         # where it stays inside every other cone, off their limits (else the
         # optimal face is smaller: the full solver's least-norm program)
         conv = conv & ~outside
         outside[:] = False
-    # rows whose split is one of many (redundant contacts, or contacts touching
-    # outside the set): the documented one (``forces``), from the neighbour's
-    # split, on the cone limits that bind it; the others' forces are Newton's,
-    # each strictly positive
-    shared = np.full(B, redundant) | outside
+    # forces that are one of many: the documented split (``forces``), from the
+    # neighbour's split
+    shared = conv & (redundant | outside)
     ok = conv.copy()
-    # positions only: Newton's own forces, each strictly positive, certify x
-    # as they are where the contacts they load pin it (the split would only
-    # share them out for the report)
-    own = np.zeros(B, dtype=bool) if split_forces else shared & kept_strict & conv
-    if np.any(own):
-        rows = np.flatnonzero(own)
-        own[rows] = _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
-        shared &= ~own
     if np.any(shared):
         rows = np.flatnonzero(shared)
         apex = st.feasibility_tolerance * ws.max_radius
@@ -547,38 +529,26 @@ def _newton_batch(
             st,
             c[rows],
         )
-        if tie is None:
-            pins = _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
-        else:
-            # a tie's rows pick the least-norm point of its face, which holds
-            # every optimum where the split loads each of its contacts
-            pins = ~np.any(newton.weak_rows(ws, lam[rows], f[rows], key), axis=1)
-        ok[rows] &= split & pins
-    ok[~shared] &= (strict | own)[~shared]
-    # rigid joints' forces by least squares, for split and own rows alike
-    # (the batch reports contact forces only)
+        ok[rows] &= split
     checks = certificate.check(ws, g_hat, x, lam, f, sigma, r, c=c)
-    passed = checks.passed(st, ws.max_radius)
-    # converged with Newton's forces strictly positive: the unique optimum of
-    # the (convex) program on the set's contacts alone; where it crosses
-    # another contact, no other start on this set does better
-    crossed = checks.feasibility > st.feasibility_tolerance * ws.max_radius
-    wrong_set = conv & strict & crossed if tie is None else np.zeros(B, dtype=bool)
-    ok &= passed
-    if face.determined is None:
-        # a tilting face: whether it pins x depends on x. A split row's x is
-        # unique where its loaded contacts pin it (``_pinned``), whatever the
-        # face; the others need the face to pin it
-        rows = np.flatnonzero((ok & ~shared & ~own) | wrong_set)
-        pins = faces.determined_rows(ws, face, x[rows], c_surface[rows])
-        ok[rows] &= pins
-        wrong_set[rows] &= pins
+    ok &= checks.passed(st, ws.max_radius)
+    # converged with Newton's forces strictly positive: the optimum of the
+    # (convex) program on the set's contacts alone, unique where the face pins
+    # it; where it crosses another contact, no other start on this set does better
+    wrong_set = conv & strict & (checks.feasibility > st.feasibility_tolerance * ws.max_radius)
+    if tie is not None:
+        wrong_set[:] = False
+    wrong = np.flatnonzero(wrong_set)
+    wrong_set[wrong] = faces.determined_rows(ws, face, x[wrong], c_surface[wrong])
+    rows = np.flatnonzero(ok)
+    if tie is None:
+        # a certified optimum, the only one where its loaded contacts pin x
+        ok[rows] = _pinned(ws, key, x[rows], lam[rows], f[rows], c[rows])
+    else:
+        # the tie's rows pick the least-norm point of the face, which holds
+        # every optimum where each contact of the set is loaded
+        ok[rows] = ~np.any(newton.weak_rows(ws, lam[rows], f[rows], key), axis=1)
     return ok, x, lam, f, checks, wrong_set
-
-
-def _kept_linear(face: Face, e_keep: IntArray, ne0: int) -> IntArray:
-    """The linear cones of ``face`` whose equalities ``e_keep`` keeps."""
-    return np.flatnonzero(np.isin(ne0 + face.lam_rows, e_keep))
 
 
 def _load_predicted(
@@ -709,7 +679,7 @@ def _pinned(
             M = np.where(tilt[:, None, None], across, M)
         parts.append(np.where(loaded[:, i, None, None], M, 0.0))
     J = np.concatenate(parts, axis=1)
-    if J.shape[1] < ws.m:
+    if J.shape[1] < ws.m or B == 0:
         return np.zeros(B, dtype=bool)
     if np.all(J[0] == J):  # one system (a study whose contacts do not turn)
         return np.repeat(linalg.full_column_rank_rows(J[:1], st.free_motion_rcond), B)
