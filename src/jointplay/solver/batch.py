@@ -464,7 +464,7 @@ def _newton_batch(
     na, ne = len(surface), Eq.shape[0]
     # redundant contacts: Newton on an independent part of the active rows
     # (the same positions), the others masked out; the forces are split after
-    kept = _independent_rows(ws, face, x0[0], c_surface[0], lam0[0, list(surface)])
+    kept = _independent_rows(ws, face, x0[0], c_surface[0])
     redundant = kept is not None
     s_keep, e_keep = kept if kept is not None else (np.arange(na), np.arange(ne))
     mask = np.zeros((B, na + ne), dtype=bool)
@@ -687,7 +687,7 @@ def _pinned(
 
 
 def _independent_rows(
-    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray, lam: FloatArray
+    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray
 ) -> tuple[IntArray, IntArray] | None:
     """None if the active rows of ``face`` at ``x`` (each surface cone's
     gradient and the equalities) are independent. Else they are redundant
@@ -702,13 +702,7 @@ def _independent_rows(
     if len(sub.k):
         v, rho = sub.norms(x, centre)
         u = v / np.repeat(np.where(rho > 0, rho, 1.0), sub.k)
-        gradient = np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B
-        # the pivots prefer the contacts a neighbour's split loads most (by at
-        # most a factor 2, which moves no rank decision but one within 2x of
-        # free_motion_rcond), so that Newton's forces on the part kept are
-        # positive where they can be
-        top = float(np.max(lam, initial=0.0))
-        rows.insert(0, gradient * (1.0 + np.clip(lam, 0.0, None) / max(top, TINY))[:, None])
+        rows.insert(0, np.add.reduceat(linalg.dense(sub.A) * u[:, None], sub.start, axis=0) + sub.B)
     J = np.vstack(rows)
     spring = ws.stack.spring
     soft = np.zeros(len(J), dtype=bool)
