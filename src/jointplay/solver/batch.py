@@ -2,11 +2,14 @@
 
 Most samples of a study share their active contact set. For one set, the
 optimality (KKT) equations of all samples are solved together by Newton's
-method with batched linear algebra. A sample is kept only if its own
-certificate holds: feasible, every active force strictly positive, forces
-balancing its loads, on a face that pins the position down (so the optimum
-is unique). The first sample left over goes through the full solver; its
-active set is then tried on the others, until none is left.
+method with batched linear algebra, on an independent part of the set's
+rows where its contacts are redundant. Forces that are one of many (a
+redundant set, or contacts touching outside it) take the documented split.
+A sample is kept only if its own certificate holds and its optimum is the
+answer: the only one where its loaded contacts pin the position, or, on a
+tie, the least-norm point of a face that every contact of the set loads.
+The first sample left over goes through the full solver; its active set is
+then tried on the others, until none is left.
 """
 
 from __future__ import annotations
@@ -398,8 +401,8 @@ def _newton_batch(
     centres (default: the same as the rows').
 
     Returns (accepted mask, x, full multipliers, force vectors, their
-    certificate, wrong-set mask); a row is accepted only if it converged
-    and passes the certificate of a unique optimum. The wrong-set rows
+    certificate, wrong-set mask); a row is accepted as the module says. The
+    wrong-set rows
     converged, Newton's forces all strictly positive, to a point that
     crosses a contact outside the set: their optimum lies on another set.
     """
