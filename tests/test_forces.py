@@ -773,9 +773,9 @@ def test_the_split_s_parts_are_joined_by_balance_wrench_and_cone() -> None:
     """``forces._part_scales`` on a hand-made split: unknowns 0 and 1 share a
     balance row; 2 shares none with them but is 1's cone's force vector;
     3 and 4 share only a wrench row; 5 is alone and carries nothing. Each
-    part's size is its largest ``|given|`` over the largest part's (10):
-    the cone keeps 2 with 0 and 1 (alone, it was sized 0.1 and its cone
-    scaled apart), and the unloaded part stays at 0 (its split is 0)."""
+    part's size is the largest ``|b|`` on its balance rows: the cone keeps 2
+    with 0 and 1 (alone, it was sized on its own row and its cone scaled
+    apart), and the unloaded part stays at 0 (its split is 0)."""
     import scipy.sparse as sp
 
     from jointplay.solver import forces
@@ -783,7 +783,7 @@ def test_the_split_s_parts_are_joined_by_balance_wrench_and_cone() -> None:
     G = sp.csr_matrix(np.array([[1.0, 2, 0, 0, 0, 0], [0, 0, 3, 0, 0, 0], [0, 0, 0, 1, 0, 0]]))
     P = sp.csr_matrix(np.array([[0.0, 0, 0, 1, 1, 0], [0, 0, 0, 0, 0, 1]]))
     owner = np.array([0, 1, 1, 2, 3, -1])
-    given = np.array([2.0, -5.0, 1.0, 10.0, 0.5, 0.0])
-    d = forces._part_scales(G, P, owner, given)
-    # exact: each a ratio of small integers exact in binary (5 / 10, 10 / 10)
-    np.testing.assert_array_equal(d, [0.5, 0.5, 0.5, 1.0, 1.0, 0.0])
+    b = np.array([-5.0, 2.0, 10.0])
+    size_row, size = forces._part_scales(G, P, owner, b)
+    np.testing.assert_array_equal(size_row, [5.0, 5.0, 10.0])
+    np.testing.assert_array_equal(size, [5.0, 5.0, 5.0, 10.0, 10.0, 0.0])
