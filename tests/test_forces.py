@@ -787,3 +787,42 @@ def test_the_split_s_parts_are_joined_by_balance_wrench_and_cone() -> None:
     size_row, size = forces._part_scales(G, P, owner, b)
     np.testing.assert_array_equal(size_row, [5.0, 5.0, 10.0])
     np.testing.assert_array_equal(size, [5.0, 5.0, 5.0, 10.0, 10.0, 0.0])
+
+
+def test_the_lathe_slide_s_split_meets_the_rule_s_optimality_conditions() -> None:
+    """The lathe slide's guide corners: the least squares over all of them
+    would pull on two, and at the rule's optimum those two carry nothing
+    while their multipliers vanish too (a degenerate optimum). An interior
+    point stops 5e-5 of the largest force off such a point (its forces and
+    multipliers there shrink alike); the split program's answer is finished
+    by the least squares on the contacts it loads, kept only where it meets
+    the program's conditions. Checked independently here (least squares on
+    the printed forces): the two corners carry no force, the gradient of
+    ``|P y|^2 / 2`` is balanced by multipliers of the balance and of the
+    unloaded corners (>= 0), to 1e-9 of its largest entry."""
+    from jointplay.solver import Workspace, forces, pipeline
+
+    model = jointplay.load(Path(__file__).parents[1] / "examples" / "gallery" / "lathe_slide.yaml")
+    ws = Workspace.of(model)
+    g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
+    point = pipeline.optimum(ws, g_hat)
+    st = ws.settings
+    x, lam, f = point.x, point.lam, point.f
+    surface, apex, _, u = forces._classes(ws.stack, x, ws.stack.r, st.feasibility_tolerance, st)
+    Z, owner = forces._unknowns(ws.stack, surface, apex, u, ws.asm.E.shape[0], False)
+    P, G = forces._wrenches(ws.asm, Z), forces._work(ws.asm, Z)
+    nu = point.nu if point.nu is not None else np.zeros(ws.asm.E.shape[0])
+    multipliers = np.concatenate([f, lam, nu])
+    y = np.linalg.lstsq(Z, multipliers, rcond=None)[0]
+    top = float(np.max(np.abs(y)))
+    np.testing.assert_allclose(G @ y, g_hat, rtol=0, atol=BALANCE * top)
+    unloaded = [j for j in np.flatnonzero(owner >= 0) if abs(y[j]) <= BALANCE * top]
+    assert len(unloaded) == 2
+    assert np.all(y[owner >= 0] >= -BALANCE * top)
+    held = np.zeros((len(y), len(unloaded)))
+    held[unloaded, np.arange(len(unloaded))] = -1.0
+    M = np.hstack([G.T, held])
+    grad = P.T @ (P @ y)
+    mult = np.linalg.lstsq(M, -grad, rcond=None)[0]
+    np.testing.assert_allclose(M @ mult + grad, 0.0, rtol=0, atol=1e-9 * np.max(np.abs(grad)))
+    assert np.all(mult[-len(unloaded) :] >= -1e-9 * np.max(np.abs(grad)))

@@ -93,18 +93,13 @@ def least_squares_split(
     if Z.shape[1] == 0:
         return None
     G, b = _pressing(_work(asm, Z), b, owner, pressed, lam)
-    centred = apex & ~stack.has_offset
-    P = _wrenches(asm, Z)
-    if not asm.sparse:
-        if _determined_rows(G[None], settings.free_motion_rcond)[0]:
-            return None  # one split balances the loads: the solver's own
-        y, optimal = _least_squares(P[None], G[None], b[None], np.arange(Z.shape[1]), settings)
-        split = _split_of(stack, Z @ y[0], keep_lam, keep_f, centred)
-        if optimal[0] and _inside(split.lam, split.f, stack, settings.equilibrium_tolerance):
-            return split
-    faces = apex & stack.has_offset
-    y = _program(P, G, b, owner, int(np.sum(surface)), stack.k[faces], settings, asm.sparse)
-    return None if y is None else _split_of(stack, Z @ y, keep_lam, keep_f, centred)
+    if not asm.sparse and _determined_rows(G[None], settings.free_motion_rcond)[0]:
+        return None  # one split balances the loads: the solver's own
+    cones = (int(np.sum(surface)), stack.k[apex & stack.has_offset])
+    y = _rule(_wrenches(asm, Z), G, b, owner, cones, settings, asm.sparse)
+    return (
+        None if y is None else _split_of(stack, Z @ y, keep_lam, keep_f, apex & ~stack.has_offset)
+    )
 
 
 def least_squares_rows(
@@ -123,8 +118,9 @@ def least_squares_rows(
     ``f``, ``g_hat``, each with its own cone ``radii`` and, if given,
     ``centres``; dense models). ``near = (lam, f)``: rows of a split close to
     each row's (a neighbouring sample's): its touching contacts with no force
-    are held unloaded in the stacked least squares (``_least_squares``);
-    rows where that is not the program's optimum take the program.
+    are held unloaded in one stacked least squares (``_least_squares``);
+    the rows where that is not the program's optimum take the rule one by
+    one (``_rule``).
 
     Returns the mask of the rows whose split is the rule's (or the row's
     own, where one split balances the loads), and every row's
@@ -155,29 +151,15 @@ def least_squares_rows(
         determinate = _determined_rows(G, settings.free_motion_rcond)
         ok[rows[determinate[same]]] = True
         P = _wrenches(asm, Z)
+        cones = (int(np.sum(s)), stack.k[a & stack.has_offset])
         keep = np.flatnonzero((owner < 0) | ~unloaded[rows[0]][np.maximum(owner, 0)])
-        y, optimal = _least_squares(P, G, b_rows, keep, settings)
-        out = _split_of(
-            stack,
-            (Z @ y[:, :, None])[:, :, 0],
-            keep_lam[rows[first]],
-            keep_f[rows[first]],
-            a & ~stack.has_offset,
-        )
-        optimal &= _inside(out.lam, out.f, stack, settings.equilibrium_tolerance)
-        faces = a & stack.has_offset
+        y, optimal = _least_squares(P, G, b_rows, keep, cones, settings)
         for j in np.flatnonzero(~optimal & ~determinate):
-            y_j = _program(P[j], G[j], b_rows[j], owner, int(np.sum(s)), stack.k[faces], settings)
+            y_j = _rule(P[j], G[j], b_rows[j], owner, cones, settings, False)
             if y_j is not None:
-                one = _split_of(
-                    stack,
-                    Z[j] @ y_j,
-                    keep_lam[rows[first[j]]],
-                    keep_f[rows[first[j]]],
-                    a & ~stack.has_offset,
-                )
-                out.lam[j], out.f[j], out.nu[j] = one.lam, one.f, one.nu
-                optimal[j] = True
+                y[j], optimal[j] = y_j, True
+        z = (Z @ y[:, :, None])[:, :, 0]
+        out = _split_of(stack, z, keep_lam[rows[first]], keep_f[rows[first]], a & ~stack.has_offset)
         split = ~determinate[same]
         at = rows[split]
         lam[at], f[at], nu[at] = (v[same][split] for v in (out.lam, out.f, out.nu))
@@ -185,31 +167,72 @@ def least_squares_rows(
     return ok, lam, f, nu
 
 
+#: The split's cones: the number of surface forces (the first unknowns,
+#: each >= 0), then each face's vector size (its ``lam_i``, then ``f_i``).
+Cones = tuple[int, IntArray]
+
+
+def _rule(
+    P: Any,
+    G: Any,
+    b: FloatArray,
+    owner: IntArray,
+    cones: Cones,
+    settings: SolverSettings,
+    sparse: bool,
+) -> FloatArray | None:
+    """The split's ``y``: the program's (``_program``), finished on a dense
+    model by the least squares on the forces it leaves pushing
+    (``_least_squares``), kept where that is the program's optimum. The
+    finish makes it exact: the program stops at its tolerance, and a
+    contact whose force and multiplier both vanish at the optimum (a
+    lathe slide's corner) ends 5e-5 of the largest force off it."""
+    found = _program(P, G, b, owner, cones, settings, sparse)
+    if found is None or sparse:
+        return None if found is None else found[0]
+    y, held = found
+    keep = np.setdiff1d(np.arange(len(y)), held)
+    exact, optimal = _least_squares(P[None], G[None], b[None], keep, cones, settings)
+    return exact[0] if optimal[0] else y
+
+
 def _least_squares(
-    P: FloatArray, G: FloatArray, b: FloatArray, keep: IntArray, settings: SolverSettings
+    P: FloatArray,
+    G: FloatArray,
+    b: FloatArray,
+    keep: IntArray,
+    cones: Cones,
+    settings: SolverSettings,
 ) -> tuple[FloatArray, NDArray[np.bool_]]:
     """For each row of the stacks ``P``, ``G``, ``b``: the ``y`` of least
     ``|P y|`` with ``G y = b`` and the unknowns outside ``keep`` at 0 (held
     unloaded), from the pseudo-inverses of ``G`` (its singular values below
     ``free_motion_rcond`` of the largest are dependent rows') and of ``P``
-    on the null space of ``G``. Also the mask of the rows where it balances
-    the loads and no held unknown would lower ``|P y|`` by taking load (the
-    gradient on each, with the balance's multipliers, is >= 0, to
-    ``equilibrium_tolerance``): there it is the program's optimum, given it
-    lies inside every cone (the caller's check)."""
+    on the null space of ``G``. Also the mask of the rows where it is the
+    program's optimum (its conditions, to ``equilibrium_tolerance``): it
+    balances the loads, lies in every cone, and no held unknown would lower
+    ``|P y|`` by taking load (the gradient on each, with the balance's
+    multipliers, is >= 0)."""
     B, _, n_y = G.shape
     rcond, tol = settings.free_motion_rcond, settings.equilibrium_tolerance
     Gk, Pk = G[:, :, keep], P[:, :, keep]
     G_pinv = np.linalg.pinv(Gk, rcond=rcond)
     y_k = G_pinv @ b[:, :, None]
     null = np.eye(len(keep)) - G_pinv @ Gk  # the projector on G's null space
-    P_null = Pk @ null
-    y_k -= null @ (np.linalg.pinv(P_null, rcond=rcond) @ (Pk @ y_k))
+    y_k -= null @ (np.linalg.pinv(Pk @ null, rcond=rcond) @ (Pk @ y_k))
     y = np.zeros((B, n_y))
     y[:, keep] = y_k[:, :, 0]
+    top = np.maximum(np.max(np.abs(y), axis=1, initial=0.0), TINY)
     size_b = np.maximum(np.max(np.abs(b), axis=1, initial=0.0), TINY)
     miss = np.max(np.abs((G @ y[:, :, None])[:, :, 0] - b), axis=1, initial=0.0)
     optimal = miss <= tol * size_b
+    n_s, k_faces = cones
+    optimal &= np.all(y[:, :n_s] >= -tol * top[:, None], axis=1)
+    at = n_s
+    for k in k_faces.tolist():
+        size = np.linalg.norm(y[:, at + 1 : at + 1 + k], axis=1)
+        optimal &= size <= y[:, at] + tol * top
+        at += 1 + k
     held = np.setdiff1d(np.arange(n_y), keep)
     if len(held):
         grad = (P.transpose(0, 2, 1) @ (P @ y[:, :, None]))[:, :, 0]
@@ -225,27 +248,27 @@ def _program(
     G: Any,
     b: FloatArray,
     owner: IntArray,
-    n_s: int,
-    k_faces: IntArray,
+    cones: Cones,
     settings: SolverSettings,
-    sparse: bool = False,
-) -> FloatArray | None:
-    """The ``y`` of least ``|P y|`` with ``G y = b``, the ``n_s`` surface
-    forces (the first unknowns) non-negative and each face's ``(lam_i,
-    f_i)`` (``k_faces``: its vector's size) in its cone: one Clarabel call,
-    refined as the model's interior point is (``conic.refined``). Each part
-    of the mechanism that the program joins (``_part_scales``) is posed at
-    its own size, so that the tolerance applies to each part's forces."""
+    sparse: bool,
+) -> tuple[FloatArray, IntArray] | None:
+    """The ``y`` of least ``|P y|`` with ``G y = b`` and in its ``cones``:
+    one Clarabel call, refined as the model's interior point is
+    (``conic.refined``). Each part of the mechanism that the program joins
+    (``_part_scales``) is posed at its own size, so that the tolerance
+    applies to each part's forces. Also the one-sign unknowns the program
+    holds at 0 (its dual above its value)."""
     G, P = sp.csr_matrix(G), sp.csr_matrix(P)
     used = np.flatnonzero(np.diff(G.indptr))  # rows no unknown works on (a free spin)
     G, b = G[used], b[used]
     size_row, size = _part_scales(G, P, owner, b)
     m, n_y = G.shape
+    n_s, k_faces = cones
     n_cone = n_s + int(np.sum(k_faces + 1))
-    cones: list[Any] = [clarabel.ZeroConeT(m)] if m else []
+    kinds: list[Any] = [clarabel.ZeroConeT(m)] if m else []
     if n_s:
-        cones.append(clarabel.NonnegativeConeT(n_s))
-    cones += [
+        kinds.append(clarabel.NonnegativeConeT(n_s))
+    kinds += [
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in k_faces
     ]
@@ -257,12 +280,15 @@ def _program(
         np.zeros(n_y),
         sp.vstack([G, -sp.eye(n_cone, n_y)], format="csc"),
         np.r_[np.divide(b, size_row, out=np.zeros_like(b), where=size_row > 0), np.zeros(n_cone)],
-        cones,
+        kinds,
         conic.options(settings, refine=conic.refined(settings, sparse)),
     ).solve()
     if not conic.has_answer(sol):
         return None
-    return np.asarray(sol.x) * size
+    s, z = np.asarray(sol.s)[m:], np.asarray(sol.z)[m:]
+    one_sign = np.r_[np.arange(n_s), n_s + (np.cumsum(k_faces + 1) - k_faces - 1)[k_faces == 0]]
+    held = one_sign[s[one_sign] <= z[one_sign]].astype(np.intp)
+    return np.asarray(sol.x) * size, held
 
 
 def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -471,15 +497,3 @@ def _wrenches(asm: Assembly, Z: Any) -> Any:
     P_full[o_rows, n_rows + o_cols] = offset
     P_full[n_ball:, n_rows + n :] = w_fixed[:, None] * T.wrench_fixed
     return P_full @ Z
-
-
-def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:
-    """Whether every contact pushes (``lam >= 0``) with its force vector
-    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force:
-    one bool, or a mask over rows."""
-    if not lam.shape[-1]:
-        return np.ones(lam.shape[:-1], dtype=bool) if lam.ndim > 1 else True
-    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), TINY)
-    f_norm = np.sqrt(stack.segment_sum(f * f))
-    inside = np.all(lam >= -size, axis=-1) & np.all(f_norm <= lam + size, axis=-1)
-    return inside if lam.ndim > 1 else bool(inside)
