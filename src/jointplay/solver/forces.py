@@ -69,17 +69,16 @@ def least_squares_split(
     unique_on: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
 ) -> Split | None:
     """The split (module docstring) at positions ``x`` under unit loads
-    ``g_hat``. ``lam``, ``f``: the solver's own forces; its compliant
-    contacts keep theirs (a face pressed flat, its force but not its force
-    vector: ``_pressing``). ``nu``: the solver's rigid multipliers (the
-    split finds its own). ``apex_level``: a cone with ``|A_i x|`` at or
-    below it rests at its apex, its force vector free inside the cone. None
-    when the program finds no split, or when only one balances the loads
-    (the caller keeps its own). ``unique_on``: a face (surface cones, those
+    ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split (a sparse
+    model's program starts from it); its compliant contacts keep theirs (a
+    face pressed flat, its force but not its force vector: ``_pressing``).
+    ``apex_level``: a cone with ``|A_i x|`` at or below it rests at its
+    apex, its force vector free inside the cone. None when the program
+    finds no split, or when only one balances the loads (the caller keeps
+    its own). ``unique_on``: a face (surface cones, those
     at their apex) of a hard model whose Newton system was regular: if its
     cones are the touching ones, in the same classes, their forces are the
     only ones (None is returned at once)."""
-    del nu  # the split is found from the positions alone
     stack = asm.stack
     surface, apex, pressed, u = _classes(stack, x, stack.r, apex_level, settings, lam=lam)
     if unique_on is not None and (
@@ -96,7 +95,11 @@ def least_squares_split(
     if not asm.sparse and _determined_rows(G[None], settings.free_motion_rcond)[0]:
         return None  # one split balances the loads: the solver's own
     cones = (int(np.sum(surface)), stack.k[apex & stack.has_offset])
-    y = _rule(_wrenches(asm, Z), G, b, owner, cones, settings, asm.sparse)
+    given = None
+    if asm.sparse:  # the route's split, in the unknowns (Z's columns are apart)
+        given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
+        given = given / np.asarray(Z.multiply(Z).sum(axis=0)).ravel()
+    y = _rule(_wrenches(asm, Z), G, b, owner, cones, settings, given)
     return (
         None if y is None else _split_of(stack, Z @ y, keep_lam, keep_f, apex & ~stack.has_offset)
     )
@@ -155,7 +158,7 @@ def least_squares_rows(
         keep = np.flatnonzero((owner < 0) | ~unloaded[rows[0]][np.maximum(owner, 0)])
         y, optimal = _least_squares(P, G, b_rows, keep, cones, settings)
         for j in np.flatnonzero(~optimal & ~determinate):
-            y_j = _rule(P[j], G[j], b_rows[j], owner, cones, settings, False)
+            y_j = _rule(P[j], G[j], b_rows[j], owner, cones, settings)
             if y_j is not None:
                 y[j], optimal[j] = y_j, True
         z = (Z @ y[:, :, None])[:, :, 0]
@@ -179,16 +182,27 @@ def _rule(
     owner: IntArray,
     cones: Cones,
     settings: SolverSettings,
-    sparse: bool,
+    given: FloatArray | None = None,
 ) -> FloatArray | None:
-    """The split's ``y``: the program's (``_program``), finished on a dense
-    model by the least squares on the forces it leaves pushing
-    (``_least_squares``), kept where that is the program's optimum. The
-    finish makes it exact: the program stops at its tolerance, and a
-    contact whose force and multiplier both vanish at the optimum (a
-    lathe slide's corner) ends 5e-5 of the largest force off it."""
-    found = _program(P, G, b, owner, cones, settings, sparse)
-    if found is None or sparse:
+    """The split's ``y``. A dense model (``given`` None) first takes the
+    least squares (``_least_squares``): where it lies in every cone it is
+    the rule's; else it is the program's start. A sparse model's program
+    starts from ``given``, the route's split. The program's answer
+    (``_program``) is then finished on a dense model by the least squares
+    on the forces it leaves pushing, kept where that is the program's
+    optimum: the program stops at its tolerance, and a contact whose force
+    and multiplier both vanish at the optimum (a lathe slide's corner) ends
+    5e-5 of the largest force off it."""
+    dense = given is None
+    if given is None:
+        y, optimal = _least_squares(
+            P[None], G[None], b[None], np.arange(G.shape[1]), cones, settings
+        )
+        given = np.asarray(y[0])
+        if optimal[0]:
+            return given
+    found = _program(P, G, b, given, owner, cones, settings, not dense)
+    if found is None or not dense:
         return None if found is None else found[0]
     y, held = found
     keep = np.setdiff1d(np.arange(len(y)), held)
@@ -247,21 +261,24 @@ def _program(
     P: Any,
     G: Any,
     b: FloatArray,
+    given: FloatArray,
     owner: IntArray,
     cones: Cones,
     settings: SolverSettings,
     sparse: bool,
 ) -> tuple[FloatArray, IntArray] | None:
-    """The ``y`` of least ``|P y|`` with ``G y = b`` and in its ``cones``:
-    one Clarabel call, refined as the model's interior point is
-    (``conic.refined``). Each part of the mechanism that the program joins
-    (``_part_scales``) is posed at its own size, so that the tolerance
-    applies to each part's forces. Also the one-sign unknowns the program
-    holds at 0 (its dual above its value)."""
+    """The ``y`` of least ``|P y|`` in its ``cones`` among ``y = given + z``
+    with ``G z = 0`` (the same work on the bodies as ``given``, a split that
+    balances the loads ``b``): one Clarabel call, refined as the model's
+    interior point is (``conic.refined``). Written on ``z``, the equalities
+    are consistent even where G's rows depend on each other (a bearing
+    chain's: written ``G y = b``, its program ran out of steps). Each part
+    of the mechanism the program joins (``_part_scales``) is posed at its
+    own size, so that the tolerance applies to each part's forces. Also the
+    one-sign unknowns the program holds at 0 (its dual above its value)."""
     G, P = sp.csr_matrix(G), sp.csr_matrix(P)
-    used = np.flatnonzero(np.diff(G.indptr))  # rows no unknown works on (a free spin)
-    G, b = G[used], b[used]
-    size_row, size = _part_scales(G, P, owner, b)
+    size = _part_scales(G, P, owner, b)
+    given_hat = np.divide(given, size, out=np.zeros_like(given), where=size > 0)
     m, n_y = G.shape
     n_s, k_faces = cones
     n_cone = n_s + int(np.sum(k_faces + 1))
@@ -272,14 +289,14 @@ def _program(
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in k_faces
     ]
-    # y = size * y_hat: each part's rows and unknowns divided by its size
-    # leave G and the optimum as they are (both separable across parts)
+    # y = size * y_hat: each part's unknowns divided by its size leave the
+    # balance and the optimum as they are (both separable across parts)
     Q = sp.csc_matrix(P.T @ P)
     sol = clarabel.DefaultSolver(
         sp.triu(Q, format="csc"),
-        np.zeros(n_y),
+        Q @ given_hat,
         sp.vstack([G, -sp.eye(n_cone, n_y)], format="csc"),
-        np.r_[np.divide(b, size_row, out=np.zeros_like(b), where=size_row > 0), np.zeros(n_cone)],
+        np.r_[np.zeros(m), given_hat[:n_cone]],
         kinds,
         conic.options(settings, refine=conic.refined(settings, sparse)),
     ).solve()
@@ -288,12 +305,12 @@ def _program(
     s, z = np.asarray(sol.s)[m:], np.asarray(sol.z)[m:]
     one_sign = np.r_[np.arange(n_s), n_s + (np.cumsum(k_faces + 1) - k_faces - 1)[k_faces == 0]]
     held = one_sign[s[one_sign] <= z[one_sign]].astype(np.intp)
-    return np.asarray(sol.x) * size, held
+    return (given_hat + np.asarray(sol.x)) * size, held
 
 
-def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The size of each part of the split's program, per row of ``G`` and
-    per unknown: the largest ``|b|`` on the rows of the part. A part is what
+def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> FloatArray:
+    """The size of the part of the split's program each unknown is in: the
+    largest ``|b|`` on the part's rows of ``G``. A part is what
     a row of ``G`` (a body's balance), a row of ``P`` (a wrench) or a cone
     (``owner``) joins, directly or through others. Posed at the size of all
     the loads, a table on four feet beside a block welded under a load 1e8
@@ -316,7 +333,7 @@ def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> tuple[FloatA
     size = np.zeros(int(label.max()) + 1)
     m = G.shape[0]
     np.maximum.at(size, label[:m], np.abs(b))
-    return size[label[:m]], size[label[pattern.shape[0] :]]
+    return np.asarray(size[label[pattern.shape[0] :]])
 
 
 def _classes(
