@@ -784,7 +784,7 @@ def test_the_split_s_parts_are_joined_by_balance_wrench_and_cone() -> None:
     P = sp.csr_matrix(np.array([[0.0, 0, 0, 1, 1, 0], [0, 0, 0, 0, 0, 1]]))
     owner = np.array([0, 1, 1, 2, 3, -1])
     b = np.array([-5.0, 2.0, 10.0])
-    size_row, size = forces._part_scales(G, P, owner, b)
+    size_row, size = forces._part_scales(G, P, owner, b)  # per row, per unknown
     np.testing.assert_array_equal(size_row, [5.0, 5.0, 10.0])
     np.testing.assert_array_equal(size, [5.0, 5.0, 5.0, 10.0, 10.0, 0.0])
 

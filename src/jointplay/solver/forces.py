@@ -186,8 +186,8 @@ def _rule(
 ) -> FloatArray | None:
     """The split's ``y``. A dense model (``given`` None) first takes the
     least squares (``_least_squares``): where it lies in every cone it is
-    the rule's; else it is the program's start. A sparse model's program
-    starts from ``given``, the route's split. The program's answer
+    the rule's. A sparse model's program starts from ``given``, the
+    route's split. The program's answer
     (``_program``) is then finished on a dense model by the least squares
     on the forces it leaves pushing, kept where that is the program's
     optimum: the program stops at its tolerance, and a contact whose force
@@ -198,9 +198,9 @@ def _rule(
         y, optimal = _least_squares(
             P[None], G[None], b[None], np.arange(G.shape[1]), cones, settings
         )
-        given = np.asarray(y[0])
         if optimal[0]:
-            return given
+            return np.asarray(y[0])
+        given = np.zeros(G.shape[1])
     found = _program(P, G, b, given, owner, cones, settings, not dense)
     if found is None or not dense:
         return None if found is None else found[0]
@@ -236,16 +236,20 @@ def _least_squares(
     y_k -= null @ (np.linalg.pinv(Pk @ null, rcond=rcond) @ (Pk @ y_k))
     y = np.zeros((B, n_y))
     y[:, keep] = y_k[:, :, 0]
-    top = np.maximum(np.max(np.abs(y), axis=1, initial=0.0), TINY)
+    # each force against those it shares a body's balance with: judged
+    # against all, a table's foot pulled 0.75 N beside a block under 1e8 N
+    works = G != 0
+    near = np.max(works * np.abs(y)[:, None, :], axis=2, initial=0.0)
+    top = np.maximum(np.max(works * near[:, :, None], axis=1, initial=0.0), TINY)
     size_b = np.maximum(np.max(np.abs(b), axis=1, initial=0.0), TINY)
     miss = np.max(np.abs((G @ y[:, :, None])[:, :, 0] - b), axis=1, initial=0.0)
     optimal = miss <= tol * size_b
     n_s, k_faces = cones
-    optimal &= np.all(y[:, :n_s] >= -tol * top[:, None], axis=1)
+    optimal &= np.all(y[:, :n_s] >= -tol * top[:, :n_s], axis=1)
     at = n_s
     for k in k_faces.tolist():
         size = np.linalg.norm(y[:, at + 1 : at + 1 + k], axis=1)
-        optimal &= size <= y[:, at] + tol * top
+        optimal &= size <= y[:, at] + tol * top[:, at]
         at += 1 + k
     held = np.setdiff1d(np.arange(n_y), keep)
     if len(held):
@@ -267,17 +271,18 @@ def _program(
     settings: SolverSettings,
     sparse: bool,
 ) -> tuple[FloatArray, IntArray] | None:
-    """The ``y`` of least ``|P y|`` in its ``cones`` among ``y = given + z``
-    with ``G z = 0`` (the same work on the bodies as ``given``, a split that
-    balances the loads ``b``): one Clarabel call, refined as the model's
-    interior point is (``conic.refined``). Written on ``z``, the equalities
-    are consistent even where G's rows depend on each other (a bearing
-    chain's: written ``G y = b``, its program ran out of steps). Each part
+    """The ``y`` of least ``|P y|`` in its ``cones`` with ``G y = b``: one
+    Clarabel call, refined as the model's interior point is
+    (``conic.refined``). A sparse model's is written on ``z = y - given``,
+    ``given`` a split that balances the loads, with ``G z = 0``: consistent
+    even where G's rows depend on each other (a bearing chain's: written
+    ``G y = b``, its program ran out of steps). Each part
     of the mechanism the program joins (``_part_scales``) is posed at its
     own size, so that the tolerance applies to each part's forces. Also the
     one-sign unknowns the program holds at 0 (its dual above its value)."""
     G, P = sp.csr_matrix(G), sp.csr_matrix(P)
-    size = _part_scales(G, P, owner, b)
+    size_row, size = _part_scales(G, P, owner, b)
+    miss = np.zeros_like(b) if sparse else b - G @ given
     given_hat = np.divide(given, size, out=np.zeros_like(given), where=size > 0)
     m, n_y = G.shape
     n_s, k_faces = cones
@@ -289,14 +294,16 @@ def _program(
         clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
         for k in k_faces
     ]
-    # y = size * y_hat: each part's unknowns divided by its size leave the
-    # balance and the optimum as they are (both separable across parts)
+    # y = size * y_hat: each part's rows and unknowns divided by its size
+    # leave G and the optimum as they are (both separable across parts)
     Q = sp.csc_matrix(P.T @ P)
     sol = clarabel.DefaultSolver(
         sp.triu(Q, format="csc"),
         Q @ given_hat,
         sp.vstack([G, -sp.eye(n_cone, n_y)], format="csc"),
-        np.r_[np.zeros(m), given_hat[:n_cone]],
+        np.r_[
+            np.divide(miss, size_row, out=np.zeros_like(b), where=size_row > 0), given_hat[:n_cone]
+        ],
         kinds,
         conic.options(settings, refine=conic.refined(settings, sparse)),
     ).solve()
@@ -308,9 +315,9 @@ def _program(
     return (given_hat + np.asarray(sol.x)) * size, held
 
 
-def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> FloatArray:
-    """The size of the part of the split's program each unknown is in: the
-    largest ``|b|`` on the part's rows of ``G``. A part is what
+def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The size of the part of the split's program each row of ``G`` and
+    each unknown is in: the largest ``|b|`` on the part's rows. A part is what
     a row of ``G`` (a body's balance), a row of ``P`` (a wrench) or a cone
     (``owner``) joins, directly or through others. Posed at the size of all
     the loads, a table on four feet beside a block welded under a load 1e8
@@ -333,7 +340,7 @@ def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> FloatArray:
     size = np.zeros(int(label.max()) + 1)
     m = G.shape[0]
     np.maximum.at(size, label[:m], np.abs(b))
-    return np.asarray(size[label[pattern.shape[0] :]])
+    return size[label[:m]], size[label[pattern.shape[0] :]]
 
 
 def _classes(
