@@ -372,18 +372,16 @@ def test_a_split_that_does_not_certify_leaves_the_routes_forces(
         )
 
 
-def test_a_face_whose_force_reaches_its_rim_gets_the_exact_split() -> None:
+def test_a_face_whose_force_reaches_its_rim_gets_the_rule_s_split() -> None:
     """The carriage's least-squares split would pull on a guide corner and
     put the nut face's centre of pressure outside its disc. The rule's
     split then leaves that corner unloaded and the centre of pressure on the
     rim (``|f| = lam``). Checked here by the optimality conditions of the
     rule's convex program, found independently (least squares): the
     gradient of |P y|^2 / 2 is balanced by multipliers of the balance, of
-    the rim (>= 0) and of the unloaded corner (>= 0). Newton on those limits
-    makes the split exact; where its finish is not taken, the cone
-    program's answer is kept, good to its tolerance (formulation.md, 11a:
-    the gradient balanced to 5e-8 of its largest, the corner at 8e-11 and
-    the rim at 4e-10, measured with the finish refused), so the limits are
+    the rim (>= 0) and of the unloaded corner (>= 0). The split program's
+    answer is good to its tolerance there (a rim is not a linear limit the
+    least-squares finish can hold), so the limits are
     checked to the certificate's balance and the gradient to 1e-6."""
     from jointplay.solver import Workspace, forces, pipeline
 
