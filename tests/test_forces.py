@@ -824,3 +824,27 @@ def test_the_lathe_slide_s_split_meets_the_rule_s_optimality_conditions() -> Non
     mult = np.linalg.lstsq(M, -grad, rcond=None)[0]
     np.testing.assert_allclose(M @ mult + grad, 0.0, rtol=0, atol=1e-9 * np.max(np.abs(grad)))
     assert np.all(mult[-len(unloaded) :] >= -1e-9 * np.max(np.abs(grad)))
+
+
+def test_a_batch_of_loads_on_four_feet_shares_each_as_equal_springs_would() -> None:
+    """A sweep of 40 loads across the plate on four feet (each inside the
+    feet, so no foot would pull): every row's split is the equal springs'
+    closed form (``test_redundant_feet_share_the_load_as_equal_springs_would``).
+    The split's least squares exists for such batches: one stacked solve
+    splits every row where it lies in every cone, instead of one cone
+    program per row (the rows it does not settle take the program)."""
+    from jointplay.assembly import assemble
+    from jointplay.solver import Workspace
+
+    a, b, F = 120.0, 80.0, 100.0
+    asm = assemble(model_from_dict(table_on_feet([0.0, 0.0, 0.0])))
+    rng = np.random.default_rng(3)
+    at = np.column_stack([rng.uniform(-60, 60, 40), rng.uniform(-40, 40, 40), np.zeros(40)])
+    work = np.array([np.r_[0, 0, -F, 0, 0, 0] @ asm.wrench_work("plate", list(p)).T for p in at])
+    batch = Workspace(asm).solve_batch(work)
+    assert batch.forces is not None and np.all(batch.assembled)
+    names = [asm.model.joints[ball.joint_index].name for ball in asm.balls]
+    for i, (x, y) in enumerate(FEET[:4]):
+        expected = F / 4 * (1 + at[:, 0] * x / a**2 + at[:, 1] * y / b**2)
+        got = batch.forces[:, names.index(f"foot{i + 1}")]
+        np.testing.assert_allclose(got, expected, rtol=0, atol=BALANCE * F)
