@@ -353,70 +353,6 @@ def test_a_settled_solve_counts_what_a_slow_refinement_has_left(
     assert step is not None and abs(step[0] - 1.0) <= 0.02
 
 
-def test_each_body_s_balance_rows_are_taken_by_their_span() -> None:
-    """``forces._spanned_balance``: orthonormal rows, each on one body's six,
-    as many as the rank of that body's rows, that keep every balance row (a
-    body with an empty row and two that repeat each other, one with none
-    at all, one whose six rows are clearly independent and stay as they
-    are); the rows past the bodies' are left to the caller."""
-    from jointplay.solver import forces
-
-    rng = np.random.default_rng(11)
-    G = np.zeros((24 + 2, 15))
-    G[0:6, 0:3] = rng.standard_normal((6, 3))  # body 0: rank 3
-    G[6:12, 2:7] = rng.standard_normal((6, 5))
-    G[11] = 0.0  # body 1: an empty row, rank 5
-    G[7] = G[6]  # and a repeated one: rank 4
-    G[18:24, 7:15] = rng.standard_normal((6, 8))  # body 3: rank 6 (body 2 has no row)
-    G[24:] = rng.standard_normal((2, 15))  # two rows past the bodies
-    T = forces._spanned_balance(sp.csr_matrix(G), 24, DEFAULT.free_motion_rcond).toarray()
-    assert T.shape == (3 + 4 + 6, 24)
-    assert np.allclose(T @ T.T, np.eye(13), rtol=0, atol=1e-14)
-    assert np.allclose(T.T @ (T @ G[:24]), G[:24], rtol=0, atol=1e-14)
-    assert not np.any(T[:3, 6:]) and not np.any(T[3:7, :6]) and not np.any(T[:7, 12:])
-    assert np.array_equal(T[7:, 18:], np.eye(6))  # the clear body's own rows
-    # a repeated entry adds up, as in any sparse product
-    # (an entry stored twice, 1 and -1, is 0: the body's rows are empty)
-    twice = sp.csr_matrix((np.r_[1.0, -1.0], np.r_[0, 0], np.r_[0, 2, 2, 2, 2, 2, 2]), shape=(6, 1))
-    assert forces._spanned_balance(twice, 6, DEFAULT.free_motion_rcond).shape == (0, 6)
-
-
-def test_a_closed_loop_s_split_is_its_least_squares() -> None:
-    """The bodies of a closed tube loop have six independent balance rows
-    (kept as they are), and its system stays singular (a contact's
-    tangential motion is no body's): its least squares is found from the
-    regularized factors, and it is the least-squares split (with G of full
-    column rank, the one ``y`` that balances the loads). Newton's system is
-    taken as not regular here, so that the split goes to its least squares
-    (where it is, its forces are the split at once:
-    ``test_a_regular_newton_system_answers_for_its_face_and_its_forces``)."""
-    from jointplay.io.generate import tube_string
-    from jointplay.solver import forces
-
-    found: list[tuple[Any, Any, Any, Any]] = []
-    least_squares = forces._least_squares
-
-    def recorded(P: Any, G: Any, b: Any, given: Any, m: int, settings: Any) -> Any:
-        y = least_squares(P, G, b, given, m, settings)
-        found.append((G, b, y, None))
-        return y
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(forces, "_least_squares", recorded)
-        patch.setattr(linalg.Factors, "regular", lambda self, cutoff: False)
-        jointplay.solve(tube_string(300, closed=True)).check()
-    assert found
-    G, b, y, _ = found[0]
-    assert y is not None
-    Gd = np.asarray(sp.csr_matrix(G).todense())
-    assert np.linalg.matrix_rank(Gd) == Gd.shape[1]
-    exact = np.linalg.lstsq(Gd, b, rcond=None)[0]
-    # a unit test of the least squares on this G (full column rank, condition
-    # 9e2): refined until it settles, it ends at round-off times that (7e-14
-    # of the largest measured), far inside 1e-10 on any machine
-    assert np.allclose(y, exact, rtol=0, atol=1e-10 * np.max(np.abs(exact)))
-
-
 def test_a_long_string_s_force_split_is_the_same_from_either_start() -> None:
     """The sparse least-squares split refines the route's forces: on a
     500-segment tube string each body's balance rows repeat each other
@@ -643,55 +579,6 @@ def test_newton_converges_on_a_bearing_chain_s_active_set() -> None:
     _, _, level = ws.stack.levels(found.x)
     on = list(key[0])
     assert np.max(np.abs(level[on] - ws.stack.r[on])) <= DEFAULT.newton_accept * ws.max_radius
-
-
-def test_a_split_balances_the_loads_at_least_as_well_as_the_one_it_refines(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """The sparse force split's least squares over a subset of the contacts
-    (those the cone program loads) may not reach the loads: on a 100-shaft
-    bearing chain it missed by 5.9e-9 of 0.08 where the cone program's split,
-    which it refines, missed by 1.1e-11, and the certificate then refused
-    it. Such an answer is refused; one that balances at least as well as the
-    split it starts from is kept (a review: a fixed bar of 1e-10 of the loads
-    refused a 130-shaft chain's better split, and its residual doubled)."""
-    from jointplay.io.generate import bearing_chain
-    from jointplay.settings import DEFAULT
-    from jointplay.solver import forces
-
-    G = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
-    P = sp.identity(2, format="csr")
-    consistent = np.array([1.0, 2.0, 3.0])
-    # no body's balance rows (m = 0): the rows are taken as they are
-    y = forces._least_squares(P, G, consistent, np.zeros(2), 0, DEFAULT)
-    assert y is not None and np.allclose(G @ y, consistent, rtol=0, atol=1e-12)
-    # a step that leaves the loads less balanced than where it started is refused
-    inconsistent = np.array([1.0, 1.0, 2.5])  # no y has G y = b; [1, 1] misses by 0.5
-    with monkeypatch.context() as patch:
-        patch.setattr(linalg, "settled_solve", lambda *a, **k: np.r_[0.7, 0.0, 0.0, 0.0, 0.0])
-        assert forces._least_squares(P, G, inconsistent, np.ones(2), 0, DEFAULT) is None
-        patch.setattr(linalg, "settled_solve", lambda *a, **k: np.r_[0.1, 0.1, 0.0, 0.0, 0.0])
-        better = forces._least_squares(P, G, inconsistent, np.ones(2), 0, DEFAULT)
-        assert better is not None and np.allclose(better, [1.1, 1.1], rtol=0, atol=1e-15)
-
-    calls: list[tuple[float, float, float | None]] = []  # bar, miss of given, miss of y
-    least_squares = forces._least_squares
-
-    def recorded(P: Any, G: Any, b: Any, given: Any, m: int, settings: Any) -> Any:
-        y = least_squares(P, G, b, given, m, settings)
-        bar = DEFAULT.kkt_refined * float(np.max(np.abs(b)))
-        before = float(np.max(np.abs(G @ given - b)))
-        calls.append((bar, before, None if y is None else float(np.max(np.abs(G @ y - b)))))
-        return y
-
-    monkeypatch.setattr(forces, "_least_squares", recorded)
-    for model in (bearing_chain(100), bearing_chain(130, force=(0.3, -1.0, 0.5))):
-        jointplay.solve(model).check()
-    # the rule holds on every split these solves made; how many they made is
-    # round-off of a degenerate chain's route, not asked
-    for bar, before, miss in calls:
-        if miss is not None:
-            assert miss <= max(bar, before)
 
 
 @pytest.mark.parametrize("kind", ["bearing", "chain"])
@@ -978,37 +865,6 @@ def test_a_large_model_s_interior_point_goes_unrefined() -> None:
     top = max(float(np.linalg.norm(d)) for _, d in pairs)
     for c, d in pairs:  # N: to the certificate's balance, 1e-8 of the largest force
         np.testing.assert_allclose(c, d, rtol=0, atol=1e-8 * top)
-
-
-def test_a_large_model_s_split_program_goes_unrefined(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The split rule's cone program goes without Clarabel's iterative
-    refinement on a large (sparse) model, as its interior point does
-    (``sparse_interior_refinement``): refinement doubled its time (1,000
-    shafts: 0.22 s against 0.11 s in the same 84 steps; 10,000: 3.6 s
-    against 1.8 s). Its answer is refined on its support by least squares,
-    or, where that fails (a degenerate chain's), printed if it certifies,
-    as before: a 300-shaft chain's forces moved 1.3e-4 N of about 1 N,
-    inside what the program stops at ("almost solved", its answers 5e-4 of
-    the largest force apart across its settings). A small model's program
-    is refined (as its interior point is), and so is the retry's."""
-    from jointplay.io.generate import bearing_chain
-    from jointplay.solver import forces
-
-    refined: list[bool] = []
-    program = forces._cone_program
-
-    def spied(*args: Any) -> Any:
-        refined.append(args[-1])
-        return program(*args)
-
-    monkeypatch.setattr(forces, "_cone_program", spied)
-    for shafts, want in ((20, True), (300, False)):
-        refined.clear()
-        jointplay.solve(bearing_chain(shafts)).check()
-        # the first program's, if the route meets one (round-off of a
-        # degenerate chain); a retry's are refined, small or large
-        assert refined[:1] in ([], [want])
-    assert DEFAULT.retry().sparse_interior_refinement
 
 
 def test_a_large_model_s_tie_program_goes_unrefined(monkeypatch: pytest.MonkeyPatch) -> None:

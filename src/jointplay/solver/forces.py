@@ -1,4 +1,4 @@
-"""The split of the loads between redundant contacts: one rule, whatever the route.
+"""The split of the loads between redundant contacts: one rule, one program.
 
 When touching contacts are redundant (a carriage on four corners of its
 guide, a weld in a closed loop), the optimal positions fix only some sums of
@@ -19,9 +19,12 @@ apex) keeps that force, but where it acts on the face (its force vector, the
 centre of pressure) is not fixed by the positions: it is split by the same
 rule, inside the face's cone.
 
-The least-squares split comes from one linear (KKT) solve. Only when it
-would make a contact pull, or push outside its cone, the same objective is
-minimized as a small cone program with those limits.
+The split is one convex program (``_program``: the metric above, the balance
+as equalities, each touching contact's cone), solved by Clarabel. A dense
+model first takes its least squares on the contacts a nearby split loads
+(``_least_squares``, stacked over the rows of a batch), kept only where it
+is the program's optimum: inside every cone, and no contact held unloaded
+that would take load with profit.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ from numpy.typing import NDArray
 from jointplay.assembly import Assembly, BallStack, IntArray
 from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
-from jointplay.settings import GRAM_CERTAIN, GRAM_MARGIN, TINY
+from jointplay.settings import TINY
 from jointplay.solver import conic
 
 if TYPE_CHECKING:
@@ -65,20 +68,17 @@ def least_squares_split(
     settings: SolverSettings,
     unique_on: tuple[tuple[int, ...], tuple[int, ...]] | None = None,
 ) -> Split | None:
-    """The least-squares split (module docstring) at positions ``x`` under
-    unit loads ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split;
-    its compliant contacts keep theirs (a face pressed flat, its force but
-    not its force vector: ``_pressing``). ``apex_level``: a cone with
-    ``|A_i x|`` at or below it rests at its apex, its force vector free
-    inside the cone (the position's round-off). None when no split with
-    these contacts is found, or when only one balances the loads (the
-    caller keeps its own). ``settings``: the
-    equilibrium tolerance (how far a force may fall below 0 or outside its
-    cone by round-off), the rank cutoff, the KKT regularization and the
-    interior-point tolerance. ``unique_on``: a face (surface cones, those
-    at their apex) of a hard model whose Newton system was regular, so its
-    rows are independent: if its cones are the touching ones, in the same
-    classes, their forces are the only ones (None is returned at once)."""
+    """The split (module docstring) at positions ``x`` under unit loads
+    ``g_hat``. ``lam``, ``f``, ``nu``: the solver's own split (a sparse
+    model's program starts from it); its compliant contacts keep theirs (a
+    face pressed flat, its force but not its force vector: ``_pressing``).
+    ``apex_level``: a cone with ``|A_i x|`` at or below it rests at its
+    apex, its force vector free inside the cone. None when the program
+    finds no split, or when only one balances the loads (the caller keeps
+    its own). ``unique_on``: a face (surface cones, those
+    at their apex) of a hard model whose Newton system was regular: if its
+    cones are the touching ones, in the same classes, their forces are the
+    only ones (None is returned at once)."""
     stack = asm.stack
     surface, apex, pressed, u = _classes(stack, x, stack.r, apex_level, settings, lam=lam)
     if unique_on is not None and (
@@ -94,53 +94,15 @@ def least_squares_split(
     G, b = _pressing(_work(asm, Z), b, owner, pressed, lam)
     if not asm.sparse and _determined_rows(G[None], settings.free_motion_rcond)[0]:
         return None  # one split balances the loads: the solver's own
-    P = _wrenches(asm, Z)
-    centred = apex & ~stack.has_offset
-
-    def split_of(y: FloatArray, cols: IntArray | slice = slice(None)) -> Split:
-        return _split_of(stack, Z[:, cols] @ y, keep_lam, keep_f, centred)
-
-    given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
-    given = given / np.asarray((Z.multiply(Z) if asm.sparse else Z * Z).sum(axis=0)).ravel()
-    y = _least_squares(P, G, b, given, asm.m, settings)
-    if y is not None:
-        split = split_of(y)
-        if _inside(split.lam, split.f, stack, settings.equilibrium_tolerance):
-            return split
-    faces = apex & stack.has_offset
-    refine = conic.refined(settings, asm.sparse)
-    d = _part_scales(G, P, owner, given)
-    given_hat = np.divide(given, d, out=np.zeros_like(given), where=d > 0)
-    y = _cone_program(P, G, given_hat, int(np.sum(surface)), stack.k[faces], settings, refine)
-    if y is None:
-        return None
-    y = y * d
-    split = split_of(y)
-    # the cone program's answer is good to its tolerance; the limits that
-    # bind it held as equalities, the split is exact
-    if not asm.sparse:
-        rows = least_squares_rows(
-            asm,
-            x[None],
-            lam[None],
-            f[None],
-            g_hat[None],
-            stack.r[None],
-            (split.lam[None], split.f[None]),
-            apex_level,
-            settings,
-        )
-        if rows[0][0]:
-            return Split(rows[1][0], rows[2][0], rows[3][0])
-        return split
-    pushing = split.lam > settings.positive_force * float(np.max(np.abs(split.lam)))
-    cols = np.flatnonzero((owner < 0) | pushing[np.maximum(owner, 0)])
-    y = _least_squares(P[:, cols], G[:, cols], b, y[cols], asm.m, settings)
-    if y is not None:
-        exact = split_of(y, cols)
-        if _inside(exact.lam, exact.f, stack, settings.equilibrium_tolerance):
-            return exact
-    return split
+    cones = (int(np.sum(surface)), stack.k[apex & stack.has_offset])
+    given = None
+    if asm.sparse:  # the route's split, in the unknowns (Z's columns are apart)
+        given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
+        given = given / np.asarray(Z.multiply(Z).sum(axis=0)).ravel()
+    y = _rule(_wrenches(asm, Z), G, b, owner, cones, settings, given)
+    return (
+        None if y is None else _split_of(stack, Z @ y, keep_lam, keep_f, apex & ~stack.has_offset)
+    )
 
 
 def least_squares_rows(
@@ -157,19 +119,14 @@ def least_squares_rows(
 ) -> tuple[NDArray[np.bool_], FloatArray, FloatArray, FloatArray]:
     """``least_squares_split`` of B answers at once (rows of ``x``, ``lam``,
     ``f``, ``g_hat``, each with its own cone ``radii`` and, if given,
-    ``centres``; dense models), on the cone limits that bind a split ``near`` it.
+    ``centres``; dense models). ``near = (lam, f)``: rows of a split close to
+    each row's (a neighbouring sample's): its touching contacts with no force
+    are held unloaded in one stacked least squares (``_least_squares``);
+    the rows where that is not the program's optimum take the rule one by
+    one (``_rule``).
 
-    ``near = (lam, f)``: rows of a split close to each row's, such as the
-    cone program's answer or a neighbouring sample's split. Its touching
-    contacts with no force are left unloaded (the least-squares split of all
-    would pull on them), and its faces whose force reaches their rim
-    (``|f_i| = lam_i``: the centre of pressure on the rim) keep it there.
-    The split is the least-squares one with those limits held as
-    equalities, by Newton from ``near`` (``_split_newton``). It is the
-    rule's only if no other limit is broken and none of these could be let
-    go with profit (their multipliers are >= 0).
-
-    Returns the mask of the rows whose split is the rule's, and every row's
+    Returns the mask of the rows whose split is the rule's (or the row's
+    own, where one split balances the loads), and every row's
     ``(lam, f, nu)`` (the rule's where the mask holds)."""
     stack = asm.stack
     B, n_e = x.shape[0], asm.E.shape[0]
@@ -178,134 +135,212 @@ def least_squares_rows(
     b = g_hat - stack.adjoint(keep_f, keep_lam)
     ok = np.zeros(B, dtype=bool)
     lam, f, nu = lam.copy(), f.copy(), np.zeros((B, n_e))
-    faces = apex & stack.has_offset & (stack.k > 0)
-    lam_n, f_n = near
+    lam_n = near[0]
     top = np.max(np.abs(lam_n), axis=1, keepdims=True, initial=0.0)
-    pushing = lam_n > settings.noise_force * top  # below: the cone program's round-off
-    on_rim = np.sqrt(stack.segment_sum(f_n * f_n)) >= (1.0 - settings.apex) * lam_n
     # only one-sign unknowns are held at 0: a surface force, a one-sided
     # limit's (a ball at its centre has a vector of either sign)
-    unloaded = ~pushing & (surface | (apex & (stack.k == 0)))
-    rim = pushing & on_rim & faces
-    start = np.concatenate([f_n - keep_f, lam_n - keep_lam, np.zeros((B, n_e))], axis=1)
+    unloaded = (lam_n <= settings.noise_force * top) & (surface | (apex & (stack.k == 0)))
     # rows whose contacts touch alike share the shape of their unknowns
-    first_kind, kind = linalg.distinct_rows(np.hstack([surface, apex, pressed, unloaded, rim]))
+    first_kind, kind = linalg.distinct_rows(np.hstack([surface, apex, pressed, unloaded]))
     for rows in (np.flatnonzero(kind == g) for g in range(len(first_kind))):
-        s, a, d, e = surface[rows[0]], apex[rows[0]], unloaded[rows[0]], rim[rows[0]]
+        s, a, p = surface[rows[0]], apex[rows[0]], pressed[rows[0]]
         # rows that pose the same problem (a study whose plays vary and whose
         # loads do not, on contacts whose directions do not move) are solved once
-        first, same = linalg.distinct_rows(
-            np.hstack([b[rows], u[rows], start[rows], lam[rows][:, pressed[rows[0]]]])
-        )
+        first, same = linalg.distinct_rows(np.hstack([b[rows], u[rows], lam[rows][:, p]]))
         Z, owner = _unknowns(stack, s, a, u[rows[first]], n_e, False)
         if Z.shape[-1] == 0:
             continue
-        G, b_rows = _pressing(
-            _work(asm, Z), b[rows[first]], owner, pressed[rows[0]], lam[rows[first]]
-        )
-        # a split that one balance determines is the row's own (as in
-        # ``least_squares_split``): its touching contacts are not redundant
-        determinate = _determined_rows(G, settings.free_motion_rcond)[same]
-        ok[rows[determinate]] = True
-        if np.all(determinate):
-            continue
+        G, b_rows = _pressing(_work(asm, Z), b[rows[first]], owner, p, lam[rows[first]])
+        determinate = _determined_rows(G, settings.free_motion_rcond)
+        ok[rows[determinate[same]]] = True
         P = _wrenches(asm, Z)
-        cone = np.maximum(owner, 0)
-        keep = np.flatnonzero((owner < 0) | ~d[cone])
-        # a face's columns: its lam first, then its force vector
-        rims = [np.flatnonzero(owner == i) for i in np.flatnonzero(e)]
-        y0 = np.einsum("brj,br->bj", Z, start[rows[first]]) / np.sum(Z * Z, axis=1)
-        y, optimal = _split_newton(P, G, b_rows, keep, rims, settings, y0)
-        z = (Z @ y[:, :, None])[same, :, 0]
-        out = _split_of(stack, z, keep_lam[rows], keep_f[rows], a & ~stack.has_offset)
-        split = rows[~determinate]
-        lam[split], f[split], nu[split] = (v[~determinate] for v in (out.lam, out.f, out.nu))
-        inside = _inside(out.lam, out.f, stack, settings.equilibrium_tolerance)
-        ok[split] = (optimal[same] & inside)[~determinate]
+        cones = (int(np.sum(s)), stack.k[a & stack.has_offset])
+        keep = np.flatnonzero((owner < 0) | ~unloaded[rows[0]][np.maximum(owner, 0)])
+        y, optimal = _least_squares(P, G, b_rows, keep, cones, settings)
+        for j in np.flatnonzero(~optimal & ~determinate):
+            y_j = _rule(P[j], G[j], b_rows[j], owner, cones, settings)
+            if y_j is not None:
+                y[j], optimal[j] = y_j, True
+        z = (Z @ y[:, :, None])[:, :, 0]
+        out = _split_of(stack, z, keep_lam[rows[first]], keep_f[rows[first]], a & ~stack.has_offset)
+        split = ~determinate[same]
+        at = rows[split]
+        lam[at], f[at], nu[at] = (v[same][split] for v in (out.lam, out.f, out.nu))
+        ok[at] = optimal[same][split]
     return ok, lam, f, nu
 
 
-def _split_newton(
+#: The split's cones: the number of surface forces (the first unknowns,
+#: each >= 0), then each face's vector size (its ``lam_i``, then ``f_i``).
+Cones = tuple[int, IntArray]
+
+
+def _rule(
+    P: Any,
+    G: Any,
+    b: FloatArray,
+    owner: IntArray,
+    cones: Cones,
+    settings: SolverSettings,
+    given: FloatArray | None = None,
+) -> FloatArray | None:
+    """The split's ``y``. A dense model (``given`` None) first takes the
+    least squares (``_least_squares``): where it lies in every cone it is
+    the rule's. A sparse model's program starts from ``given``, the
+    route's split. The program's answer
+    (``_program``) is then finished on a dense model by the least squares
+    on the forces it leaves pushing, kept where that is the program's
+    optimum: the program stops at its tolerance, and a contact whose force
+    and multiplier both vanish at the optimum (a lathe slide's corner) ends
+    5e-5 of the largest force off it."""
+    dense = given is None
+    if given is None:
+        y, optimal = _least_squares(
+            P[None], G[None], b[None], np.arange(G.shape[1]), cones, settings
+        )
+        if optimal[0]:
+            return np.asarray(y[0])
+        given = np.zeros(G.shape[1])
+    found = _program(P, G, b, given, owner, cones, settings, not dense)
+    if found is None or not dense:
+        return None if found is None else found[0]
+    y, held = found
+    keep = np.setdiff1d(np.arange(len(y)), held)
+    exact, optimal = _least_squares(P[None], G[None], b[None], keep, cones, settings)
+    return exact[0] if optimal[0] else y
+
+
+def _least_squares(
     P: FloatArray,
     G: FloatArray,
     b: FloatArray,
     keep: IntArray,
-    rims: list[IntArray],
+    cones: Cones,
     settings: SolverSettings,
-    y0: FloatArray | None = None,
 ) -> tuple[FloatArray, NDArray[np.bool_]]:
-    """The ``y`` (rows) of least ``|P y|^2 / 2`` with ``G y = b``, the
-    unknowns outside ``keep`` at 0 and each face of ``rims`` (its columns:
-    ``lam_i``, then ``f_i``) with ``|f_i| = lam_i``: Newton on the KKT
-    equations from ``y0`` (needed with rims: their force's direction; else
-    the first step is the least-squares split, the problem being linear).
-    Also the mask of the rows where that is the optimum of the cone
-    program: the equations hold (``newton_accept``), each rim's multiplier
-    is >= 0 and so is the gradient on each unknown held at 0 (to
-    ``equilibrium_tolerance``)."""
-    B, m, n_y = G.shape
-    Pk, Gk = P[:, :, keep], G[:, :, keep]
-    Q = Pk.transpose(0, 2, 1) @ Pk
-    where = {int(c): j for j, c in enumerate(keep)}
-    rims = [np.array([where[int(c)] for c in cols]) for cols in rims]
-    nk, nr = len(keep), len(rims)
-    n = nk + m + nr
-    z = np.zeros((B, n))  # y on keep, mu, eta
-    if y0 is not None:
-        z[:, :nk] = y0[:, keep]
-    ok = np.zeros(B, dtype=bool)
-    scale = np.maximum(np.max(np.abs(b), axis=1, initial=0.0), TINY)
-    # G's rows depend on each other where no contact works (a free spin):
-    # a regularization of mu that small leaves every step exact to round-off
-    # on a consistent system (the steps refine it), and LU never meets a
-    # singular matrix
-    K0 = np.zeros((B, n, n))
-    K0[:, :nk, :nk] = Q
-    K0[:, :nk, nk : nk + m] = Gk.transpose(0, 2, 1)
-    K0[:, nk : nk + m, :nk] = Gk
-    size = np.max(np.abs(K0), axis=(1, 2), initial=1.0)
-    K0[:, nk + np.arange(m), nk + np.arange(m)] = -settings.kkt_round_off * size[:, None]
-    polished = False
-    for step in range(settings.newton_steps + 1):
-        yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
-        K = K0.copy()
-        grad = (Q @ yk[:, :, None])[:, :, 0] + np.einsum("bmy,bm->by", Gk, mu)
-        c = np.zeros((B, nr))
-        for j, cols in enumerate(rims):
-            at, fc = cols[0], cols[1:]
-            size = np.maximum(np.linalg.norm(yk[:, fc], axis=1), TINY)
-            w = yk[:, fc] / size[:, None]
-            c[:, j] = size - yk[:, at]
-            row = np.zeros((B, nk))
-            row[:, fc], row[:, at] = w, -1.0
-            grad += eta[:, j : j + 1] * row
-            curve = (np.eye(len(fc))[None] - w[:, :, None] * w[:, None, :]) / size[:, None, None]
-            K[:, fc[:, None], fc[None, :]] += eta[:, j, None, None] * curve
-            K[:, nk + m + j, :nk] = row
-            K[:, :nk, nk + m + j] = row
-        F = np.concatenate([grad, (Gk @ yk[:, :, None])[:, :, 0] - b, c], axis=1)
-        ok = np.max(np.abs(F), axis=1) <= settings.newton_accept * scale
-        if np.all(ok):
-            if polished:
-                break
-            polished = True  # one more step: from there quadratic to round-off
-        if step == settings.newton_steps:
-            break  # ``ok`` is that of the last step's answer
-        z += linalg.solve_stack(K, -F, settings.kkt_plain, settings.lstsq_rcond)
-    yk, mu, eta = z[:, :nk], z[:, nk : nk + m], z[:, nk + m :]
+    """For each row of the stacks ``P``, ``G``, ``b``: the ``y`` of least
+    ``|P y|`` with ``G y = b`` and the unknowns outside ``keep`` at 0 (held
+    unloaded), from the pseudo-inverses of ``G`` (its singular values below
+    ``free_motion_rcond`` of the largest are dependent rows') and of ``P``
+    on the null space of ``G``. Also the mask of the rows where it is the
+    program's optimum (its conditions, to ``equilibrium_tolerance``): it
+    balances the loads, lies in every cone, and no held unknown would lower
+    ``|P y|`` by taking load (the gradient on each, with the balance's
+    multipliers, is >= 0)."""
+    B, _, n_y = G.shape
+    rcond, tol = settings.free_motion_rcond, settings.equilibrium_tolerance
+    Gk, Pk = G[:, :, keep], P[:, :, keep]
+    G_pinv = np.linalg.pinv(Gk, rcond=rcond)
+    y_k = G_pinv @ b[:, :, None]
+    null = np.eye(len(keep)) - G_pinv @ Gk  # the projector on G's null space
+    y_k -= null @ (np.linalg.pinv(Pk @ null, rcond=rcond) @ (Pk @ y_k))
     y = np.zeros((B, n_y))
-    y[:, keep] = yk
-    # multipliers of the limits: each rim's, and the gradient on each unknown at 0
-    size = settings.equilibrium_tolerance * np.maximum(
-        np.max(np.abs(Q @ yk[:, :, None]), axis=(1, 2), initial=0.0), TINY
-    )
+    y[:, keep] = y_k[:, :, 0]
+    # each force against those it shares a body's balance with: judged
+    # against all, a table's foot pulled 0.75 N beside a block under 1e8 N
+    works = G != 0
+    near = np.max(works * np.abs(y)[:, None, :], axis=2, initial=0.0)
+    top = np.maximum(np.max(works * near[:, :, None], axis=1, initial=0.0), TINY)
+    size_b = np.maximum(np.max(np.abs(b), axis=1, initial=0.0), TINY)
+    miss = np.max(np.abs((G @ y[:, :, None])[:, :, 0] - b), axis=1, initial=0.0)
+    optimal = miss <= tol * size_b
+    n_s, k_faces = cones
+    optimal &= np.all(y[:, :n_s] >= -tol * top[:, :n_s], axis=1)
+    at = n_s
+    for k in k_faces.tolist():
+        size = np.linalg.norm(y[:, at + 1 : at + 1 + k], axis=1)
+        optimal &= size <= y[:, at] + tol * top[:, at]
+        at += 1 + k
     held = np.setdiff1d(np.arange(n_y), keep)
     if len(held):
         grad = (P.transpose(0, 2, 1) @ (P @ y[:, :, None]))[:, :, 0]
-        grad += np.einsum("bmy,bm->by", G, mu)
-        ok &= np.all(grad[:, held] >= -size[:, None], axis=1)
-    ok &= np.all(eta >= -size[:, None], axis=1)
-    return y, ok
+        mu = -(G_pinv.transpose(0, 2, 1) @ grad[:, keep, None])
+        grad += (G.transpose(0, 2, 1) @ mu)[:, :, 0]
+        size = tol * np.maximum(np.max(np.abs(grad), axis=1, initial=0.0), TINY)
+        optimal &= np.all(grad[:, held] >= -size[:, None], axis=1)
+    return y, optimal
+
+
+def _program(
+    P: Any,
+    G: Any,
+    b: FloatArray,
+    given: FloatArray,
+    owner: IntArray,
+    cones: Cones,
+    settings: SolverSettings,
+    sparse: bool,
+) -> tuple[FloatArray, IntArray] | None:
+    """The ``y`` of least ``|P y|`` in its ``cones`` with ``G y = b``: one
+    Clarabel call, refined as the model's interior point is
+    (``conic.refined``). A sparse model's is written on ``z = y - given``,
+    ``given`` a split that balances the loads, with ``G z = 0``: consistent
+    even where G's rows depend on each other (a bearing chain's: written
+    ``G y = b``, its program ran out of steps). Each part
+    of the mechanism the program joins (``_part_scales``) is posed at its
+    own size, so that the tolerance applies to each part's forces. Also the
+    one-sign unknowns the program holds at 0 (its dual above its value)."""
+    G, P = sp.csr_matrix(G), sp.csr_matrix(P)
+    size_row, size = _part_scales(G, P, owner, b)
+    miss = np.zeros_like(b) if sparse else b - G @ given
+    given_hat = np.divide(given, size, out=np.zeros_like(given), where=size > 0)
+    m, n_y = G.shape
+    n_s, k_faces = cones
+    n_cone = n_s + int(np.sum(k_faces + 1))
+    kinds: list[Any] = [clarabel.ZeroConeT(m)] if m else []
+    if n_s:
+        kinds.append(clarabel.NonnegativeConeT(n_s))
+    kinds += [
+        clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
+        for k in k_faces
+    ]
+    # y = size * y_hat: each part's rows and unknowns divided by its size
+    # leave G and the optimum as they are (both separable across parts)
+    Q = sp.csc_matrix(P.T @ P)
+    sol = clarabel.DefaultSolver(
+        sp.triu(Q, format="csc"),
+        Q @ given_hat,
+        sp.vstack([G, -sp.eye(n_cone, n_y)], format="csc"),
+        np.r_[
+            np.divide(miss, size_row, out=np.zeros_like(b), where=size_row > 0), given_hat[:n_cone]
+        ],
+        kinds,
+        conic.options(settings, refine=conic.refined(settings, sparse)),
+    ).solve()
+    if not conic.has_answer(sol):
+        return None
+    s, z = np.asarray(sol.s)[m:], np.asarray(sol.z)[m:]
+    one_sign = np.r_[np.arange(n_s), n_s + (np.cumsum(k_faces + 1) - k_faces - 1)[k_faces == 0]]
+    held = one_sign[s[one_sign] <= z[one_sign]].astype(np.intp)
+    return (given_hat + np.asarray(sol.x)) * size, held
+
+
+def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The size of the part of the split's program each row of ``G`` and
+    each unknown is in: the largest ``|b|`` on the part's rows. A part is what
+    a row of ``G`` (a body's balance), a row of ``P`` (a wrench) or a cone
+    (``owner``) joins, directly or through others. Posed at the size of all
+    the loads, a table on four feet beside a block welded under a load 1e8
+    times the table's had its feet's split decided to the block's tolerance
+    (8 N off the rule's, of 60); the cone joins what the balance may not (a
+    face's force and its force vector: two thrust collars). A part with no
+    load has size 0: its split is 0."""
+    from scipy.sparse.csgraph import connected_components  # this route only: 0.02 s to import
+
+    coned = np.flatnonzero(owner >= 0)
+    cones = sp.csr_matrix(
+        (np.ones(len(coned)), (owner[coned], coned)),
+        shape=(int(owner.max(initial=-1)) + 1, len(owner)),
+    )
+    pattern = sp.vstack([sp.csr_matrix(G), sp.csr_matrix(P), cones], format="csr")
+    pattern.eliminate_zeros()
+    pattern.data[:] = 1.0
+    graph = sp.bmat([[None, pattern], [pattern.T, None]], format="csr")
+    _, label = connected_components(graph, directed=False)
+    size = np.zeros(int(label.max()) + 1)
+    m = G.shape[0]
+    np.maximum.at(size, label[:m], np.abs(b))
+    return size[label[:m]], size[label[pattern.shape[0] :]]
 
 
 def _classes(
@@ -486,189 +521,3 @@ def _wrenches(asm: Assembly, Z: Any) -> Any:
     P_full[o_rows, n_rows + o_cols] = offset
     P_full[n_ball:, n_rows + n :] = w_fixed[:, None] * T.wrench_fixed
     return P_full @ Z
-
-
-def _least_squares(
-    P: Any, G: Any, b: FloatArray, given: FloatArray, m: int, settings: SolverSettings
-) -> FloatArray | None:
-    """The ``y`` of least ``|P y|`` with ``G y = b``. Dense: from an SVD of
-    G (rows below ``rcond`` of the largest are dependent ones), to machine
-    precision. Sparse: ``given + z``, a split near the answer (``G given = b``
-    to round-off) corrected by the ``z`` of least ``|P (given + z)|`` with
-    ``G z = b - G given``, each body's six balance rows (the first ``m``)
-    taken by their span (``_spanned_balance``): one KKT solve, refined until
-    ``z`` settles to round-off (``linalg.settled_solve``). None when it does
-    not settle, or ``G y = b`` holds neither to
-    ``kkt_refined`` of ``b`` nor as well as for ``given``: a subset of the
-    contacts (those the cone program loads) may not balance the loads
-    exactly, and its least-squares answer then misses by more than the split
-    it would refine (a 100-shaft bearing chain: 5.9e-9 of 0.08, against
-    1.1e-11 for the cone program's split, to which it fell back)."""
-    n_y = G.shape[1]
-    round_off, kkt_round_off = settings.round_off, settings.kkt_round_off
-    if not linalg.is_sparse(G):
-        y, ok = _split_newton(P[None], G[None], b[None], np.arange(n_y), [], settings)
-        return y[0] if ok[0] else None
-    size_b = float(np.max(np.abs(b), initial=0.0))
-    PtP = sp.csr_matrix(P.T @ P)
-    T = _spanned_balance(G, m, settings.free_motion_rcond)
-    G_t = sp.vstack([T @ G[:m], G[m:]], format="csr")
-    miss_given = b - G @ given
-    K = sp.bmat([[PtP, G_t.T], [G_t, None]], format="csc")
-    rhs = np.r_[-(PtP @ given), T @ miss_given[:m], miss_given[m:]]
-    eps = kkt_round_off * float(abs(K).max())
-    settle = round_off * max(float(np.max(np.abs(given), initial=0.0)), size_b)
-    step = linalg.settled_solve(K, rhs, n_y, settle, eps)
-    if step is None:
-        return None
-    y = np.asarray(given + step[:n_y])
-    miss = float(np.max(np.abs(G @ y - b), initial=0.0))
-    bar = max(settings.kkt_refined * size_b, float(np.max(np.abs(miss_given), initial=0.0)))
-    return y if miss <= bar else None
-
-
-def _spanned_balance(G: Any, m: int, rcond: float) -> sp.csr_matrix:
-    """``T`` (r, m): each body's six balance rows (the first ``m`` rows of
-    the sparse ``G``) replaced by an orthonormal basis of their span: the
-    left singular vectors of the body's block whose singular values are
-    above ``rcond`` of the largest of all, or the rows themselves where
-    their Gram matrix shows them clearly independent (``GRAM_CERTAIN``:
-    most bodies of a closed loop; an SVD each cost 0.2 s on 10,000). A
-    body's rows often depend on each other (a free spin's row is empty; a
-    tube's three contacts span four of its six), which leaves the
-    least-squares KKT system singular: regularized, its refinement crawled
-    where the balance is ill-conditioned (a 1,000-segment tube string: 115
-    rounds; taken by their span, the system is regular and 4 rounds of its
-    plain factors settle it)."""
-    rows_m = sp.csr_matrix(G[:m], copy=True)
-    rows_m.sum_duplicates()  # a repeated entry adds up, as in any product
-    top = rows_m.tocoo()
-    n_y = G.shape[1]
-    code = (top.row // 6).astype(np.int64) * n_y + top.col
-    pairs, entry_pair = np.unique(code, return_inverse=True)
-    pair_body = pairs // n_y
-    count = np.bincount(pair_body, minlength=m // 6)
-    column = np.arange(len(pairs)) - (np.cumsum(count) - count)[pair_body]
-    body = pair_body[entry_pair]
-    blocks = []
-    for c in np.unique(count[count > 0]).tolist():  # bodies with as many unknowns, together
-        same = np.flatnonzero(count == c)
-        slot = np.full(m // 6, -1)
-        slot[same] = np.arange(len(same))
-        block = np.zeros((len(same), 6, c))
-        mine = slot[body] >= 0
-        block[slot[body[mine]], top.row[mine] % 6, column[entry_pair[mine]]] = top.data[mine]
-        blocks.append((same, block, np.linalg.eigvalsh(block @ block.transpose(0, 2, 1))))
-    if not blocks:
-        return sp.csr_matrix((0, m))
-    top_square = max(float(w[:, -1].max()) for _, _, w in blocks)  # largest singular value, squared
-    certain = max(GRAM_CERTAIN, GRAM_MARGIN * rcond**2) * top_square
-    cutoff = rcond * np.sqrt(top_square)
-    bodies: list[IntArray] = []
-    vectors: list[FloatArray] = []
-    for same, block, w in blocks:
-        clear = w[:, 0] > certain
-        bodies.append(np.repeat(same[clear], 6))
-        vectors.append(np.tile(np.eye(6), (int(np.sum(clear)), 1)))
-        U, sv, _ = np.linalg.svd(block[~clear], full_matrices=False)
-        b_idx, e_idx = np.nonzero(sv > cutoff)
-        bodies.append(same[~clear][b_idx])
-        vectors.append(U[b_idx, :, e_idx])
-    owner = np.concatenate(bodies)
-    order = np.argsort(owner, kind="stable")  # by body; a body's as found
-    n_t = len(order)
-    return sp.csr_matrix(
-        (
-            np.concatenate(vectors)[order].ravel(),
-            (np.repeat(np.arange(n_t), 6), (6 * owner[order][:, None] + np.arange(6)).ravel()),
-        ),
-        shape=(n_t, m),
-    )
-
-
-def _inside(lam: FloatArray, f: FloatArray, stack: BallStack, tol: float) -> Any:
-    """Whether every contact pushes (``lam >= 0``) with its force vector
-    inside its cone (``|f_i| <= lam_i``), to ``tol`` of the largest force:
-    one bool, or a mask over rows."""
-    if not lam.shape[-1]:
-        return np.ones(lam.shape[:-1], dtype=bool) if lam.ndim > 1 else True
-    size = tol * np.maximum(np.max(np.abs(lam), axis=-1, keepdims=True), TINY)
-    f_norm = np.sqrt(stack.segment_sum(f * f))
-    inside = np.all(lam >= -size, axis=-1) & np.all(f_norm <= lam + size, axis=-1)
-    return inside if lam.ndim > 1 else bool(inside)
-
-
-def _part_scales(G: Any, P: Any, owner: IntArray, given: FloatArray) -> FloatArray:
-    """Per unknown, the size of the forces of its part of the mechanism,
-    relative to the largest part's: the largest ``|given|`` among the
-    unknowns joined to it, directly or through others, by a row of ``G``
-    (a body's balance), a row of ``P`` (a wrench) or their cone
-    (``owner``). The split's program is separable across parts, so each
-    part's unknowns divided by their own size leave its answer the same,
-    while its tolerance applies to each part's forces alike: a table on
-    four feet beside a block welded under a load 1e6 times the table's had
-    its feet's split decided to the block's tolerance (8 N off the rule's,
-    of 60). The cone joins what the balance may not: a face's force and
-    its force vector, scaled apart, moved two thrust collars' split by
-    5.7 N of 50. A part whose ``given`` is 0 carries no load and its split
-    is 0: its size 0 keeps it there."""
-    from scipy.sparse.csgraph import connected_components  # this route only: 0.02 s to import
-
-    coned = np.flatnonzero(owner >= 0)
-    cones = sp.csr_matrix(
-        (np.ones(len(coned)), (owner[coned], coned)),
-        shape=(int(owner.max(initial=-1)) + 1, len(owner)),
-    )
-    pattern = sp.vstack([sp.csr_matrix(G), sp.csr_matrix(P), cones], format="csr")
-    pattern.eliminate_zeros()
-    rows = pattern.shape[0]
-    pattern.data[:] = 1.0
-    graph = sp.bmat([[None, pattern], [pattern.T, None]], format="csr")
-    _, label = connected_components(graph, directed=False)
-    part = label[rows:]
-    size = np.zeros(int(label.max()) + 1)
-    np.maximum.at(size, part, np.abs(given))
-    # relative to the largest part's, which keeps its scale: a mechanism of
-    # one part poses the program as before (a uniform rescale moved the
-    # program's path, and file-order scans by 1e2 either way)
-    return np.asarray(size[part] / max(float(size.max()), TINY))
-
-
-def _cone_program(
-    P: Any,
-    G: Any,
-    given: FloatArray,
-    n_s: int,
-    k_faces: IntArray,
-    settings: SolverSettings,
-    refine: bool,
-) -> FloatArray | None:
-    """The ``y`` of least ``|P y|`` among ``y = given + z`` with ``G z = 0``
-    (the same work as the solver's own split ``given``), surface forces
-    non-negative and each face's ``(lam_i, f_i)`` in its cone: one Clarabel
-    call, ``refine``d or not (``sparse_interior_refinement``). Written on
-    ``z``, the equalities are consistent even where G's rows depend on each
-    other."""
-    m, n_y = G.shape
-    n_cone = n_s + int(np.sum(k_faces + 1))
-    cone_part = sp.eye(n_cone, n_y, format="csr")
-    A = sp.vstack([sp.csr_matrix(G), -cone_part], format="csc")
-    cones: list[Any] = [clarabel.ZeroConeT(m)] if m else []
-    if n_s:
-        cones.append(clarabel.NonnegativeConeT(n_s))
-    cones += [
-        clarabel.SecondOrderConeT(int(k) + 1) if k else clarabel.NonnegativeConeT(1)
-        for k in k_faces
-    ]
-    Q = sp.csc_matrix(P.T @ P)
-    sol = clarabel.DefaultSolver(
-        sp.triu(Q, format="csc"),
-        Q @ given,
-        A,
-        np.r_[np.zeros(m), given[:n_cone]],
-        cones,
-        conic.options(settings, refine=refine),
-    ).solve()
-    if not conic.has_answer(sol):
-        return None
-    return np.asarray(given + np.asarray(sol.x))
