@@ -497,15 +497,15 @@ def _least_squares(
     to round-off) corrected by the ``z`` of least ``|P (given + z)|`` with
     ``G z = b - G given``, each body's six balance rows (the first ``m``)
     taken by their span (``_spanned_balance``): one KKT solve, refined until
-    ``z`` settles to round-off (``linalg.settled_solve``). None when it does
-    not settle, or ``G y = b`` holds neither to
+    ``z`` solves it to round-off (``linalg.solve_kkt``). None when it does
+    not, or ``G y = b`` holds neither to
     ``kkt_refined`` of ``b`` nor as well as for ``given``: a subset of the
     contacts (those the cone program loads) may not balance the loads
     exactly, and its least-squares answer then misses by more than the split
     it would refine (a 100-shaft bearing chain: 5.9e-9 of 0.08, against
     1.1e-11 for the cone program's split, to which it fell back)."""
     n_y = G.shape[1]
-    round_off, kkt_round_off = settings.round_off, settings.kkt_round_off
+    kkt_round_off = settings.kkt_round_off
     if not linalg.is_sparse(G):
         y, ok = _split_newton(P[None], G[None], b[None], np.arange(n_y), [], settings)
         return y[0] if ok[0] else None
@@ -516,10 +516,12 @@ def _least_squares(
     miss_given = b - G @ given
     K = sp.bmat([[PtP, G_t.T], [G_t, None]], format="csc")
     rhs = np.r_[-(PtP @ given), T @ miss_given[:m], miss_given[m:]]
-    eps = kkt_round_off * float(abs(K).max())
-    settle = round_off * max(float(np.max(np.abs(given), initial=0.0)), size_b)
-    step = linalg.settled_solve(K, rhs, n_y, settle, eps)
-    if step is None:
+    tol = settings.kkt_refined * max(linalg.largest(rhs), size_b)
+    try:
+        step, _ = linalg.solve_kkt(
+            K, rhs, n_y, tol=tol, refinements=settings.kkt_refinements, shift=kkt_round_off
+        )
+    except linalg.SingularSystemError:
         return None
     y = np.asarray(given + step[:n_y])
     miss = float(np.max(np.abs(G @ y - b), initial=0.0))
