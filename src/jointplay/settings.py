@@ -116,11 +116,11 @@ class SolverSettings:
     #: (relative to the right-hand side); a regularized one, ``kkt_refined``.
     kkt_plain: float = 1e-8
     kkt_refined: float = 1e-10
-    #: At most this many steps of iterative refinement after a KKT solve's
-    #: one factorization (``linalg.solve_kkt``): a regular system needs one
-    #: or two; a regularized one shrinks its error by the shift over the
-    #: pivot each step.
-    kkt_refinements: int = 8
+    #: Steps of iterative refinement after a KKT solve's one factorization
+    #: (``linalg.solve_kkt``, and a large model's rigid forces'
+    #: ``linalg.lstsq``): a regular system needs one or two; a regularized
+    #: one shrinks its error by the shift over the pivot each step.
+    kkt_refinements: int = 4
     #: Newton has stalled when a step gains less than this factor on the best
     #: of the three before it (round-off, or a slow mode of a long chain), and
     #: stops after at most ``newton_steps`` steps (from an interior point or a

@@ -197,10 +197,10 @@ def solve_kkt(
     shift: float = 0.0,
 ) -> tuple[FloatArray, Factors | None]:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
-    equations) from one LU factorization, refined against K at most
-    ``refinements`` times until every ``|rhs - K step|`` is below ``tol`` (a
-    number or one per row; ``inf``: no check). Raises ``SingularSystemError``
-    when K cannot be factored or the residual stays above ``tol``.
+    equations) from one LU factorization, refined against K ``refinements``
+    times (each a solve with the factors: cheap beside the factorization).
+    Raises ``SingularSystemError`` when K cannot be factored or a residual
+    ``|rhs - K step|`` is then above ``tol`` (a number or one per row).
 
     ``shift`` > 0: the factors are those of the quasi-definite ``K + D``,
     ``D`` ``+shift`` on the first ``n_primal`` unknowns and ``-shift`` on the
@@ -210,21 +210,14 @@ def solve_kkt(
     converges to its solution nearest 0 in the norm ``D``. Returned with the
     step: K's own factors (their pivots tell whether K is regular), None
     when regularized."""
-    n = K.shape[0]
     factors = _factored(K if not shift else K + _diag(_quasi_definite(K, n_primal, shift), K))
     if factors is None:
         raise SingularSystemError
-    step = np.zeros(n)
-    miss = rhs
-    for solves in range(refinements + 2):
-        if np.all(np.abs(miss) <= tol):
-            return np.asarray(step, dtype=np.float64), None if shift else factors
-        if solves > refinements:
-            break
-        step = step + np.asarray(factors(miss), dtype=float)
-        if not np.all(np.isfinite(step)):
-            break
-        miss = rhs - K @ step
+    step = np.asarray(factors(rhs), dtype=float)
+    for _ in range(refinements):
+        step = step + np.asarray(factors(rhs - K @ step), dtype=float)
+    if np.all(np.abs(rhs - K @ step) <= tol):  # NaN: not solved
+        return np.asarray(step, dtype=np.float64), None if shift else factors
     raise SingularSystemError
 
 
@@ -332,11 +325,15 @@ def lstsq(A: Matrix, b: FloatArray, rcond: float, refinements: int) -> FloatArra
     (they square A's singular values; a smaller shift leaves the solve's
     round-off along A's null space at eps over it), one LU, refined
     ``refinements`` times against A itself: a proximal-point iteration,
-    which converges to the least-norm solution."""
+    which converges to the least-norm solution. Raises
+    ``SingularSystemError`` where it cannot be done."""
     if A.shape[1] == 0:
         return np.zeros(0)
     if not sp.issparse(A):
-        return np.asarray(np.linalg.lstsq(A, b, rcond=rcond)[0])
+        try:
+            return np.asarray(np.linalg.lstsq(A, b, rcond=rcond)[0])
+        except np.linalg.LinAlgError as exc:  # its SVD did not converge (an entry not finite)
+            raise SingularSystemError from exc
     AtA = sp.csc_matrix(A.T @ A)
     shift = np.sqrt(rcond) * max(float(abs(AtA).max()), TINY)
     factors = _factored(AtA + shift * sp.identity(AtA.shape[0], format="csc"))

@@ -384,9 +384,16 @@ def newton(
                     try:
                         step, factors = solve(shift)
                     except linalg.SingularSystemError:
-                        if shift:
-                            raise
-                        step, factors = solve(settings.kkt_round_off)  # singular: regularized
+                        try:
+                            if shift:
+                                raise
+                            step, factors = solve(settings.kkt_round_off)  # singular: regularized
+                        except linalg.SingularSystemError:
+                            if sparse:
+                                raise
+                            # no step solves it (a degenerate set): its least squares
+                            step = linalg.lstsq(Kone, -F[0], settings.lstsq_rcond, 0)
+                            factors = None
                     if (
                         prox
                         and sparse
