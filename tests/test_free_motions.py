@@ -14,7 +14,7 @@ from jointplay.assembly import assemble
 from jointplay.errors import SolverError
 from jointplay.io.generate import bearing_chain, tube_string
 from jointplay.numerics import linalg
-from jointplay.numerics.free_motions import column_rank_deficit, null_basis
+from jointplay.numerics.free_motions import Eliminated, null_basis
 from jointplay.settings import DEFAULT
 from jointplay.solver import Workspace, pipeline
 
@@ -42,7 +42,7 @@ def assert_same_null_space(C: sp.csr_matrix, m: int) -> None:
     # subspace, and these round-off bounds, hold on every machine
     N = null_basis(C, m, RCOND, ROUND_OFF).toarray()
     dense = linalg.null_space(C.toarray(), m, RCOND, ROUND_OFF)
-    assert N.shape[1] == dense.shape[1] == column_rank_deficit(C, m, RCOND)
+    assert N.shape[1] == dense.shape[1] == Eliminated(C, m, RCOND).deficit
     np.testing.assert_allclose(N.T @ N, np.eye(N.shape[1]), rtol=0, atol=1e-12)
     scale = float(abs(C).max())
     assert np.max(np.abs(C @ N), initial=0.0) <= 1e-12 * scale
@@ -108,7 +108,7 @@ def test_every_free_motion_is_reported() -> None:
 
 def test_a_mechanism_with_no_free_motion_has_no_deficit() -> None:
     C, m = constraint_rows(tube_string(200, closed=True))
-    assert column_rank_deficit(C, m, RCOND) == 0
+    assert Eliminated(C, m, RCOND).deficit == 0
     assert null_basis(C, m, RCOND, ROUND_OFF).shape == (m, 0)
 
 
@@ -144,7 +144,7 @@ def test_columns_that_are_not_six_per_body_are_refused() -> None:
     with pytest.raises(ValueError, match="6 columns per body"):
         null_basis(sp.csr_matrix(np.ones((1, 7))), 7, RCOND, ROUND_OFF)
     with pytest.raises(ValueError, match="6 columns per body"):
-        column_rank_deficit(sp.csr_matrix(np.ones((1, 12))), 6, RCOND)
+        Eliminated(sp.csr_matrix(np.ones((1, 12))), 6, RCOND)
 
 
 @pytest.mark.parametrize("closed", [False, True])

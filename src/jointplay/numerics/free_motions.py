@@ -332,7 +332,7 @@ def null_basis(
     orthogonalized (enough to tell what they move: the QR of vectors that
     run down a long chain is dense, 2 s for 377 of a 10,000-body string).
     ``s_max``: the scale of the threshold, if not C's largest singular value
-    (another matrix's, as in ``column_rank_deficit``)."""
+    (another matrix's: a face's rows counted at the free motions' scale)."""
     return Eliminated(C, m, rcond, s_max).basis(round_off, orthonormal)
 
 
@@ -348,13 +348,6 @@ def _unit_columns(vectors: list[dict[int, FloatArray]], m: int) -> sp.csc_matrix
     )
     norms = np.sqrt(np.asarray(out.multiply(out).sum(axis=0)).ravel())
     return sp.csc_matrix(out @ sp.diags(1.0 / norms))
-
-
-def column_rank_deficit(C: sp.spmatrix, m: int, rcond: float, s_max: float | None = None) -> int:
-    """How many independent motions ``C`` does not move (0: its rows pin
-    every unknown): singular values below ``rcond`` times C's largest, or
-    times ``s_max`` if given (another matrix's scale, to compare with its count)."""
-    return Eliminated(C, m, rcond, s_max).deficit
 
 
 def _back_substitute(

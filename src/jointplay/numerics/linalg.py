@@ -81,15 +81,6 @@ def vstack(mats: Sequence[Matrix], m: int) -> Matrix:
     return np.vstack(parts)
 
 
-def hstack(mats: Sequence[Matrix], rows: int) -> Matrix:
-    parts = [a for a in mats if a.shape[1]]
-    if not parts:
-        return np.zeros((rows, 0))
-    if any(sp.issparse(a) for a in parts):
-        return sp.hstack([sp.csr_matrix(a) for a in parts], format="csr")
-    return np.hstack(parts)
-
-
 def dense(a: Matrix) -> FloatArray:
     return np.asarray(a.toarray()) if sp.issparse(a) else np.asarray(a)
 
@@ -139,7 +130,7 @@ def full_column_rank(rows: Matrix, m: int, rcond: float) -> bool:
     if not sp.issparse(rows):
         sv = np.linalg.svd(rows, compute_uv=False)
         return bool(sv.size and sv[0] > 0 and np.sum(sv > rcond * sv[0]) == m)
-    return free_motions.column_rank_deficit(rows, m, rcond) == 0
+    return free_motions.Eliminated(rows, m, rcond).deficit == 0
 
 
 def full_column_rank_rows(J: FloatArray, rcond: float) -> NDArray[np.bool_]:
@@ -200,7 +191,8 @@ def solve_kkt(
     equations) from one LU factorization, refined against K ``refinements``
     times (each a solve with the factors: cheap beside the factorization).
     Raises ``SingularSystemError`` when K cannot be factored or a residual
-    ``|rhs - K step|`` is then above ``tol`` (a number or one per row).
+    ``|rhs - K step|`` is then above ``tol`` (a number or one per row;
+    ``inf``: the caller checks what it needs).
 
     ``shift`` > 0: the factors are those of the quasi-definite ``K + D``,
     ``D`` ``+shift`` on the first ``n_primal`` unknowns and ``-shift`` on the

@@ -497,8 +497,7 @@ def _least_squares(
     to round-off) corrected by the ``z`` of least ``|P (given + z)|`` with
     ``G z = b - G given``, each body's six balance rows (the first ``m``)
     taken by their span (``_spanned_balance``): one KKT solve, refined until
-    ``z`` solves it to round-off (``linalg.solve_kkt``). None when it does
-    not, or ``G y = b`` holds neither to
+    (``linalg.solve_kkt``). None when K cannot be factored, or ``G y = b`` holds neither to
     ``kkt_refined`` of ``b`` nor as well as for ``given``: a subset of the
     contacts (those the cone program loads) may not balance the loads
     exactly, and its least-squares answer then misses by more than the split
@@ -516,10 +515,9 @@ def _least_squares(
     miss_given = b - G @ given
     K = sp.bmat([[PtP, G_t.T], [G_t, None]], format="csc")
     rhs = np.r_[-(PtP @ given), T @ miss_given[:m], miss_given[m:]]
-    tol = settings.kkt_refined * max(linalg.largest(rhs), size_b)
-    try:
+    try:  # no residual bar: the balance is checked below (the system may be inconsistent)
         step, _ = linalg.solve_kkt(
-            K, rhs, n_y, tol=tol, refinements=settings.kkt_refinements, shift=kkt_round_off
+            K, rhs, n_y, tol=np.inf, refinements=settings.kkt_refinements, shift=kkt_round_off
         )
     except linalg.SingularSystemError:
         return None
