@@ -108,9 +108,10 @@ class SolverSettings:
     #: Double-precision round-off of a well-scaled quantity: where Newton
     #: stops, and what results and eliminations treat as an exact zero.
     round_off: float = 1e-14
-    #: Regularization of a singular KKT system, relative to its largest
-    #: entry: small against every pivot of a well-posed one, large against
-    #: round-off (its refinement then converges to the least-norm solution).
+    #: Regularization of a singular KKT system, relative to each row's
+    #: largest entry (a lever squared beside rows of size 1 alike): small
+    #: against every pivot of a well-posed one, large against round-off (its
+    #: refinement then converges to the solution nearest the current point).
     kkt_round_off: float = 1e-12
     #: A plain KKT solve is refined until its residual is this small
     #: (relative to the right-hand side); a regularized one, ``kkt_refined``.
