@@ -224,13 +224,10 @@ def test_a_singular_system_is_refused(sparse: bool) -> None:
 
 
 @pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
-def test_a_badly_scaled_singular_system_is_regularized_row_by_row(sparse: bool) -> None:
+def test_a_badly_scaled_singular_system_is_solved_by_its_regularization(sparse: bool) -> None:
     """A tied face's KKT system holds a metric of lever squared beside rows
-    of size 1, and repeats rows. A regularization relative to K's largest
-    entry would swamp the weak mode's pivot (the refinement then shrinks its
-    error by eps / (pivot + eps) a step: 0.97 here); relative to each row's
-    own largest entry it is small against every pivot, and a few steps of
-    refinement are exact."""
+    of size 1 and a weak mode, and repeats rows. Its regularization is small
+    against every pivot: a few steps of refinement are exact."""
     H = np.diag([1e8, 1.0, 3e-6])  # a lever squared, a unit stiffness, a weak mode
     J = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])  # a repeated row
     K = np.block([[H, J.T], [J, np.zeros((2, 2))]])

@@ -108,8 +108,7 @@ class SolverSettings:
     #: Double-precision round-off of a well-scaled quantity: where Newton
     #: stops, and what results and eliminations treat as an exact zero.
     round_off: float = 1e-14
-    #: Regularization of a singular KKT system, relative to each row's
-    #: largest entry (a lever squared beside rows of size 1 alike): small
+    #: Regularization of a singular KKT system (loads of unit norm): small
     #: against every pivot of a well-posed one, large against round-off (its
     #: refinement then converges to the solution nearest the current point).
     kkt_round_off: float = 1e-12

@@ -196,8 +196,7 @@ def solve_kkt(
 
     ``shift`` > 0: the factors are those of the quasi-definite ``K + D``,
     ``D`` ``+shift`` on the first ``n_primal`` unknowns and ``-shift`` on the
-    others, each times its row's largest entry (so that a row of lever
-    squared and a row of size 1 are regularized alike). Refined against K, a
+    others. Refined against K, a
     consistent singular system (a tied face, indeterminate forces) then
     converges to its solution nearest 0 in the norm ``D``. Returned with the
     step: K's own factors (their pivots tell whether K is regular), None
@@ -214,13 +213,9 @@ def solve_kkt(
 
 
 def _quasi_definite(K: Matrix, n_primal: int, shift: float) -> FloatArray:
-    """``+shift`` on the primal unknowns, ``-shift`` on the multipliers,
-    each times its row's largest entry (an empty row: K's largest)."""
-    top = abs(K).max(axis=1)
-    top = top.toarray().ravel() if sp.issparse(top) else np.asarray(top).ravel()
-    top = np.where(top > 0, top, float(top.max(initial=0.0)) or 1.0)
-    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
-    return np.asarray(shift * signs * top, dtype=float)
+    """``+shift`` on the primal unknowns, ``-shift`` on the multipliers (the
+    problem is scaled to loads of unit norm: an absolute shift)."""
+    return np.asarray(np.r_[np.full(n_primal, shift), np.full(K.shape[0] - n_primal, -shift)])
 
 
 def _diag(d: FloatArray, like: Matrix) -> Matrix:
