@@ -14,9 +14,11 @@ from jointplay.assembly import assemble
 from jointplay.errors import SolverError
 from jointplay.io.generate import bearing_chain, tube_string
 from jointplay.numerics import linalg
-from jointplay.numerics.free_motions import column_rank_deficit, null_basis
+from jointplay.numerics.free_motions import Eliminated, null_basis
 from jointplay.settings import DEFAULT
 from jointplay.solver import Workspace, pipeline
+
+RCOND, ROUND_OFF = DEFAULT.free_motion_rcond, DEFAULT.round_off
 
 
 def constraint_rows(model: jointplay.Model) -> tuple[sp.csr_matrix, int]:
@@ -38,9 +40,9 @@ def assert_same_null_space(C: sp.csr_matrix, m: int) -> None:
     # a linear-algebra helper on the model's exact rows (no solve): its free
     # motions are separated from the rest by far more than round-off, so the
     # subspace, and these round-off bounds, hold on every machine
-    N = null_basis(C, m).toarray()
-    dense = linalg.null_space(C.toarray(), m)
-    assert N.shape[1] == dense.shape[1] == column_rank_deficit(C, m)
+    N = null_basis(C, m, RCOND, ROUND_OFF).toarray()
+    dense = linalg.null_space(C.toarray(), m, RCOND, ROUND_OFF)
+    assert N.shape[1] == dense.shape[1] == Eliminated(C, m, RCOND).deficit
     np.testing.assert_allclose(N.T @ N, np.eye(N.shape[1]), rtol=0, atol=1e-12)
     scale = float(abs(C).max())
     assert np.max(np.abs(C @ N), initial=0.0) <= 1e-12 * scale
@@ -91,7 +93,7 @@ def test_a_local_free_motion_stays_local_and_none_is_left_out() -> None:
     """1,000 shafts, each free to spin: 1,000 free motions (the randomized
     search this replaced stopped at 256), each on its own shaft."""
     C, m = constraint_rows(bearing_chain(1000))
-    N = null_basis(C, m)
+    N = null_basis(C, m, RCOND, ROUND_OFF)
     assert N.shape[1] == 1000
     bodies_moved = [len(np.unique(N[:, c].indices // 6)) for c in range(N.shape[1])]
     assert max(bodies_moved) == 1
@@ -106,8 +108,8 @@ def test_every_free_motion_is_reported() -> None:
 
 def test_a_mechanism_with_no_free_motion_has_no_deficit() -> None:
     C, m = constraint_rows(tube_string(200, closed=True))
-    assert column_rank_deficit(C, m) == 0
-    assert null_basis(C, m).shape == (m, 0)
+    assert Eliminated(C, m, RCOND).deficit == 0
+    assert null_basis(C, m, RCOND, ROUND_OFF).shape == (m, 0)
 
 
 def test_a_body_with_no_rows_is_free_and_nothing_is_printed(
@@ -119,7 +121,7 @@ def test_a_body_with_no_rows_is_free_and_nothing_is_printed(
     rng = np.random.default_rng(1)
     C = np.zeros((10, 18))
     C[:, :12] = rng.standard_normal((10, 12))  # bodies 0 and 1; body 2 has no rows
-    N = null_basis(sp.csr_matrix(C), 18)
+    N = null_basis(sp.csr_matrix(C), 18, RCOND, ROUND_OFF)
     out, err = capfd.readouterr()
     assert out == "" and err == ""
     assert N.shape[1] == 6 + 2  # body 2's six motions and two of 0 and 1 together
@@ -131,7 +133,7 @@ def test_repeated_entries_add_up_and_the_matrix_is_left_alone() -> None:
         (np.array([1.0, 1.0, 2.0]), np.array([0, 0, 1]), np.array([0, 2, 3])), shape=(2, 6)
     )  # row 0 holds column 0 twice: 1 + 1
     before = (C.data.copy(), C.indices.copy(), C.indptr.copy())
-    N = null_basis(C, 6).toarray()
+    N = null_basis(C, 6, RCOND, ROUND_OFF).toarray()
     assert N.shape[1] == 4
     assert np.allclose(C.toarray() @ N, 0.0)
     for got, kept in zip((C.data, C.indices, C.indptr), before, strict=True):
@@ -140,9 +142,9 @@ def test_repeated_entries_add_up_and_the_matrix_is_left_alone() -> None:
 
 def test_columns_that_are_not_six_per_body_are_refused() -> None:
     with pytest.raises(ValueError, match="6 columns per body"):
-        null_basis(sp.csr_matrix(np.ones((1, 7))), 7)
+        null_basis(sp.csr_matrix(np.ones((1, 7))), 7, RCOND, ROUND_OFF)
     with pytest.raises(ValueError, match="6 columns per body"):
-        column_rank_deficit(sp.csr_matrix(np.ones((1, 12))), 6)
+        Eliminated(sp.csr_matrix(np.ones((1, 12))), 6, RCOND)
 
 
 @pytest.mark.parametrize("closed", [False, True])
@@ -176,7 +178,7 @@ def test_free_motions_come_in_body_order_and_a_bearing_chain_is_certified() -> N
     balances is round-off of a degenerate problem (5e-11 on one CPU, 4e-9 on
     another): the promise is the certificate's."""
     C, m = constraint_rows(bearing_chain(100))
-    N = null_basis(C, m).tocsc()
+    N = null_basis(C, m, RCOND, ROUND_OFF).tocsc()
     first_body = [int(N.indices[N.indptr[j]]) // 6 for j in range(N.shape[1])]
     assert first_body == sorted(first_body) and len(first_body) == 100  # one spin a shaft
     result = jointplay.solve(bearing_chain(100))

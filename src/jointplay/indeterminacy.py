@@ -104,7 +104,7 @@ def indeterminacy_of(asm: Assembly, x: FloatArray, settings: SolverSettings) -> 
         return DETERMINATE
     rcond = settings.free_motion_rcond
     if linalg.is_sparse(work):
-        degree, part = _by_elimination(asm.m, work, pair, pairs, rcond)
+        degree, part = _by_elimination(asm.m, work, pair, pairs, rcond, settings.round_off)
     else:
         degree, part = _by_svd(work, rcond)
     if degree <= 0:
@@ -132,7 +132,7 @@ def _by_svd(work: FloatArray, rcond: float) -> tuple[int, NDArray[np.bool_]]:
 
 
 def _by_elimination(
-    m: int, work: Any, pair: IntArray, pairs: IntArray, rcond: float
+    m: int, work: Any, pair: IntArray, pairs: IntArray, rcond: float, round_off: float
 ) -> tuple[int, NDArray[np.bool_]]:
     """A large model's degree and the unknowns that take part, in time
     linear in its size: first within each pair of bodies (the joints between
@@ -152,7 +152,7 @@ def _by_elimination(
         null = np.arange(b.n)[None, None, :] >= rank[:, None, None]
         size = np.sqrt(np.sum(np.where(null, b.V, 0.0) ** 2, axis=2))  # (pairs, n)
         part[b.unknowns[size > rcond]] = True
-    loop_degree, in_loops = _loops(m, blocks, len(pair), pair, rcond)
+    loop_degree, in_loops = _loops(m, blocks, len(pair), pair, rcond, round_off)
     return degree + loop_degree, part | in_loops
 
 
@@ -212,7 +212,7 @@ def _pair_blocks(work: Any, pair: IntArray, pairs: IntArray) -> list[_Blocks]:
 
 
 def _loops(
-    m: int, blocks: list[_Blocks], n_y: int, pair: IntArray, rcond: float
+    m: int, blocks: list[_Blocks], n_y: int, pair: IntArray, rcond: float, round_off: float
 ) -> tuple[int, NDArray[np.bool_]]:
     """The self-balanced force systems that run through several pairs of
     bodies (a closed loop of bodies): each pair passes on its range, its
@@ -255,7 +255,7 @@ def _loops(
     C = sp.csr_matrix(
         (np.concatenate(c_vals), (np.concatenate(c_rows), np.concatenate(c_cols))), shape=(m, n_c)
     )
-    Z = sp.csc_matrix(free_motions.null_basis(C, n_c, rcond, orthonormal=False))
+    Z = sp.csc_matrix(free_motions.null_basis(C, n_c, rcond, round_off, orthonormal=False))
     n_real = sum(len(r) for r in real)
     degree = Z.shape[1] - (n_c - n_real)  # less the padding's own directions
     if degree <= 0:

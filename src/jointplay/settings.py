@@ -108,38 +108,25 @@ class SolverSettings:
     #: Double-precision round-off of a well-scaled quantity: where Newton
     #: stops, and what results and eliminations treat as an exact zero.
     round_off: float = 1e-14
-    #: Regularization of a singular KKT system, relative to its largest
-    #: entry: small against every pivot of a well-posed one, large against
-    #: round-off (its refinement then converges to the least-norm solution).
+    #: Regularization of a singular KKT system (loads of unit norm): small
+    #: against every pivot of a well-posed one, large against round-off (its
+    #: refinement then converges to the solution nearest the current point).
     kkt_round_off: float = 1e-12
     #: A plain KKT solve is refined until its residual is this small
     #: (relative to the right-hand side); a regularized one, ``kkt_refined``.
     kkt_plain: float = 1e-8
     kkt_refined: float = 1e-10
+    #: Steps of iterative refinement after a KKT solve's one factorization
+    #: (``linalg.solve_kkt``, and a large model's rigid forces'
+    #: ``linalg.lstsq``): a regular system needs one or two; a regularized
+    #: one shrinks its error by the shift over the pivot each step.
+    kkt_refinements: int = 4
     #: Newton has stalled when a step gains less than this factor on the best
     #: of the three before it (round-off, or a slow mode of a long chain), and
     #: stops after at most ``newton_steps`` steps (from an interior point or a
     #: batch neighbour it takes a few; the force split's rows, the same).
     newton_stall: float = 0.5
     newton_steps: int = 30
-    #: A regularized KKT solve's refinement is given up when
-    #: ``kkt_refine_window`` rounds together gain less than
-    #: ``kkt_refine_stall`` on the best before them (its residual, or a
-    #: settled solve's moves, ``linalg.settled_solve``): on a system that is not
-    #: consistent it stalls at once (a 10,000-segment chain's face with 377
-    #: contacts open: 40 rounds at 7.6e-9, 0.6 s), while a consistent one
-    #: gains on every stretch of rounds. Its largest residual may rise for a
-    #: few rounds and fall again (5 rounds seen), or crawl (0.4 % a round
-    #: near the end, and converge): a shorter window or a larger gain cut
-    #: such systems, found by a random search of 200,000 small ones.
-    kkt_refine_stall: float = 1e-3
-    kkt_refine_window: int = 12
-    #: Sweeps of the symmetric scaling of a tied face's KKT system before
-    #: its regularized factorization (``linalg.proximal_solve``): each
-    #: halves the exponent of a row's distance from 1. On a 10,000-shaft
-    #: chain's tie (entries from 1 to 1e8) the refinement then takes 45, 16,
-    #: 11 and 9 rounds after 1, 2, 4 and 10 sweeps; 4 cost least in all.
-    equilibration_sweeps: int = 4
     #: Newton on a face that pins the position is accepted when its
     #: equations hold to this (relative): well above where it stops, well
     #: below the certificate.
@@ -171,15 +158,10 @@ class SolverSettings:
     #: zone on a prismatic guide, 1.1e-10 mm); far below the micrometres a
     #: tolerance study reads, and the point stays inside every clearance.
     support_gap: float = 1e-9
-    #: Re-orthonormalizing a free-motion basis stops when a vector's norm
-    #: changes by less than this fraction.
-    orthonormal_stall: float = 1e-3
-    #: Dense least squares of a singular KKT system: singular values below this
-    #: fraction of the largest are dropped (round-off, not rank).
+    #: Least squares (a singular KKT system's, the rigid joints' forces):
+    #: singular values below this fraction of the largest are dropped
+    #: (round-off, not rank); a sparse one is regularized by it.
     lstsq_rcond: float = 1e-13
-    #: LSMR's stopping tolerances (large rigid systems): one digit past
-    #: round-off, so that long chains' rigid forces balance to the certificate.
-    lsmr_tolerance: float = 1e-15
     #: A body whose motion is below this fraction of the biggest one is not
     #: named as moving along (words), and is left out of the interior point's
     #: ray of unboundedness first, all such bodies at once (``held.needed_only``).

@@ -39,7 +39,6 @@ from numpy.typing import NDArray
 from scipy.linalg import lapack
 
 from jointplay.geometry import FloatArray
-from jointplay.settings import DEFAULT
 
 IntArray = NDArray[np.intp]
 
@@ -47,6 +46,10 @@ IntArray = NDArray[np.intp]
 #: (when they share no rows). Two keeps a chain's and a tree's elimination free
 #: of fill, as one at a time in minimum-degree order would.
 ELIMINATED_TOGETHER_DEGREE = 2
+
+#: Steps of the power iteration that estimates C's largest singular value:
+#: its estimate then is within a few percent, all a relative threshold needs.
+POWER_STEPS = 30
 
 
 @dataclass
@@ -256,16 +259,12 @@ def largest_singular_value(C: sp.spmatrix) -> float:
     C = sp.csr_matrix(C)
     rng = np.random.default_rng(20140101)
     v = rng.standard_normal(C.shape[1])
-    previous = 0.0
-    for _ in range(60):
+    for _ in range(POWER_STEPS):
         w = C.T @ (C @ v)
         norm = float(np.linalg.norm(w))
         if norm == 0.0:
             return 0.0
         v = w / norm
-        if abs(norm - previous) <= DEFAULT.orthonormal_stall * norm:
-            break
-        previous = norm
     return float(np.linalg.norm(C @ v))
 
 
@@ -280,7 +279,7 @@ class Eliminated:
         self,
         C: sp.spmatrix,
         m: int,
-        rcond: float = DEFAULT.free_motion_rcond,
+        rcond: float,
         s_max: float | None = None,
     ):
         C = _checked(C, m)
@@ -297,9 +296,10 @@ class Eliminated:
             return self.m
         return sum(V.shape[1] for _, V in self.elim.free)
 
-    def basis(self, orthonormal: bool = True) -> sp.csc_matrix:
+    def basis(self, round_off: float, orthonormal: bool = True) -> sp.csc_matrix:
         """Sparse basis (m, deficit) of the motions the rows leave free:
-        orthonormal, or of unit columns only (see ``null_basis``)."""
+        orthonormal, or of unit columns only (see ``null_basis``); an entry
+        below ``round_off`` of the free direction that starts a vector is 0."""
         elim = self.elim
         if elim is None:
             return sp.identity(self.m, format="csc")
@@ -312,7 +312,7 @@ class Eliminated:
         vectors: list[dict[int, FloatArray]] = []
         for j, V in sorted(elim.free, key=lambda free: free[0]):  # in body order
             for q in range(V.shape[1]):
-                vectors.append(_back_substitute(j, V[:, q], elim, position, dependents))
+                vectors.append(_back_substitute(j, V[:, q], elim, position, dependents, round_off))
         if orthonormal:
             return _orthonormal(vectors, self.m)
         return _unit_columns(vectors, self.m)
@@ -321,7 +321,8 @@ class Eliminated:
 def null_basis(
     C: sp.spmatrix,
     m: int,
-    rcond: float = DEFAULT.free_motion_rcond,
+    rcond: float,
+    round_off: float,
     orthonormal: bool = True,
     s_max: float | None = None,
 ) -> sp.csc_matrix:
@@ -331,8 +332,8 @@ def null_basis(
     orthogonalized (enough to tell what they move: the QR of vectors that
     run down a long chain is dense, 2 s for 377 of a 10,000-body string).
     ``s_max``: the scale of the threshold, if not C's largest singular value
-    (another matrix's, as in ``column_rank_deficit``)."""
-    return Eliminated(C, m, rcond, s_max).basis(orthonormal)
+    (another matrix's: a face's rows counted at the free motions' scale)."""
+    return Eliminated(C, m, rcond, s_max).basis(round_off, orthonormal)
 
 
 def _unit_columns(vectors: list[dict[int, FloatArray]], m: int) -> sp.csc_matrix:
@@ -349,21 +350,13 @@ def _unit_columns(vectors: list[dict[int, FloatArray]], m: int) -> sp.csc_matrix
     return sp.csc_matrix(out @ sp.diags(1.0 / norms))
 
 
-def column_rank_deficit(
-    C: sp.spmatrix, m: int, rcond: float = DEFAULT.free_motion_rcond, s_max: float | None = None
-) -> int:
-    """How many independent motions ``C`` does not move (0: its rows pin
-    every unknown): singular values below ``rcond`` times C's largest, or
-    times ``s_max`` if given (another matrix's scale, to compare with its count)."""
-    return Eliminated(C, m, rcond, s_max).deficit
-
-
 def _back_substitute(
     j: int,
     v: FloatArray,
     elim: _Elimination,
     position: dict[int, int],
     dependents: dict[int, list[int]],
+    round_off: float,
 ) -> dict[int, FloatArray]:
     """The free motion that body j's free direction v starts: the bodies
     eliminated before j follow through their pivot rows (latest first: a
@@ -374,7 +367,7 @@ def _back_substitute(
     seen = set(heap)
     # an entry below round-off of the free direction that started it does not
     # move that body: dropped, so a local free motion stays local
-    floor = DEFAULT.round_off * float(np.linalg.norm(v))
+    floor = round_off * float(np.linalg.norm(v))
     while heap:
         i = elim.order[-heapq.heappop(heap)]
         pivot = elim.pivots[i]

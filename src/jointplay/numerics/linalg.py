@@ -21,7 +21,7 @@ from scipy.linalg import lapack
 
 from jointplay.geometry import FloatArray
 from jointplay.numerics import free_motions
-from jointplay.settings import DEFAULT, GRAM_CERTAIN, GRAM_MARGIN, TINY
+from jointplay.settings import GRAM_CERTAIN, GRAM_MARGIN, TINY
 
 #: Mechanisms with more unknowns than this (6 per moving body) are assembled
 #: into sparse matrices. Below it, dense LAPACK calls are faster.
@@ -81,15 +81,6 @@ def vstack(mats: Sequence[Matrix], m: int) -> Matrix:
     return np.vstack(parts)
 
 
-def hstack(mats: Sequence[Matrix], rows: int) -> Matrix:
-    parts = [a for a in mats if a.shape[1]]
-    if not parts:
-        return np.zeros((rows, 0))
-    if any(sp.issparse(a) for a in parts):
-        return sp.hstack([sp.csr_matrix(a) for a in parts], format="csr")
-    return np.hstack(parts)
-
-
 def dense(a: Matrix) -> FloatArray:
     return np.asarray(a.toarray()) if sp.issparse(a) else np.asarray(a)
 
@@ -109,7 +100,7 @@ def nonzero_rows(A: Matrix) -> FloatArray:
     return np.asarray(np.any(A != 0.0, axis=1))
 
 
-def null_space(C: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> Matrix:
+def null_space(C: Matrix, m: int, rcond: float, round_off: float) -> Matrix:
     """Orthonormal basis (m, p) of the motions ``d`` with ``C d = 0``: singular
     values below ``rcond`` times the largest count as zero.
 
@@ -119,27 +110,27 @@ def null_space(C: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> M
     if C.shape[0] == 0:
         return sp.identity(m, format="csc") if sp.issparse(C) else np.eye(m)
     if sp.issparse(C):
-        return free_motions.null_basis(C, m, rcond)
+        return free_motions.null_basis(C, m, rcond, round_off)
     _, sv, Vt = np.linalg.svd(C, full_matrices=True)
     tol = rcond * (sv[0] if sv.size else 0.0)
     rank = int(np.sum(sv > tol)) if sv.size and sv[0] > 0 else 0
     return np.ascontiguousarray(Vt[rank:].T)
 
 
-def rank(M: FloatArray, rcond: float = DEFAULT.free_motion_rcond) -> int:
+def rank(M: FloatArray, rcond: float) -> int:
     """A dense matrix's rank: its singular values above ``rcond`` of the largest."""
     sv = np.linalg.svd(M, compute_uv=False)
     return int(np.sum(sv > rcond * sv[0])) if sv.size and sv[0] > 0 else 0
 
 
-def full_column_rank(rows: Matrix, m: int, rcond: float = DEFAULT.free_motion_rcond) -> bool:
+def full_column_rank(rows: Matrix, m: int, rcond: float) -> bool:
     """Whether only ``d = 0`` has ``rows @ d = 0`` (the rows pin every unknown)."""
     if rows.shape[0] < m:
         return False
     if not sp.issparse(rows):
         sv = np.linalg.svd(rows, compute_uv=False)
         return bool(sv.size and sv[0] > 0 and np.sum(sv > rcond * sv[0]) == m)
-    return free_motions.column_rank_deficit(rows, m, rcond) == 0
+    return free_motions.Eliminated(rows, m, rcond).deficit == 0
 
 
 def full_column_rank_rows(J: FloatArray, rcond: float) -> NDArray[np.bool_]:
@@ -191,213 +182,44 @@ def solve_kkt(
     K: Matrix,
     rhs: FloatArray,
     n_primal: int,
-    prox: float = 0.0,
-    floor: float = 0.0,
-    plain: bool = True,
-    factors: Any = None,
-    weights: FloatArray | None = None,
-) -> tuple[FloatArray, Any]:
+    *,
+    tol: float | FloatArray,
+    refinements: int,
+    shift: float = 0.0,
+) -> tuple[FloatArray, Factors | None]:
     """A solution of the square system ``K step = rhs`` (a Newton step on KKT
-    equations). A singular but consistent system (statically indeterminate
-    forces) gets a solution: the plain factors' if round-off lets them solve
-    it (its split of the indeterminate multipliers is then any; the position
-    step is the one there is), else a regularized-and-refined one (dense:
-    least squares if that fails too). Raises ``SingularSystemError`` when no
-    step solves it accurately.
+    equations) from one LU factorization, refined against K ``refinements``
+    times (each a solve with the factors: cheap beside the factorization).
+    Raises ``SingularSystemError`` when K cannot be factored or a residual
+    ``|rhs - K step|`` is then above ``tol`` (a number or one per row;
+    ``inf``: the caller checks what it needs).
 
-    ``prox`` > 0: the system is expected to be singular up to round-off (a
-    tied face); the step is the regularized-and-refined one, which stays
-    nearest the current point in every unknown (a plain solve would take the
-    round-off's huge step along the singular directions).
-
-    ``floor``: a residual that small is solved whatever the right side's
-    size (Newton's own stopping point: near it, its right side is so small
-    that a tolerance relative to it falls below round-off; a 100-shaft
-    bearing chain's step stopped at 2.9e-16 against 7.5e-17 asked, and every
-    polish of it failed).
-
-    ``plain=False``: K is singular by construction (equality rows that
-    repeat each other, kept as they are in a sparse system): no plain
-    factorization, the regularized one at once. SuperLU fills a large
-    singular K in before it meets the zero pivot: on a 4,000-shaft bearing
-    chain's tie, 3.8 s and 1.2 GB to fail, against 0.08 s regularized
-    (and equilibrated: ``proximal_solve``).
-
-    ``factors``: the plain factors of the previous Newton step's K, tried
-    first (refined against this K); returned with the step are the plain
-    factors that solved it (None if none did). Newton's K moves with its
-    steps only, and near the optimum hardly at all: its last steps need no
-    factorization of their own. A sparse K's only: a small dense LU costs
-    less than one round of refinement (6.1.6.1's warm re-solve: half its
-    reuses failed after five rounds).
-
-    ``weights``: per row, what a residual is measured in (default 1): the
-    residual is ``largest(weights * (rhs - K step))``, and ``floor`` is in
-    those terms. Newton's rows differ in kind (forces, lengths), and on a
-    long chain's tie their sizes part by eight orders: one absolute floor
-    either asks the forces' rows for digits below their round-off or lets
-    the lengths' rows stop short (``newton``)."""
-    w = np.ones(len(rhs)) if weights is None else weights
-    size = largest(w * rhs)
-    scale = max(1.0, float(abs(K).max()))
-    if plain and not prox:
-        # plain factors, with a few steps of iterative refinement (long chains need them)
-        tol = max(DEFAULT.kkt_plain * size, floor)
-        if factors is not None and sp.issparse(K):
-            step = _refined(K, factors, rhs, tol, 4, w)
-            if step is not None:
-                return step, factors
-        factors = _factored(K)
-        step = _refined(K, factors, rhs, tol, 4, w)
-        if step is not None:
-            return step, factors
-    # Quasi-definite regularization, refined against K: on a consistent
-    # system, the solution nearest the current point (in the scaled norm,
-    # where equilibrated: ``proximal_solve``)
-    tol = max(DEFAULT.kkt_refined * size, floor)
-    eps = max(prox, DEFAULT.kkt_round_off * scale)
-    step = proximal_solve(K, rhs, n_primal, eps, tol, equilibrated=not plain, weights=w)
-    if step is not None and largest(w * (rhs - K @ step)) <= tol:
-        return step, None
-    if not sp.issparse(K):
-        try:
-            return np.asarray(np.linalg.lstsq(K, rhs, rcond=DEFAULT.lstsq_rcond)[0]), None
-        except np.linalg.LinAlgError:  # its SVD did not converge (an entry not finite)
-            pass
+    ``shift`` > 0: the factors are those of the quasi-definite ``K + D``,
+    ``D`` ``+shift`` on the first ``n_primal`` unknowns and ``-shift`` on the
+    others. Refined against K, a
+    consistent singular system (a tied face, indeterminate forces) then
+    converges to its solution nearest 0 in the norm ``D``. Returned with the
+    step: K's own factors (their pivots tell whether K is regular), None
+    when regularized."""
+    factors = _factored(K if not shift else K + _diag(_quasi_definite(K, n_primal, shift), K))
+    if factors is None:
+        raise SingularSystemError
+    step = np.asarray(factors(rhs), dtype=float)
+    for _ in range(refinements):
+        step = step + np.asarray(factors(rhs - K @ step), dtype=float)
+    if np.all(np.abs(rhs - K @ step) <= tol):  # NaN: not solved
+        return np.asarray(step, dtype=np.float64), None if shift else factors
     raise SingularSystemError
 
 
-def proximal_solve(
-    K: Matrix,
-    rhs: FloatArray,
-    n_primal: int,
-    eps: float,
-    tol: float = 0.0,
-    equilibrated: bool = False,
-    weights: FloatArray | None = None,
-) -> FloatArray | None:
-    """Quasi-definite regularization (``+eps`` on the first ``n_primal``
-    unknowns, ``-eps`` on the others), then refinement against K itself: a
-    proximal-point iteration that converges on a consistent system to the
-    solution nearest 0, as a least-squares step does. Stops when
-    ``|K step - rhs| <= tol`` (each row times its ``weights``, default 1),
-    else returns the best of 40 rounds (None if the regularized matrix
-    cannot be factored): on a system consistent only up to round-off, the
-    caller checks what it needs.
-
-    ``equilibrated`` (sparse, symmetric K): regularize and factor ``D K D``
-    instead, with D the symmetric scaling that brings each row's largest
-    entry to about 1 (``eps`` kept relative to the largest entry). A tied
-    face's system holds a metric of lever squared (1e8 on a 10,000-shaft
-    chain) beside rows of size 1: a regularization relative to the largest
-    entry then swamps the small rows' pivots and the refinement crawls
-    (0.975 a round on 1,000 shafts; 3 rounds equilibrated). The solution is
-    the same; where K is singular, the one it converges to is nearest 0 in
-    the norm ``|D^-1 step|`` (on a tie: the split of the repeated rows'
-    multipliers, which Newton does not read)."""
-    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
-    if sp.issparse(K) and equilibrated:
-        d = _equilibration(K)
-        scaled = sp.diags(d) @ K @ sp.diags(d)
-        top = float(abs(K).max())  # 0: nothing to scale (SuperLU then says singular)
-        eps_d = eps * float(abs(scaled).max()) / top if top > 0 else eps
-        factors = _factored(scaled + sp.diags(eps_d * signs))
-        solve = None if factors is None else (lambda b: d * factors(d * b))
-    else:
-        solve = _factored(K + (sp.diags(eps * signs) if sp.issparse(K) else np.diag(eps * signs)))
-    if solve is None:
-        return None
-    w = np.ones(len(rhs)) if weights is None else weights
-    step = np.zeros(K.shape[0])
-    best, best_miss = step, float("inf")
-    sizes: list[float] = []
-    for _ in range(41):
-        miss = rhs - K @ step
-        size = largest(w * miss)
-        if size <= tol:
-            if size < best_miss:
-                best = step
-            break
-        if size < best_miss:
-            best, best_miss = step, size
-        sizes.append(size)
-        if _stalled(sizes):
-            break  # the system is not consistent (to round-off)
-        step = step + np.asarray(solve(miss), dtype=float)
-        if not np.all(np.isfinite(step)):
-            break
-    return np.asarray(best, dtype=np.float64)
+def _quasi_definite(K: Matrix, n_primal: int, shift: float) -> FloatArray:
+    """``+shift`` on the primal unknowns, ``-shift`` on the multipliers (the
+    problem is scaled to loads of unit norm: an absolute shift)."""
+    return np.asarray(np.r_[np.full(n_primal, shift), np.full(K.shape[0] - n_primal, -shift)])
 
 
-def settled_solve(
-    K: sp.spmatrix, rhs: FloatArray, n_primal: int, settle: float, eps: float
-) -> FloatArray | None:
-    """A solution of the sparse ``K step = rhs`` whose first ``n_primal``
-    unknowns are refined until what is left to move them is below
-    ``settle``: from K's plain factors where its pattern lets it be regular,
-    else (or where they do not settle) from the quasi-definite
-    regularization ``eps`` (``proximal_solve``). What is left is read from
-    the last two moves, ``d_k (d_k / d_k-1) / (1 - d_k / d_k-1)``: a slow
-    contraction leaves more than its last move. None if neither settles in
-    41 rounds, or if its moves stall as a regularized refinement's residual
-    does (``kkt_refine_window``: a 2,000-shaft bearing chain's split on the
-    cone program's support moved 4.7e-6 a round, 40 rounds of a large
-    factorization for nothing). For a caller that reads those unknowns
-    only, beside multipliers so large that their rows' residual sits at
-    round-off and cannot show the others' progress (a 300-segment tube
-    string's force split: multipliers of 1,800 against forces of 1;
-    stopped by its residual, it was 2e-8 of its forces off, two rounds in)."""
-    from scipy.sparse.csgraph import structural_rank  # large models only: 0.02 s to import
-
-    pattern = sp.csr_matrix(K, copy=True)
-    pattern.eliminate_zeros()
-    # plain factors only where the pattern lets K be regular: SuperLU
-    # crashed on a singular pattern (a compliant model's split, clarabel 0.11)
-    shifts = [0.0, eps] if structural_rank(pattern) == K.shape[0] else [eps]
-    signs = np.r_[np.ones(n_primal), -np.ones(K.shape[0] - n_primal)]
-    for shift in shifts:
-        solve = _factored(K + sp.diags(shift * signs) if shift else K)
-        if solve is None:
-            continue
-        step = np.zeros(K.shape[0])
-        sizes: list[float] = []
-        for _ in range(41):
-            moved = np.asarray(solve(rhs - K @ step), dtype=float)
-            step = step + moved
-            if not np.isfinite(step).all():
-                break
-            sizes.append(largest(moved[:n_primal]))
-            before = sizes[-2] if len(sizes) > 1 else float("inf")
-            left = sizes[-1] ** 2 / max(before - sizes[-1], TINY)
-            if sizes[-1] <= settle and left <= settle:
-                return np.asarray(step, dtype=np.float64)
-            if _stalled(sizes):
-                break
-    return None
-
-
-def _stalled(sizes: list[float]) -> bool:
-    """Whether a refinement's last ``kkt_refine_window`` rounds gained less
-    than ``kkt_refine_stall`` on the best before them (``sizes``: its
-    residuals, or its moves)."""
-    window, gain = DEFAULT.kkt_refine_window, 1.0 - DEFAULT.kkt_refine_stall
-    return len(sizes) > window and min(sizes[-window:]) > gain * min(sizes[:-window])
-
-
-def _equilibration(K: Any) -> FloatArray:
-    """The symmetric (Ruiz) scaling d of a sparse, symmetric K (a KKT
-    system; its rows are its columns): each row of ``diag(d) K diag(d)``
-    has its largest entry near 1 (``equilibration_sweeps``)."""
-    K = sp.csr_matrix(K)
-    d = np.ones(K.shape[0])
-    filled = np.flatnonzero(np.diff(K.indptr))  # rows with an entry
-    rows = np.repeat(np.arange(K.shape[0]), np.diff(K.indptr))
-    size = np.abs(K.data)
-    for _ in range(DEFAULT.equilibration_sweeps):
-        top = np.ones(K.shape[0])
-        top[filled] = np.maximum.reduceat(size * d[rows] * d[K.indices], K.indptr[filled])
-        d /= np.sqrt(np.where(top > 0, top, 1.0))
-    return d
+def _diag(d: FloatArray, like: Matrix) -> Matrix:
+    return sp.diags(d) if sp.issparse(like) else np.diag(d)
 
 
 class Factors:
@@ -464,11 +286,10 @@ def _has_empty_line(K: sp.csc_matrix) -> bool:
 @contextmanager
 def _silenced() -> Iterator[None]:
     """Standard output and error of the process routed to /dev/null (file
-    descriptors 1 and 2, where C libraries write): a KKT system of a tied
-    face or of indeterminate forces is singular by construction, SuperLU then
-    fails, as it should, but OpenBLAS prints its complaint first; we catch
-    the failure and take the regularized step, and nothing but our own words
-    may reach the user. Only around a factorization, which prints nothing else."""
+    descriptors 1 and 2, where C libraries write): SuperLU fails on a
+    singular K, as it should, but OpenBLAS prints its complaint first; we
+    catch the failure, and nothing but our own words may reach the user.
+    Only around a factorization, which prints nothing else."""
     sys.stdout.flush()
     sys.stderr.flush()
     saved = [os.dup(1), os.dup(2)]
@@ -484,37 +305,31 @@ def _silenced() -> Iterator[None]:
             os.close(fd)
 
 
-def _refined(
-    K: Matrix, solve: Any, rhs: FloatArray, tol: float, rounds: int, weights: FloatArray
-) -> FloatArray | None:
-    """``solve(rhs)`` refined against K until ``|K step - rhs| <= tol``,
-    each row times its ``weights`` (None if it does not get there in
-    ``rounds`` corrections)."""
-    if solve is None:
-        return None
-    step = np.zeros(K.shape[0])
-    miss = rhs  # the miss of step 0
-    for _ in range(rounds + 1):
-        if largest(weights * miss) <= tol:
-            return np.asarray(step, dtype=np.float64)
-        step = step + np.asarray(solve(miss), dtype=float)
-        if not np.isfinite(step).all():
-            return None
-        miss = rhs - K @ step
-    return None
-
-
-def lstsq(A: Matrix, b: FloatArray) -> FloatArray:
-    """Least-squares (least-norm for a dense A) solution of ``A y = b``."""
+def lstsq(A: Matrix, b: FloatArray, rcond: float, refinements: int) -> FloatArray:
+    """The least-norm least-squares solution of ``A y = b``. Dense: by an
+    SVD, singular values below ``rcond`` of the largest dropped. Sparse: the
+    normal equations, regularized by ``sqrt(rcond)`` of their largest entry
+    (they square A's singular values; a smaller shift leaves the solve's
+    round-off along A's null space at eps over it), one LU, refined
+    ``refinements`` times against A itself: a proximal-point iteration,
+    which converges to the least-norm solution. Raises
+    ``SingularSystemError`` where it cannot be done."""
     if A.shape[1] == 0:
         return np.zeros(0)
     if not sp.issparse(A):
-        return np.asarray(np.linalg.lstsq(A, b, rcond=None)[0])
-    tol = DEFAULT.lsmr_tolerance
-    import scipy.sparse.linalg as spla  # large mechanisms only
-
-    out = spla.lsmr(A, b, atol=tol, btol=tol, maxiter=20 * max(A.shape))
-    return np.asarray(out[0])
+        try:
+            return np.asarray(np.linalg.lstsq(A, b, rcond=rcond)[0])
+        except np.linalg.LinAlgError as exc:  # its SVD did not converge (an entry not finite)
+            raise SingularSystemError from exc
+    AtA = sp.csc_matrix(A.T @ A)
+    shift = np.sqrt(rcond) * max(float(abs(AtA).max()), TINY)
+    factors = _factored(AtA + shift * sp.identity(AtA.shape[0], format="csc"))
+    if factors is None:
+        raise SingularSystemError
+    y = np.zeros(A.shape[1])
+    for _ in range(refinements + 1):
+        y = y + np.asarray(factors(A.T @ (b - A @ y)), dtype=float)
+    return np.asarray(y)
 
 
 def solve_rows(K: FloatArray, rhs: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:

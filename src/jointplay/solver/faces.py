@@ -135,7 +135,9 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
             if ws.sparse:
                 return None
             rows = linalg.dense(linalg.vstack([ws.Eq, L, sub.A], ws.m))
-            free = linalg.null_space(rows, ws.m, ws.settings.free_motion_rcond)
+            free = linalg.null_space(
+                rows, ws.m, ws.settings.free_motion_rcond, ws.settings.round_off
+            )
             return np.asarray(ws.asm.metric_times(linalg.dense(free)).T)
 
         face = Face(
@@ -172,7 +174,7 @@ def pins_position(ws: Workspace, rows: Matrix) -> bool:
     if ws.sparse:
         return bool(_eliminated(ws, rows).deficit <= ws.N.shape[1])
     all_rows = linalg.vstack([ws.Eq, rows], ws.m)
-    return linalg.full_column_rank(all_rows, ws.m)
+    return linalg.full_column_rank(all_rows, ws.m, ws.settings.free_motion_rcond)
 
 
 def _eliminated(ws: Workspace, rows: Matrix) -> free_motions.Eliminated:

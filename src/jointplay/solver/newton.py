@@ -9,6 +9,7 @@ a batch of one. ``kkt_point`` puts it on a face.
 
 from __future__ import annotations
 
+import functools
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
@@ -135,6 +136,23 @@ def face_forces(
     f[:, face.linear_rows] = nu_linear[:, face.f_rows]
     faces.rimless_forces(ws.stack, list(linear), lam, f)
     return lam, f
+
+
+def _kkt_step(
+    K: Matrix,
+    rhs: FloatArray,
+    m: int,
+    size: float,
+    floor: float,
+    weights: FloatArray,
+    settings: SolverSettings,
+    shift: float,
+) -> tuple[FloatArray, linalg.Factors | None]:
+    """One Newton step's solve: residual at ``kkt_plain`` of the right side
+    plain, ``kkt_refined`` regularized, and never below ``floor``."""
+    bar = settings.kkt_refined if shift else settings.kkt_plain
+    tol = max(bar * size, floor) / weights
+    return linalg.solve_kkt(K, rhs, m, tol=tol, refinements=settings.kkt_refinements, shift=shift)
 
 
 class Run(NamedTuple):
@@ -358,17 +376,24 @@ def newton(
                     else None
                 )
                 floor = settings.round_off * (1.0 if weighted else min(force[0], length[0]))
+                w_rows = np.ones(n) if weights is None else weights
+                size = linalg.largest(w_rows * F[0])
+                solve = functools.partial(_kkt_step, Kone, -F[0], m, size, floor, w_rows, settings)
                 try:
-                    step, factors = linalg.solve_kkt(
-                        Kone,
-                        -F[0],
-                        m,
-                        0.0 if sparse else prox,
-                        floor,
-                        not weighted,
-                        factors,
-                        weights,
-                    )
+                    shift = settings.kkt_round_off if weighted else (0.0 if sparse else prox)
+                    try:
+                        step, factors = solve(shift)
+                    except linalg.SingularSystemError:
+                        try:
+                            if shift:
+                                raise
+                            step, factors = solve(settings.kkt_round_off)  # singular: regularized
+                        except linalg.SingularSystemError:
+                            if sparse:
+                                raise
+                            # no step solves it (a degenerate set): its least squares
+                            step = linalg.lstsq(Kone, -F[0], settings.lstsq_rcond, 0)
+                            factors = None
                     if (
                         prox
                         and sparse
@@ -377,9 +402,7 @@ def newton(
                             or linalg.largest(step[m:]) > settings.far * force[0]
                         )
                     ):  # round-off's step along a tie or an indeterminate force
-                        step, factors = linalg.solve_kkt(
-                            Kone, -F[0], m, prox, floor, weights=weights
-                        )
+                        step, factors = solve(prox)
                 except linalg.SingularSystemError:
                     factors, failed = None, True  # an earlier system's say nothing of this one
                     break

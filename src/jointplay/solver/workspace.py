@@ -56,7 +56,7 @@ class Workspace:
         #: the free motions (dense, or sparse for a large mechanism)
         with linalg.one_blas_thread():
             rcond = self.settings.free_motion_rcond
-            self.N = linalg.null_space(limit_rows(self), self.m, rcond)
+            self.N = linalg.null_space(limit_rows(self), self.m, rcond, self.settings.round_off)
         #: rows that hold the answer orthogonal to N in the least-norm metric
         if not self.sparse:
             self.K = assembly.metric_times(self.N).T
@@ -196,6 +196,7 @@ class Balance:
         self.asm = asm
         self.stack = ws.stack  # the workspace's cones: exact rotations' are linearized
         self.E = ws.E
+        self.settings = ws.settings
         n = len(asm.body_names)
         # per body: force rows as they are, moment rows to N*mm over ell (units of |g|/s)
         self.weight = np.column_stack(
@@ -244,7 +245,10 @@ class Balance:
             return np.zeros((rest.shape[0], 0))
         if not linalg.is_sparse(E):
             return np.asarray(np.linalg.lstsq(np.asarray(E).T, rest.T, rcond=None)[0].T)
-        return np.array([linalg.lstsq(E.T, row) for row in rest])
+        st = self.settings
+        return np.array(
+            [linalg.lstsq(E.T, row, st.lstsq_rcond, st.kkt_refinements) for row in rest]
+        )
 
     def largest_reaction(self, lam: FloatArray, f: FloatArray, nu: FloatArray) -> FloatArray:
         """(B,): the largest joint reaction, force or moment over ell."""
