@@ -17,7 +17,7 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg
@@ -65,6 +65,9 @@ class BatchSolution:
     batched: BoolArray  # (B,)
     full_solves: int
     assembled: BoolArray  # (B,)
+    #: each row's answer as a ``Start`` for the same sample in a nearby batch
+    #: (None where it has no active set), when asked (``own_starts``)
+    own_starts: tuple[Start | None, ...] | None = None
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
@@ -157,6 +160,7 @@ def solve_batch(
     *,
     forces: bool = True,
     starts: Sequence[Start] = (),
+    own_starts: Sequence[Start | None] | None = None,
 ) -> BatchSolution:
     """See ``Workspace.solve_batch``. ``radii`` (B, n): each sample's scaled
     cone radii (``Assembly.balls`` order; default: the model's); ``centres``
@@ -165,7 +169,7 @@ def solve_batch(
     BLAS thread: the work is many small matrices, which more threads only
     slow down, and a study's processes would compete for the cores."""
     with linalg.one_blas_thread():
-        return _solve_batch(ws, work, radii, centres, forces, starts)
+        return _solve_batch(ws, work, radii, centres, forces, starts, own_starts)
 
 
 def _solve_batch(
@@ -175,6 +179,7 @@ def _solve_batch(
     centres: FloatArray | None,
     split_forces: bool,
     starts: Sequence[Start] = (),
+    own_starts: Sequence[Start | None] | None = None,
 ) -> BatchSolution:
     from scipy.spatial import cKDTree  # here: a single solve need not import it
 
@@ -204,12 +209,22 @@ def _solve_batch(
     # a large one's rows are solved one by one)
     _check_starts(ws, starts)
     starts = starts if not ws.asm.sparse else ()
-    if starts:
-        g_hat = np.vstack([g_hat, *(s.g_hat for s in starts)])
-        r = np.vstack([r, *(s.r for s in starts)])
-        c = np.vstack([c, *(s.c for s in starts)])
-        sigma = np.vstack([sigma, np.zeros((len(starts), n_balls))])  # read for samples only
-    rows_all = B + len(starts)
+    # each row's own start (the same sample in a nearby batch), tried first
+    if own_starts is not None and len(own_starts) != B:
+        raise ValueError(f"own_starts must have one entry per row ({B}), not {len(own_starts)}")
+    own = [
+        (row, known)
+        for row, known in enumerate(own_starts or ())
+        if known is not None and not ws.asm.sparse and scales[row] > 0
+    ]
+    _check_starts(ws, [known for _, known in own])
+    before = [*starts, *(known for _, known in own)]
+    if before:
+        g_hat = np.vstack([g_hat, *(s.g_hat for s in before)])
+        r = np.vstack([r, *(s.r for s in before)])
+        c = np.vstack([c, *(s.c for s in before)])
+        sigma = np.vstack([sigma, np.zeros((len(before), n_balls))])  # read for samples only
+    rows_all = B + len(before)
     # the nearest solved sample (loads, and plays when they vary) starts Newton
     scale = max(ws.max_radius, TINY)
     features = np.hstack([g_hat, r / scale, c / scale]) if varied else g_hat
@@ -223,9 +238,11 @@ def _solve_batch(
     residual = np.zeros(rows_all)
     pending = np.flatnonzero(scales > 0)
     solved_by_set: dict[FaceKey, list[IntArray]] = {}  # active set -> solved rows
-    for j, known in enumerate(starts):
+    keys: list[FaceKey | None] = [None] * B  # each row's active set (or tie's), once solved
+    for j, known in enumerate(before):
         x[B + j], lam[B + j], f[B + j] = known.x, known.lam, known.f
-        solved_by_set.setdefault(known.key, []).append(np.array([B + j]))
+        if j < len(starts):
+            solved_by_set.setdefault(known.key, []).append(np.array([B + j]))
     # active set -> how often each row failed from it: a row is not tried
     # again after ``batch_give_up`` failures (else every full solve would
     # re-run Newton on every pending row: time quadratic in the samples)
@@ -242,6 +259,32 @@ def _solve_batch(
     # rows per Newton batch (n at most the unknowns and all multipliers)
     n_most = ws.m + n_balls + ws.stack.A.shape[0] + ws.Eq.shape[0]
     chunk = max(1, CHUNK_ENTRIES // n_most**2)
+
+    def take(now: IntArray, ok: BoolArray, solved: tuple[Any, ...], active: FaceKey) -> IntArray:
+        """Keep the rows ``now[ok]`` Newton solved on ``active``."""
+        xs, lams, fs, checks = solved
+        won = now[ok]
+        x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
+        assert checks is not None  # rows were accepted: they were checked
+        feas[won], residual[won] = checks.feasibility[ok], checks.balance[ok]
+        for row in won.tolist():
+            keys[row] = active
+        return won
+
+    own_sets: dict[FaceKey, list[tuple[int, int]]] = {}
+    for j, (sample, known) in enumerate(own):
+        own_sets.setdefault(known.key, []).append((sample, B + len(starts) + j))
+    for active, pairs in own_sets.items():
+        for part in range(0, len(pairs), chunk):
+            now, near = np.array(pairs[part : part + chunk]).T
+            ok, xs, lams, fs, checks, _ = _newton_batch(
+                ws, active, g_hat[now], sigma[now], x[near], lam[near], f[near],
+                r[now], c[now], (r[near], c[near]), g_hat[near],
+            )  # fmt: skip
+            if np.any(ok):
+                won = take(now, ok, (xs, lams, fs, checks), active)
+                solved_by_set.setdefault(active, []).append(won)
+                pending = np.setdiff1d(pending, won, assume_unique=True)
     while pending.size:
         # Newton from the nearest solved sample of each known active set, while it helps.
         progress = True
@@ -289,10 +332,7 @@ def _solve_batch(
                         start_distance[active][tried[chunk:]] = np.inf
                         break
                     if np.any(ok):
-                        won = now[ok]
-                        x[won], lam[won], f[won], batched[won] = xs[ok], lams[ok], fs[ok], True
-                        assert checks is not None  # rows were accepted: they were checked
-                        feas[won], residual[won] = checks.feasibility[ok], checks.balance[ok]
+                        won = take(now, ok, (xs, lams, fs, checks), active)
                         rows.append(won)
                         pending = np.setdiff1d(pending, won, assume_unique=True)
                         progress = True
@@ -317,6 +357,7 @@ def _solve_batch(
         feas[first] = point.certificate.feasibility_mm / ws.asm.s
         residual[first] = point.certificate.equilibrium_residual
         found = point.active if point.active is not None else point.tie
+        keys[first] = found
         if found is not None and dense:
             solved_by_set.setdefault(found, []).append(np.array([first]))
 
@@ -332,6 +373,14 @@ def _solve_batch(
             full += 1
     x, lam, f, batched, assembled = x[:B], lam[:B], f[:B], batched[:B], assembled[:B]
     feas, residual = feas[:B], residual[:B]
+    followed = None
+    if own_starts is not None:
+        followed = tuple(
+            Start(g_hat[i], r[i], c[i], x[i].copy(), lam[i].copy(), f[i].copy(), key)
+            if key is not None and assembled[i]
+            else None
+            for i, key in enumerate(keys)
+        )
     x[~assembled] = np.nan
     lam[~assembled] = np.nan
     return BatchSolution(
@@ -344,6 +393,7 @@ def _solve_batch(
         batched=batched,
         full_solves=full,
         assembled=assembled,
+        own_starts=followed,
     )
 
 

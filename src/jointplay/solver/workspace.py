@@ -146,6 +146,7 @@ class Workspace:
         *,
         forces: bool = True,
         starts: Sequence[Start] = (),
+        own_starts: Sequence[Start | None] | None = None,
     ) -> BatchSolution:
         """Equilibria under many loads at once: ``work`` is (B, m), one row of
         the loads' work per sample (build rows with ``Assembly.wrench_work``).
@@ -157,10 +158,15 @@ class Workspace:
         (``BatchSolution.forces``); a study that reads positions only says
         False and skips that split where Newton's own forces certify them.
         ``starts``: samples solved before (``batch.solved_start``) that start
-        Newton like the batch's own solved samples (a study's chunks share one)."""
+        Newton like the batch's own solved samples (a study's chunks share one).
+        ``own_starts``: one per row, the same sample solved in a nearby batch
+        (``BatchSolution.own_starts`` of the previous pose of a motion), tried
+        first; given, the solution carries its rows' own starts in turn."""
         from jointplay.solver.batch import solve_batch
 
-        return solve_batch(self, work, radii, centres, forces=forces, starts=starts)
+        return solve_batch(
+            self, work, radii, centres, forces=forces, starts=starts, own_starts=own_starts
+        )
 
     def with_radii(self, radii: FloatArray, centre: FloatArray | None = None) -> Workspace:
         """A workspace of the same mechanism with other plays: ``radii`` are

@@ -19,6 +19,8 @@ play that drives each measure where it is worst.
 
 from __future__ import annotations
 
+import itertools
+import os
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -29,7 +31,7 @@ from jointplay.errors import StudyError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.proven import Resolution, proven
-from jointplay.solver.batch import solved_start
+from jointplay.solver.batch import Start, solved_start
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.kinematics import Poses, nominal_poses
 from jointplay.studies.montecarlo import PERCENTILES
@@ -163,8 +165,19 @@ class MotionMonteCarlo:
         workers: int | None,
     ) -> MotionMonteCarloResult:
         shared = (cycle, plays, loads, deviations, self.motion.case)
-        tasks = [(s,) for s in range(cycle.steps)]
-        solved = sorted(run_chunks(_solve_pose, shared, tasks, workers, None), key=lambda p: p.step)
+        # contiguous runs of poses, one per process: each part starts from its
+        # answer at the pose before
+        runs = min(cycle.steps, workers or os.cpu_count() or 1)
+        edges = np.linspace(0, cycle.steps, runs + 1).round().astype(int).tolist()
+        tasks = list(itertools.pairwise(edges))
+        solved = sorted(
+            (
+                pose
+                for run in run_chunks(_solve_poses, shared, tasks, workers, None)
+                for pose in run
+            ),
+            key=lambda p: p.step,
+        )
         first = cycle.posed(0)
         asm = assemble(first)
         pmap, lmap, dmap = (
@@ -226,9 +239,25 @@ class _Pose:
     equilibrium_residual: float
 
 
+def _solve_poses(
+    shared: tuple[_Cycle, FloatArray, FloatArray, FloatArray, str | None], first: int, stop: int
+) -> list[_Pose]:
+    """Poses ``first`` to ``stop - 1`` in turn, each part's Newton starting
+    from its own answer at the pose before (its touching contacts seldom
+    change over a step)."""
+    poses = []
+    own: tuple[Start | None, ...] | None = None
+    for step in range(first, stop):
+        pose, own = _solve_pose(shared, step, own)
+        poses.append(pose)
+    return poses
+
+
 def _solve_pose(
-    shared: tuple[_Cycle, FloatArray, FloatArray, FloatArray, str | None], step: int
-) -> _Pose:
+    shared: tuple[_Cycle, FloatArray, FloatArray, FloatArray, str | None],
+    step: int,
+    own: tuple[Start | None, ...] | None,
+) -> tuple[_Pose, tuple[Start | None, ...] | None]:
     """Every set of parts at pose ``step``: the posed model assembled once,
     the parts' radii, loads and centres from its maps, one batch."""
     cycle, plays, loads, deviations, case = shared
@@ -244,7 +273,12 @@ def _solve_pose(
         centres = dmap.centres(deviations)
     nominal = solved_start(ws, lmap.g0)  # the model's own parts start the batch's Newton
     batch = ws.solve_batch(
-        work, radii, centres, forces=False, starts=() if nominal is None else (nominal,)
+        work,
+        radii,
+        centres,
+        forces=False,
+        starts=() if nominal is None else (nominal,),
+        own_starts=own if own is not None else (None,) * n,
     )
     displacement = np.zeros((n, len(model.points), 3))
     length = Resolution.of(asm.s, asm.ell, settings=ws.settings).length
@@ -253,7 +287,7 @@ def _solve_pose(
         at = np.asarray(point.at)
         displacement[:, k] = proven(motion[:, :3] + np.cross(motion[:, 3:], at), length)
     displacement[~batch.assembled] = np.nan  # parts that cannot be put together at this pose
-    return _Pose(
+    pose = _Pose(
         step,
         displacement,
         int(np.sum(batch.batched)),
@@ -261,6 +295,7 @@ def _solve_pose(
         float(np.max(batch.feasibility_mm, initial=0.0)),
         float(np.max(batch.equilibrium_residual, initial=0.0)),
     )
+    return pose, batch.own_starts
 
 
 @dataclass(frozen=True)
