@@ -117,6 +117,19 @@ def test_version_and_help() -> None:
     assert "solve" in run("--help").stdout
 
 
+def test_python_dash_m_runs_the_command_line() -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "jointplay", "solve", str(PAPER / "6.1.6.1.yaml"), "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 0 and proc.stderr == ""
+    assert json.loads(proc.stdout) == json.loads(
+        run("solve", str(PAPER / "6.1.6.1.yaml"), "--json").stdout
+    )
+
+
 def test_every_bundled_example_solves() -> None:
     for path in sorted((PAPER.parent).rglob("*.yaml")):
         proc = run("solve", str(path), "--json")

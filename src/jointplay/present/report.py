@@ -1053,6 +1053,19 @@ class _Page:
                 )
             head = ["point", "limit (mm)", "worst step", "measured there (mm)", "over the motion"]
             self.parts.append(_table(head, rows, "Requirements at every pose"))
+            # the summary's verdicts are at the pose written in the file: say the motion's there
+            failing = [row for row in rows if row[4] == "FAILED"]
+            words = (
+                "Over the motion (the summary above is at the pose written in the file): "
+                + (
+                    f"{len(failing)} of {len(rows)} requirements FAIL, "
+                    + "; ".join(f"{r[0]} at step {r[2]}: {r[3]} mm against {r[1]}" for r in failing)
+                    if failing
+                    else "all requirements pass at every pose"
+                )
+                + ". See the Motion section."
+            )
+            self.parts.insert(self.summary_end, "<p>" + html.escape(words) + "</p>")
         self.parts.append(_svg(motion_figure(mr)))
         self.parts.append(_svg(poses_figure(model, mr)))
         self.paragraph("Move the slider to step through the poses.")
