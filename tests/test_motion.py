@@ -561,3 +561,16 @@ def test_a_plain_solve_reads_the_table_at_the_written_pose() -> None:
         posed = posed_model(model, poses, s)
         assert posed.motion is None
         assert posed.loads[0].force == pytest.approx((force, 0.0, 0.0), rel=1e-12)
+
+
+def test_the_drive_is_shown_as_given_not_with_the_turn_s_round_off() -> None:
+    """The range is given in degrees and solved in radians: 15 deg came back
+    as 14.999999999999998 in --csv and --json. Shown, each step's drive is
+    the range's own grid, in every output."""
+    model = jointplay.load(GALLERY / "four_bar.yaml")
+    result = Motion(steps=73).run(model)
+    grid = [5.0 * k for k in range(73)]
+    assert [result.shown_value(s) for s in range(73)] == grid
+    assert [step["drive"] for step in result.to_dict()["steps"]] == grid
+    table = result.to_dataframe()
+    assert table[table.columns[1]].tolist() == grid

@@ -80,6 +80,13 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
     return model_from_dict(data, source=source)
 
 
+def shown_drive(coordinate: str, value: float) -> float:
+    """The drive's value as the user gives it: deg for a spin (to 12 digits:
+    the turn from the range's degrees to radians and back leaves round-off,
+    15 deg shown as 14.999999999999998), mm for a slide."""
+    return float(f"{np.degrees(value):.12g}") if coordinate == "spin" else float(value)
+
+
 @dataclass(frozen=True)
 class MotionResult:
     """Per step: the drive's value, each point's nominal position and its
@@ -110,8 +117,7 @@ class MotionResult:
         return "deg" if self.coordinate == "spin" else "mm"
 
     def shown_value(self, s: int) -> float:
-        v = float(self.values[s])
-        return float(np.degrees(v)) if self.coordinate == "spin" else v
+        return shown_drive(self.coordinate, float(self.values[s]))
 
     @property
     def reaction_unit(self) -> str:

@@ -35,7 +35,7 @@ from jointplay.solver.batch import Start, solved_start
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.kinematics import Poses, nominal_poses
 from jointplay.studies.montecarlo import PERCENTILES
-from jointplay.studies.motion import Motion, MotionResult, posed_model
+from jointplay.studies.motion import Motion, MotionResult, posed_model, shown_drive
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import deviation_map, load_map, nothing_varies, play_map
 
@@ -72,10 +72,6 @@ class _Cycle:
 
     def posed(self, step: int) -> Model:
         return posed_model(self.model, self.poses, step, self.source)
-
-
-def _shown(coordinate: str, value: float) -> float:
-    return float(np.degrees(value)) if coordinate == "spin" else float(value)
 
 
 def _unit(coordinate: str) -> str:
@@ -336,7 +332,7 @@ class MotionMonteCarloResult:
         return _unit(self.coordinate)
 
     def shown_value(self, s: int) -> float:
-        return _shown(self.coordinate, float(self.values[s]))
+        return shown_drive(self.coordinate, float(self.values[s]))
 
     def measure(self, point: str, direction: Any = None) -> FloatArray:
         """(S, N) mm: each part's displacement of ``point`` per step, along
@@ -574,7 +570,7 @@ class MotionEnvelopeResult:
         return _unit(self.coordinate)
 
     def shown_value(self, s: int) -> float:
-        return _shown(self.coordinate, float(self.values[s]))
+        return shown_drive(self.coordinate, float(self.values[s]))
 
     def at(self, step: int, point: str) -> EnvelopeResult:
         return self.envelopes[step][self.point_names.index(point)]
@@ -690,7 +686,7 @@ class MotionContributionsResult:
         return self.results[0].plays if self.results else ()
 
     def shown_value(self, s: int) -> float:
-        return _shown(self.coordinate, float(self.values[s]))
+        return shown_drive(self.coordinate, float(self.values[s]))
 
     def worst_case(self, k: int) -> FloatArray:
         """(S, nv) % of measure ``k``'s arithmetic stack per step and play."""
