@@ -27,7 +27,7 @@ LAYERS = [
     {"solver"},
     {"studies"},
     {"present"},
-    {"cli", ""},  # "" is the package's own __init__: the public API
+    {"cli", "", "__main__"},  # "" is the package's own __init__: the public API
 ]
 
 
