@@ -129,6 +129,31 @@ def test_answer_at_a_pose_is_the_posed_models() -> None:
     assert len(result.to_dataframe()) == 5
 
 
+def test_every_pose_of_a_turn_is_the_posed_models_solve() -> None:
+    """Each pose's Newton starts from the poses before (``batch.follow``,
+    ``batch.extrapolated``): two routes to one optimum, which agree to the
+    certificate's tolerance, at every step of the four-bar's turn."""
+    model = jointplay.load(GALLERY / "four_bar.yaml")
+    result = Motion().run(model)
+    for s in range(result.steps):
+        direct = jointplay.solve(posed_model(model, result.poses, s))
+        mine = result.results[s]
+        mine.check()
+        play = 0.05  # the largest play (mm): the pins' axial clearance
+        force = max(c.force_magnitude for j in direct.joints.values() for c in j.contacts)
+        assert np.allclose(
+            result.displacement[s, 0], direct.points["fingertip"].displacement, atol=1e-8 * play
+        )
+        for name, joint in direct.joints.items():
+            assert np.allclose(mine.joints[name].translation, joint.translation, atol=1e-8 * play)
+            assert np.allclose(
+                mine.joints[name].reaction_force, joint.reaction_force, atol=1e-8 * force
+            )
+        assert result.touching[s] == tuple(
+            f"{n}.{c.name}" for n, j in direct.joints.items() for c in j.contacts if c.in_contact
+        )
+
+
 # -- the clearance answer over the motion against closed forms ------------------------
 #: The clearance answer meets a closed form to this (mm): the brief's promise.
 PLAY_TOL = 1e-6

@@ -15,8 +15,9 @@ then tried on the others, until none is left.
 from __future__ import annotations
 
 import contextlib
+import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -26,8 +27,10 @@ from numpy.typing import NDArray
 from jointplay.assembly import Assembly, IntArray
 from jointplay.errors import SolverError, UnassembledError
 from jointplay.geometry import FloatArray
+from jointplay.model.mechanism import Load
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
+from jointplay.result import Result
 from jointplay.settings import DEFAULT, TINY, SolverSettings
 from jointplay.solver import certificate, faces, forces, held, newton, pipeline
 
@@ -111,6 +114,21 @@ class Start:
     key: FaceKey
 
 
+def extrapolated(before: Start | None, last: Start | None) -> Start | None:
+    """The start for the next of evenly spaced nearby models (a motion's
+    poses): ``last``'s answer moved on by its change since ``before`` when
+    both hold one active set (Newton's start, not an answer: it takes the
+    pose's curvature in fewer steps), else ``last``."""
+    if before is None or last is None or before.key != last.key:
+        return last
+    return replace(
+        last,
+        x=2.0 * last.x - before.x,
+        lam=np.maximum(2.0 * last.lam - before.lam, 0.0),
+        f=2.0 * last.f - before.f,
+    )
+
+
 def solved_start(
     ws: Workspace,
     work: FloatArray,
@@ -170,6 +188,35 @@ def solve_batch(
     slow down, and a study's processes would compete for the cores."""
     with linalg.one_blas_thread():
         return _solve_batch(ws, work, radii, centres, forces, starts, own_starts)
+
+
+def follow(
+    ws: Workspace, start: Start | None, loads: Sequence[Load] | None = None
+) -> tuple[Result, Start | None]:
+    """The certified equilibrium of ``ws``'s model under its loads (or
+    ``loads``) as a batch of one whose Newton starts from ``start`` (the
+    same sample's answer on a nearby model: the pose before, in a motion),
+    with its answer as the start of the next; the full solve where there is
+    no start or Newton's answer from it is not the optimum."""
+    began = time.perf_counter()
+    loads, g = pipeline.loads_and_work(ws, loads)
+    scale = pipeline.load_scale(ws, float(np.linalg.norm(g)))
+    if ws.asm.sparse or scale == 0.0:
+        return pipeline.solve_loads(ws, loads), None
+    with linalg.one_blas_thread():
+        solved = _solve_batch(ws, g[None], None, None, True, (), (start,))
+    assert solved.own_starts is not None
+    after = solved.own_starts[0]
+    if after is None:  # the answer has no active set to start the next from
+        return pipeline.solve_loads(ws, loads), None
+    g_hat = g / scale
+    point = faces.Point(after.x, after.lam, after.f, method="Newton from a nearby answer")
+    nu = pipeline.rigid_multipliers(ws, g_hat, point)
+    point.certificate = certificate.certify(ws, g_hat, ws.softness(scale), point, nu)
+    point.nu = nu
+    if not point.certificate.certified:  # the batch's rows passed it: round-off apart
+        return pipeline.solve_loads(ws, loads), None
+    return pipeline.result_of(ws, point, scale, loads, g, began), after
 
 
 def _solve_batch(

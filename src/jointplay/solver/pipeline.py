@@ -46,18 +46,37 @@ def solve_loads(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     """The certified small-displacement equilibrium of ``ws``'s model under
     its loads, or under ``loads`` instead."""
     start = time.perf_counter()
-    if loads is None:
-        loads = ws.asm.model.loads_of(None)
-        g = ws.asm.g
-    else:
-        loads = tuple(loads)
-        g = ws.asm.work_of(loads)
+    loads, g = loads_and_work(ws, loads)
     held.check_driven(ws, g)
     scale = load_scale(ws, float(np.linalg.norm(g)))
     g_hat = g / scale if scale else g
     point = optimum(ws, g_hat, ws.softness(scale))
+    return result_of(ws, point, scale, loads, g, start)
+
+
+def loads_and_work(
+    ws: Workspace, loads: Sequence[Load] | None
+) -> tuple[tuple[Load, ...], FloatArray]:
+    """The loads (the model's own if None) and their work on the unknowns."""
+    if loads is None:
+        return tuple(ws.asm.model.loads_of(None)), ws.asm.g
+    loads = tuple(loads)
+    return loads, ws.asm.work_of(loads)
+
+
+def result_of(
+    ws: Workspace,
+    point: faces.Point,
+    scale: float,
+    loads: Sequence[Load],
+    g: FloatArray,
+    start: float,
+) -> Result:
+    """The ``Result`` of a certified ``point`` (scaled by ``scale``, the
+    loads' ``load_scale``), timed from ``start``."""
     assert point.certificate is not None
     to_newton = scale / ws.asm.s  # scaled multipliers -> N
+    g_hat = g / scale if scale else g
     nu = point.nu if point.nu is not None else rigid_multipliers(ws, g_hat, point)
     rigid = nu * to_newton
     elapsed = time.perf_counter() - start
@@ -70,7 +89,7 @@ def solve_loads(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
         point.certificate,
         elapsed,
         ws.free_motions,
-        loads,
+        tuple(loads),
         g,
         ws.settings,
     )

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, leastsq
 
 from jointplay.errors import MotionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray, describe_motion
@@ -312,17 +312,12 @@ def _solve_step(
         return evaluated(z)[1]
 
     m = len(eqs.rows) + 1
-    fit = least_squares(
-        fun,
-        z0,
-        jac=jac,
-        method="lm" if m >= eqs.n else "trf",
-        xtol=tol,
-        ftol=tol,
-        gtol=tol,
-        max_nfev=settings.evaluations,
-    )
-    R, p, Jl = eqs._pose(R0, p0, fit.x)
+    if m >= eqs.n:  # MINPACK's Levenberg-Marquardt, called with little overhead
+        z = leastsq(fun, z0, Dfun=jac, xtol=tol, ftol=tol, gtol=tol, maxfev=settings.evaluations)[0]
+    else:
+        z = least_squares(fun, z0, jac=jac, method="trf", xtol=tol, ftol=tol, gtol=tol,
+                          max_nfev=settings.evaluations).x  # fmt: skip
+    R, p, Jl = eqs._pose(R0, p0, z)
     res, J = eqs.evaluate(R, p, Jl, value)
     where = f"step {step}" if step >= 0 else "on the way from the written pose to the first step"
     at = _shown(eqs.drive, value)
@@ -355,7 +350,7 @@ def _solve_step(
             joints=joints,
             source=source,
         )
-    return R, p, fit.x
+    return R, p, z
 
 
 def _column_scale(eqs: _Equations) -> FloatArray:

@@ -7,7 +7,9 @@ points, loads' points, centres of mass, outlines and shared deviations'
 points and frames moved with their bodies; a load's force and torque keep
 their global directions unless it ``follows: body``, and its tables are
 read at the step's drive value; gravity stays global) and solves the clearance
-equilibrium of that posed model with ``jointplay.solve``, one solve a pose.
+equilibrium of that posed model, each pose's Newton starting from the answer
+at the pose before (``batch.follow``; the full solve where that is not the
+optimum).
 """
 
 from __future__ import annotations
@@ -245,7 +247,9 @@ class Motion:
         return model_from_dict(data, source=source)
 
     def run(self, model: Model, source: str = "<model>") -> MotionResult:
-        from jointplay.solver.solve import solve
+        from jointplay.assembly import assemble
+        from jointplay.solver.batch import Start, extrapolated, follow
+        from jointplay.solver.workspace import Workspace
 
         model = self.resolve(model, source)
         assert model.motion is not None
@@ -253,9 +257,15 @@ class Motion:
         values = np.linspace(start, stop, model.motion.steps)
         poses = nominal_poses(model, values, settings=self.settings, source=source)
         results, nominal, touching, reaction = [], [], [], []
+        # each pose's Newton starts from the answers at the two poses before
+        before: Start | None = None
+        last: Start | None = None
         for s in range(len(values)):
             posed = posed_model(model, poses, s, source)
-            result = solve(posed, case=self.case) if self.case else solve(posed)
+            loads = posed.loads_of(self.case) if self.case else None
+            ws = Workspace(assemble(posed))
+            result, after = follow(ws, extrapolated(before, last), loads)
+            before, last = last, after
             results.append(result)
             nominal.append([poses.place(s, p.body, np.array(p.at)) for p in model.points])
             touching.append(

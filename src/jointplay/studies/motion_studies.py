@@ -31,7 +31,7 @@ from jointplay.errors import StudyError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.proven import Resolution, proven
-from jointplay.solver.batch import Start, solved_start
+from jointplay.solver.batch import Start, extrapolated, solved_start
 from jointplay.solver.workspace import Workspace
 from jointplay.studies.kinematics import Poses, nominal_poses
 from jointplay.studies.montecarlo import PERCENTILES
@@ -239,12 +239,17 @@ def _solve_poses(
     shared: tuple[_Cycle, FloatArray, FloatArray, FloatArray, str | None], first: int, stop: int
 ) -> list[_Pose]:
     """Poses ``first`` to ``stop - 1`` in turn, each part's Newton starting
-    from its own answer at the pose before (its touching contacts seldom
-    change over a step)."""
+    from its own answers at the two poses before, extrapolated (its touching
+    contacts seldom change over a step)."""
     poses = []
-    own: tuple[Start | None, ...] | None = None
+    before: tuple[Start | None, ...] | None = None
+    last: tuple[Start | None, ...] | None = None
     for step in range(first, stop):
-        pose, own = _solve_pose(shared, step, own)
+        own = last
+        if before is not None and last is not None:
+            own = tuple(extrapolated(b, a) for b, a in zip(before, last, strict=True))
+        pose, after = _solve_pose(shared, step, own)
+        before, last = last, after
         poses.append(pose)
     return poses
 
