@@ -123,9 +123,9 @@ def extrapolated(before: Start | None, last: Start | None) -> Start | None:
         return last
     return replace(
         last,
-        x=2.0 * last.x - before.x,
-        lam=np.maximum(2.0 * last.lam - before.lam, 0.0),
-        f=2.0 * last.f - before.f,
+        x=last.x + (last.x - before.x),
+        lam=np.maximum(last.lam + (last.lam - before.lam), 0.0),
+        f=last.f + (last.f - before.f),
     )
 
 
