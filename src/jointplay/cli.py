@@ -574,7 +574,7 @@ def motion(
                 raise OptionError(
                     f"--range {span}: expected START:STOP, e.g. '0 deg:360 deg'", source=source
                 )
-            bounds = (_number_or_text(parts[0]), _number_or_text(parts[1]))
+            bounds = (parts[0].strip(), parts[1].strip())  # as written: "90" has no unit
         _check_outputs(csv, plot)
         model = load(model_path)
         settings = Motion(drive=drive, range=bounds, steps=steps, case=case)
@@ -605,13 +605,6 @@ def motion(
         )
 
     _guarded(run, as_json)
-
-
-def _number_or_text(text: str) -> float | str:
-    try:
-        return float(text)
-    except ValueError:
-        return text.strip()
 
 
 @app.command(short_help="Which toleranced play drives each functional point.")

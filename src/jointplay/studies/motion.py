@@ -242,9 +242,49 @@ class Motion:
             return model
         section = {} if model.motion is None else model.motion.model_dump()
         section.update(given)
+        self._check_given(model, section)
         data = model.model_dump(by_alias=True, exclude_none=True)
         data["motion"] = section
         return model_from_dict(data, source=source)
+
+    def _check_given(self, model: Model, section: dict[str, Any]) -> None:
+        """``OptionError`` naming ``--drive`` or ``--range`` when the value given
+        here (the command line's) does not fit the model; what the file's
+        motion section alone gets wrong is the file's error, said on loading."""
+        from jointplay.errors import OptionError
+        from jointplay.model.mechanism import listing, suggest
+        from jointplay.model.motion import (
+            FILE_NAMES,
+            OPTION_NAMES,
+            MotionSection,
+            coordinate_of,
+            range_of,
+        )
+
+        names = [j.name for j in model.joints]
+        if self.drive is not None and self.drive not in names:
+            raise OptionError(
+                f"--drive {self.drive}: unknown joint; joints are: {listing(names)}; name the "
+                "joint whose spin or slide drives the motion" + suggest(self.drive, names)
+            )
+        if (self.drive is None and self.range is None) or section.get("drive") not in names:
+            return
+        if "range" not in section:
+            raise OptionError(
+                f"--drive {self.drive}: the model has no motion range; give --range "
+                "START:STOP, e.g. --range '0 deg:360 deg'"
+            )
+        where = OPTION_NAMES if self.range is not None else FILE_NAMES
+        try:
+            kind = coordinate_of(model.joint(section["drive"]), *section["range"], where)
+            range_of(MotionSection(**section), kind, where)
+        except ValueError as exc:
+            if self.range is not None:
+                raise OptionError(str(exc)) from None
+            raise OptionError(
+                f"--drive {self.drive}: the model file's motion {exc}; give --range START:STOP "
+                "in the unit of the drive's coordinate"
+            ) from None
 
     def run(self, model: Model, source: str = "<model>") -> MotionResult:
         from jointplay.assembly import assemble
