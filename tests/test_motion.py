@@ -657,3 +657,23 @@ def test_bad_drive_and_range_options_name_the_option(
     assert all(w in proc.stderr for w in words), proc.stderr
     doc = json.loads(run("motion", path, *args, "--steps", "3", "--json").stdout)
     assert doc["status"] == "invalid" and words[0] in doc["message"]
+
+
+@pytest.mark.parametrize("steps", [3, 37])
+def test_an_unreachable_step_is_named_by_the_users_values(steps: int) -> None:
+    """The rocker turned 360 deg in 180 deg (or 10 deg) steps: each step is
+    solved in smaller parts, but the message names only the user's step and
+    its value, and the step before: "between step N-1 (A) and step N (B)"."""
+    import re
+
+    model = _four_bar(1000.0, drive="pivot", turn="360 deg")
+    with pytest.raises(MotionError) as err:
+        Motion(steps=steps).run(model)
+    message, n = str(err.value), err.value.step
+    grid = np.linspace(0.0, 360.0, steps)
+    assert err.value.kind == "unreachable" and n >= 1
+    assert f"at step {n} (drive 'pivot' at {grid[n]:g} deg)" in message, message
+    assert f"between step {n - 1} ({grid[n - 1]:g} deg) and step {n} ({grid[n]:g} deg)" in message
+    shown = {float(v) for v in re.findall(r"(-?[\d.]+) deg", message)}
+    assert shown <= {float(grid[n - 1]), float(grid[n])}, message
+    assert err.value.value == pytest.approx(np.radians(grid[n]))
