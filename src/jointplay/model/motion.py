@@ -73,8 +73,7 @@ OPTION_NAMES = ("--range START", "--range STOP", "--range", "--drive")
 def suggested_range(start: Any, stop: Any, unit: str, option: bool) -> str:
     """The range as the user gave it, its plain numbers with ``unit``."""
     ends = [
-        f"{str(value).strip()} {unit}" if is_plain(value) else str(value)
-        for value in (start, stop)
+        f"{str(value).strip()} {unit}" if is_plain(value) else str(value) for value in (start, stop)
     ]
     if option:
         return f"--range '{ends[0]}:{ends[1]}'"
@@ -143,7 +142,6 @@ def range_of(
             ) from None
     if out[0] == out[1]:
         raise ValueError(
-            f"{names[2]}: starts and stops at {shown(section.range[0])}; give two different "
-            "values"
+            f"{names[2]}: starts and stops at {shown(section.range[0])}; give two different values"
         )
     return out[0], out[1]

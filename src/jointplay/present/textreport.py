@@ -523,7 +523,9 @@ def _touching_by_joint(result: Any, switched: Mapping[str, Sequence[str]] | None
     for name, joint in result.joints.items():
         marked = set((switched or {}).get(name, ()))
         shown = [
-            c.name + (SWITCHED if c.name in marked else "") if c.in_contact else f"{c.name} off{SWITCHED}"
+            c.name + (SWITCHED if c.name in marked else "")
+            if c.in_contact
+            else f"{c.name} off{SWITCHED}"
             for c in joint.contacts
             if c.in_contact or c.name in marked
         ]

@@ -333,7 +333,8 @@ class Motion:
             )
         where = OPTION_NAMES if self.range is not None else FILE_NAMES
         try:
-            kind = coordinate_of(model.joint(section["drive"]), *section["range"], where)
+            start, stop = section["range"]
+            kind = coordinate_of(model.joint(section["drive"]), start, stop, where)
             range_of(MotionSection(**section), kind, where)
         except ValueError as exc:
             if self.range is not None:
