@@ -642,6 +642,8 @@ def test_a_spin_range_of_zero_and_radians_with_their_unit_read() -> None:
         ("four_bar", ["--drive", "nothing"], ["--drive nothing: unknown joint", "motor"]),
         ("slider_crank", ["--drive", "guide"], ["--drive guide:", "give --range"]),
         ("slider_crank", ["--drive", "guide", "--range", "0 deg:9 deg"], ["--range START:"]),
+        ("../paper/6.1.6.1", ["--range", "0 deg:9 deg"], ["--range: the model has no", "--drive"]),
+        ("../paper/6.1.6.1", ["--drive", "l1"], ["--drive l1: the model has no", "--range"]),
     ],
 )
 def test_bad_drive_and_range_options_name_the_option(

@@ -324,8 +324,15 @@ class Motion:
                 f"--drive {self.drive}: unknown joint; joints are: {listing(names)}; name the "
                 "joint whose spin or slide drives the motion" + suggest(self.drive, names)
             )
-        if (self.drive is None and self.range is None) or section.get("drive") not in names:
+        if self.drive is None and self.range is None:
             return
+        if "drive" not in section:
+            raise OptionError(
+                "--range: the model has no motion drive; give --drive JOINT, the joint whose "
+                f"spin or slide drives the motion, one of {listing(names)}"
+            )
+        if section["drive"] not in names:
+            return  # the file's unknown drive: the file's error
         if "range" not in section:
             raise OptionError(
                 f"--drive {self.drive}: the model has no motion range; give --range "
