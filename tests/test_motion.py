@@ -325,7 +325,11 @@ def _four_bar(torque: float, drive: str = "motor", turn: object = "360 deg") -> 
             {"name": "rocker pivot", "body": "rocker", "at": [FB_D, 0, 0]},
             {"name": "rocker tip", "body": "rocker", "at": [bx, by, 0]},
         ],
-        "motion": {"drive": drive, "range": [0, turn], "steps": 37},
+        "motion": {
+            "drive": drive,
+            "range": [0, f"{turn!r} rad" if isinstance(turn, float) else turn],
+            "steps": 37,
+        },
     }
     data["joints"][["motor", "pivot"].index(drive) * 3]["backlash"] = 0
     return model_from_dict(data, source="four_bar")
@@ -527,7 +531,9 @@ def test_a_narrow_terminal_keeps_the_motion_numbers_whole() -> None:
         ([["10 deg", -200], ["360 deg", -200]], "extend it to 0"),
         ([["0 mm", -200], ["360 mm", -200]], "give them in deg"),
         ([["0 deg", -200], ["180 deg", -200]], "extend the table over the motion's range"),
-        ([[0, -200], [3.0, -200]], "extend the table over the motion's range"),  # rad
+        ([[0, -200], ["3 rad", -200]], "extend the table over the motion's range"),
+        ([[0, -200], [7, -200]], "a drive's value has no unit"),  # 7 would be rad
+        ([[0, -200], ["7", -200]], "a drive's value has no unit"),
     ],
 )
 def test_bad_load_tables(table: list[Any], words: str) -> None:
@@ -599,3 +605,77 @@ def test_the_drive_is_shown_as_given_not_with_the_turn_s_round_off() -> None:
     assert [step["drive"] for step in result.to_dict()["steps"]] == grid
     table = result.to_dataframe()
     assert table[table.columns[1]].tolist() == grid
+
+
+# -- the drive's values as given: a spin's need a unit; an option's errors name it -----
+@pytest.mark.parametrize("span", [[0, 90], ["0", "90"], ["0 deg", 1.5]])
+def test_a_spin_range_without_a_unit_is_refused_in_the_file(span: list[object]) -> None:
+    """A plain number for a spin would be read as rad (90 rad: 14 turns);
+    the file's motion.range entry is named with the fix."""
+    data = jointplay.load(GALLERY / "four_bar.yaml").model_dump(by_alias=True, exclude_none=True)
+    data["motion"]["range"] = span
+    with pytest.raises(ModelError) as err:
+        model_from_dict(data, source="bar.yaml")
+    message = str(err.value)
+    assert err.value.exit_code == 2
+    assert "bar.yaml: motion: range[1]" in message and "has no unit" in message, message
+    assert " deg'" in message and "radians" in message
+
+
+def test_a_slide_range_reads_a_plain_number_as_mm() -> None:
+    plain = _with_motion(GALLERY / "slider_crank.yaml", drive="guide", range=[0, -30])
+    given = _with_motion(GALLERY / "slider_crank.yaml", drive="guide", range=["0 mm", "-30 mm"])
+    assert plain.motion_drive()[1:] == given.motion_drive()[1:] == ("slide", 0.0, -30.0)
+
+
+def test_a_spin_range_of_zero_and_radians_with_their_unit_read() -> None:
+    model = _with_motion(GALLERY / "four_bar.yaml", range=[0, "1.5 rad"])
+    assert model.motion_drive()[1:] == ("spin", 0.0, 1.5)
+
+
+@pytest.mark.parametrize(
+    ("model", "args", "words"),
+    [
+        ("four_bar", ["--range", "0:90"], ["--range STOP: '90' has no unit", "'0 deg:90 deg'"]),
+        ("four_bar", ["--range", "0 mm:1 mm"], ["--range START: expected an angle"]),
+        ("four_bar", ["--range", "0 deg"], ["--range 0 deg: expected START:STOP"]),
+        ("four_bar", ["--drive", "nothing"], ["--drive nothing: unknown joint", "motor"]),
+        ("slider_crank", ["--drive", "guide"], ["--drive guide:", "give --range"]),
+        ("slider_crank", ["--drive", "guide", "--range", "0 deg:9 deg"], ["--range START:"]),
+        ("../paper/6.1.6.1", ["--range", "0 deg:9 deg"], ["--range: the model has no", "--drive"]),
+        ("../paper/6.1.6.1", ["--drive", "l1"], ["--drive l1: the model has no", "--range"]),
+    ],
+)
+def test_bad_drive_and_range_options_name_the_option(
+    model: str, args: list[str], words: list[str]
+) -> None:
+    """From the command line the message names the option and its fix, not
+    the file's motion entry; exit 2, one line, and --json says it too."""
+    path = str(GALLERY / f"{model}.yaml")
+    proc = run("motion", path, *args, "--steps", "3")
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert "invalid option" in proc.stderr and f"{path}: motion" not in proc.stderr
+    assert all(w in proc.stderr for w in words), proc.stderr
+    doc = json.loads(run("motion", path, *args, "--steps", "3", "--json").stdout)
+    assert doc["status"] == "invalid" and words[0] in doc["message"]
+
+
+@pytest.mark.parametrize("steps", [3, 37])
+def test_an_unreachable_step_is_named_by_the_users_values(steps: int) -> None:
+    """The rocker turned 360 deg in 180 deg (or 10 deg) steps: each step is
+    solved in smaller parts, but the message names only the user's step and
+    its value, and the step before: "between step N-1 (A) and step N (B)"."""
+    import re
+
+    model = _four_bar(1000.0, drive="pivot", turn="360 deg")
+    with pytest.raises(MotionError) as err:
+        Motion(steps=steps).run(model)
+    message, n = str(err.value), err.value.step
+    grid = np.linspace(0.0, 360.0, steps)
+    assert err.value.kind == "unreachable" and n >= 1
+    assert f"at step {n} (drive 'pivot' at {grid[n]:g} deg)" in message, message
+    assert f"between step {n - 1} ({grid[n - 1]:g} deg) and step {n} ({grid[n]:g} deg)" in message
+    shown = {float(v) for v in re.findall(r"(-?[\d.]+) deg", message)}
+    assert shown <= {float(grid[n - 1]), float(grid[n])}, message
+    assert err.value.value == pytest.approx(np.radians(grid[n]))

@@ -195,6 +195,49 @@ def test_the_guide_switches_sides_where_the_rod_lies_along_it(force: float) -> N
     assert switches["crank pin"] == switches["wrist pin"] == ()
 
 
+def test_the_text_json_and_csv_mark_the_guide_switch_where_the_rod_lies_along_it(
+    compressed: tuple[jointplay.Model, MotionResult],
+) -> None:
+    """The plot's rule, in the table (a mark after the contact, a legend
+    under the table), in --json's "switched" and the CSV's column: the guide's
+    contacts at the steps where the rod crosses the guide's line, the drive's
+    backlash where the torque it holds, F r (sin t - cos t tan phi), changes
+    sign, nothing else."""
+    import io
+
+    from rich.console import Console
+
+    from jointplay.present.textreport import SWITCHED, render_motion
+
+    _, result = compressed
+    phi = _rod_angle(result.values)
+    expected = {s for s in range(1, result.steps) if np.sign(phi[s]) != np.sign(phi[s - 1])}
+    held = np.sign(np.sin(result.values) - np.cos(result.values) * np.tan(phi))
+    turned = {s for s in range(1, result.steps) if held[s] != held[s - 1]}
+    assert turned and not turned & expected
+    buf = io.StringIO()
+    render_motion(result, "crank", Console(file=buf, width=100_000, markup=False))
+    text = buf.getvalue()
+    rows = [line for line in text.splitlines() if "│" in line]
+    assert len(rows) == result.steps
+    for s, row in enumerate(rows):
+        guide = row[row.index("guide (") :]
+        assert (SWITCHED in guide) == (s in expected), row
+        assert (f"drive{SWITCHED}" in row) == (s in turned), row
+        assert row.count(SWITCHED) == guide.count(SWITCHED) + (s in turned), row
+    legend = [line for line in text.splitlines() if line.startswith(f"{SWITCHED}: ")]
+    assert len(legend) == 1 and "pushes the other way" in legend[0]
+    doc = result.to_dict()
+    frame = result.to_dataframe()
+    for s, step in enumerate(doc["steps"]):
+        guide = [name for name in step["switched"] if name.startswith("guide.")]
+        assert bool(guide) == (s in expected)
+        assert sorted(set(step["switched"]) - set(guide)) == (
+            ["main bearing.drive"] if s in turned else []
+        )
+        assert frame["switched"][s] == " ".join(step["switched"])
+
+
 def test_the_joint_forces_are_the_reactions_and_the_rod_s_closed_form(
     compressed: tuple[jointplay.Model, MotionResult],
 ) -> None:

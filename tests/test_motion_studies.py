@@ -224,6 +224,48 @@ def test_cli_motion_with_studies_json_and_csv(tmp_path: Path) -> None:
     assert "fingertip |d| p97.5 (mm)" in header and "leading play" in header
 
 
+def _stderr_on_a_terminal(*args: str) -> tuple[int, str, str]:
+    """Run the command line with stderr on a pseudo-terminal, stdout piped."""
+    import os
+    import pty
+
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "jointplay.cli", *args], stdout=subprocess.PIPE, stderr=slave
+    )
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 65536)
+        except OSError:  # the child has closed its end
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(master)
+    out, _ = proc.communicate(timeout=300)
+    return proc.returncode, out.decode(), b"".join(chunks).decode(errors="replace")
+
+
+def test_cli_motion_progress_is_on_a_terminal_only() -> None:
+    """The studies over the motion take minutes: on a terminal stderr shows
+    their progress; piped, stderr stays empty and stdout is the same, and
+    --json is clean either way."""
+    args = ("motion", str(GALLERY / "four_bar.yaml"), "--steps", "3", "--envelope")
+    piped = run_cli(*args, "--contributions")
+    assert piped.returncode == 0 and piped.stderr == "", piped.stderr
+    as_json = run_cli(*args, "--json")
+    assert as_json.returncode == 0 and as_json.stderr == ""
+    assert json.loads(as_json.stdout)["study"] == "motion"
+    code, out, err = _stderr_on_a_terminal(*args, "--contributions")
+    assert code == 0 and out == piped.stdout
+    assert "envelopes at every pose" in err and "contributions at every pose" in err
+    code, out, err = _stderr_on_a_terminal(*args, "--json")
+    assert code == 0 and json.loads(out) == json.loads(as_json.stdout)
+    assert "every pose" not in err
+
+
 def test_cli_motion_with_samples_prints_band_columns_and_the_fraction() -> None:
     proc = run_cli("motion", str(GALLERY / "slider_crank.yaml"), "--steps", "3", "--samples", "8")
     assert proc.returncode == 0, proc.stderr

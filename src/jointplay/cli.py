@@ -8,7 +8,8 @@ import os
 import sys
 import traceback
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
@@ -574,23 +575,38 @@ def motion(
                 raise OptionError(
                     f"--range {span}: expected START:STOP, e.g. '0 deg:360 deg'", source=source
                 )
-            bounds = (_number_or_text(parts[0]), _number_or_text(parts[1]))
+            bounds = (parts[0].strip(), parts[1].strip())  # as written: "90" has no unit
         _check_outputs(csv, plot)
         model = load(model_path)
         settings = Motion(drive=drive, range=bounds, steps=steps, case=case)
-        nominal = settings.run(model, source)
-        studies = MotionStudiesResult(
-            nominal,
-            None
-            if samples is None
-            else MotionMonteCarlo(samples=samples, seed=seed, motion=settings).run(
-                model, workers=workers, source=source
-            ),
-            MotionEnvelope(motion=settings).run(model, source=source) if envelope else None,
-            MotionContributions(motion=settings).run(model, source=source)
-            if contributions
-            else None,
-        )
+        with _progress_display(not as_json) as bar:
+            nominal = _staged(bar, "solving the motion", lambda: settings.run(model, source))
+            studies = MotionStudiesResult(
+                nominal,
+                None
+                if samples is None
+                else _staged(
+                    bar,
+                    f"Monte Carlo: {samples} sets of parts at every pose",
+                    lambda: MotionMonteCarlo(samples=samples, seed=seed, motion=settings).run(
+                        model, workers=workers, source=source
+                    ),
+                ),
+                MotionEnvelope(motion=settings).run(
+                    model,
+                    source=source,
+                    progress=_stage(bar, "envelopes at every pose", nominal.steps),
+                )
+                if envelope
+                else None,
+                MotionContributions(motion=settings).run(
+                    model,
+                    source=source,
+                    progress=_stage(bar, "contributions at every pose", nominal.steps),
+                )
+                if contributions
+                else None,
+            )
         _finish_study(
             studies,
             csv,
@@ -605,13 +621,6 @@ def motion(
         )
 
     _guarded(run, as_json)
-
-
-def _number_or_text(text: str) -> float | str:
-    try:
-        return float(text)
-    except ValueError:
-        return text.strip()
 
 
 @app.command(short_help="Which toleranced play drives each functional point.")
@@ -957,14 +966,43 @@ def _note(text: str) -> None:
 
 
 def _with_progress(label: str, total: int, shown: bool, run: Callable[[Any], R]) -> R:
-    """``run(progress)``, with a progress bar on stderr when ``shown``."""
-    if not shown:
-        return run(None)
+    """``run(progress)``, with a progress bar on stderr when ``shown`` and
+    stderr is a terminal."""
+    with _progress_display(shown) as bar:
+        return run(_stage(bar, label, total))
+
+
+@contextmanager
+def _progress_display(shown: bool) -> Iterator[Any]:
+    """A progress display on stderr (gone when done) when ``shown`` and stderr
+    is a terminal, else None: a pipe, a file or a CI log gets no progress."""
+    err = Console(stderr=True)
+    if not shown or not err.is_terminal:
+        yield None
+        return
     from rich.progress import Progress
 
-    with Progress(console=Console(stderr=True), transient=True) as bar:
-        task = bar.add_task(label, total=total)
-        return run(lambda done, _total: bar.update(task, completed=done))
+    with Progress(console=err, transient=True) as bar:
+        yield bar
+
+
+def _stage(bar: Any, label: str, total: int) -> Callable[[int, int], None] | None:
+    """A task of ``bar`` (None: none), and its ``progress(done, total)``."""
+    if bar is None:
+        return None
+    task = bar.add_task(label, total=total)
+    return lambda done, _total: bar.update(task, completed=done)
+
+
+def _staged(bar: Any, label: str, run: Callable[[], R]) -> R:
+    """``run()``, shown on ``bar`` (if any) as a task of unknown length while it runs."""
+    if bar is None:
+        return run()
+    task = bar.add_task(label, total=None)
+    try:
+        return run()
+    finally:
+        bar.remove_task(task)
 
 
 def _console() -> Console:

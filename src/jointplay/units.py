@@ -297,6 +297,14 @@ def _hint(dimension: str) -> str:
     )
 
 
+def without_plain_hint(message: str, dimension: str) -> str:
+    """``message`` with its hint asking for units only: where a plain number is
+    refused (a spin's range), the hint must not offer one."""
+    return message.replace(
+        _hint(dimension), f"write it with its unit, such as {UNIT_EXAMPLES[dimension]}"
+    )
+
+
 def _expected(dimension: str, value: Any) -> str:
     return f"expected {_a(dimension)}, got {shown(value)}; {_hint(dimension)}"
 

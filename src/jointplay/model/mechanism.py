@@ -645,6 +645,16 @@ def _check_load_tables(model: Model, sections: list[tuple[str, Load]]) -> list[E
                     continue  # the motion section's own message says what is wrong
                 dimension = DIMENSION[coordinate]
                 unit = "deg" if coordinate == "spin" else "mm"
+                if coordinate == "spin" and table.plain:
+                    found.append(
+                        EntryError(
+                            entry,
+                            f"{where}: a drive's value has no unit; the drive '{joint.name}' is "
+                            "a spin, and a plain number would be read as radians: give its "
+                            "values with a unit, such as ['90 deg', -200] (or 'rad')",
+                        )
+                    )
+                    continue
                 if table.dimension not in (None, dimension):
                     found.append(
                         EntryError(

@@ -8,8 +8,9 @@ cylindrical joint (an angle), or the slide of a prismatic or cylindrical
 joint (a length). A cylindrical joint's coordinate is told by the range's
 unit ("deg" or "mm"). The drive's value is measured from the pose written in
 the file: 0 is that pose. The range's values are read here as written; the
-model checks them against the drive's joint (``check_motion``), since a plain
-number means rad for a spin and mm for a slide.
+model checks them against the drive's joint (``check_motion``): a plain
+number is mm for a slide, as every length, but is refused for a spin (save
+0): a user who writes 90 there means degrees, and it would be read as rad.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt, StrictStr
 
-from jointplay.units import shown, to_base
+from jointplay.units import read_number, shown, to_base, without_plain_hint
 
 if TYPE_CHECKING:
     from jointplay.model.joints.base import Joint
@@ -42,13 +43,52 @@ class MotionSection(BaseModel):
     steps: StrictInt = Field(73, ge=2, le=MOST_STEPS)
 
 
-def coordinate_of(joint: Joint, start: Any, stop: Any) -> Coordinate:
+def is_plain(value: Any) -> bool:
+    """A number written without a unit (``90``, ``"90"``)."""
+    if isinstance(value, str):
+        try:
+            read_number(value.strip())
+        except ValueError:
+            return False
+        return True
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def plain_angle(value: Any) -> bool:
+    """A spin's value written without a unit, and not 0 (0 is 0 in any unit)."""
+    if not is_plain(value):
+        return False
+    try:
+        return float(value) != 0.0
+    except (ValueError, OverflowError):
+        return True
+
+
+#: How errors name the range's ends, the range and the drive: the file's
+#: motion section's entries, or the command line's options.
+FILE_NAMES = ("range[0]", "range[1]", "range", "drive")
+OPTION_NAMES = ("--range START", "--range STOP", "--range", "--drive")
+
+
+def suggested_range(start: Any, stop: Any, unit: str, option: bool) -> str:
+    """The range as the user gave it, its plain numbers with ``unit``."""
+    ends = [
+        f"{str(value).strip()} {unit}" if is_plain(value) else str(value) for value in (start, stop)
+    ]
+    if option:
+        return f"--range '{ends[0]}:{ends[1]}'"
+    return f"range: ['{ends[0]}', '{ends[1]}']"
+
+
+def coordinate_of(
+    joint: Joint, start: Any, stop: Any, names: tuple[str, str, str, str] = FILE_NAMES
+) -> Coordinate:
     """Which coordinate of ``joint`` a range of ``start``, ``stop`` drives;
     ``ValueError`` with the fix where the joint cannot be driven so."""
     kinds: tuple[Coordinate, ...] = type(joint).drivable
     if not kinds:
         raise ValueError(
-            f"drive: joint '{joint.name}' is a {joint.type_name} joint, which has no spin or "
+            f"{names[3]}: joint '{joint.name}' is a {joint.type_name} joint, which has no spin or "
             "slide to drive; name a revolute or cylindrical joint (its spin) or a prismatic "
             "or cylindrical joint (its slide)"
         )
@@ -64,29 +104,44 @@ def coordinate_of(joint: Joint, start: Any, stop: Any) -> Coordinate:
             continue
         return kind
     raise ValueError(
-        f"range: joint '{joint.name}' is cylindrical, so its spin or its slide may be driven; "
-        f"give the range with its unit, ['0 deg', '360 deg'] for the spin or ['0 mm', "
-        f"'50 mm'] for the slide (got {shown([start, stop])})"
+        f"{names[2]}: joint '{joint.name}' is cylindrical, so its spin or its slide may be "
+        "driven; give the range with its unit, "
+        + (
+            "--range '0 deg:360 deg' for the spin or --range '0 mm:50 mm' for the slide"
+            if names is OPTION_NAMES
+            else "['0 deg', '360 deg'] for the spin or ['0 mm', '50 mm'] for the slide"
+        )
+        + f" (got {shown([start, stop])})"
     )
 
 
-def range_of(section: MotionSection, coordinate: Coordinate) -> tuple[float, float]:
+def range_of(
+    section: MotionSection, coordinate: Coordinate, names: tuple[str, str, str, str] = FILE_NAMES
+) -> tuple[float, float]:
     """The range in the coordinate's base unit (rad or mm); ``ValueError``
-    naming the end that does not read."""
+    naming the end that does not read (as ``names`` call the ends)."""
     out = []
     for i, value in enumerate(section.range):
+        if coordinate == "spin" and plain_angle(value):
+            fix = suggested_range(*section.range, "deg", names is OPTION_NAMES)
+            raise ValueError(
+                f"{names[i]}: {shown(value)} has no unit; the spin of joint '{section.drive}' "
+                f"is an angle, and a plain number would be read as radians: give a unit, {fix}"
+                " (or 'rad' if radians are meant)"
+            )
         try:
             out.append(to_base(value, DIMENSION[coordinate]))
         except ValueError as exc:
+            told = without_plain_hint(str(exc), "angle") if coordinate == "spin" else exc
             kind, example = (
                 ("an angle", "'90 deg'") if coordinate == "spin" else ("a length", "'25 mm'")
             )
             raise ValueError(
-                f"range[{i}]: {exc}; the {coordinate} of joint '{section.drive}' is {kind}, "
+                f"{names[i]}: {told}; the {coordinate} of joint '{section.drive}' is {kind}, "
                 f"such as {example}"
             ) from None
     if out[0] == out[1]:
         raise ValueError(
-            f"range: starts and stops at {shown(section.range[0])}; give two different values"
+            f"{names[2]}: starts and stops at {shown(section.range[0])}; give two different values"
         )
     return out[0], out[1]

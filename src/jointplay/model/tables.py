@@ -2,7 +2,8 @@
 
 ``force: [{table: [["0 deg", -200], ["180 deg", -1500], ["360 deg", -200]]}, 0, 0]``:
 the first column is the drive's value (an angle for a spin, a length for a
-slide; a plain number is rad or mm, as the motion's range reads), the second
+slide; a plain number is mm, and refused for a spin but 0, as the motion's
+range reads), the second
 the component in the load's unit; between rows the component is linear in
 the drive's value. A ``DriveTable`` is a float equal to the component at the
 drive's 0 (the pose written in the file), which a plain solve uses; the
@@ -17,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from jointplay.model.motion import is_plain
 from jointplay.units import BASE_UNITS, shown, to_base
 
 #: The first column's dimension, by how its values are written.
@@ -32,18 +34,25 @@ class DriveTable(float):
     value: tuple[float, ...]  # N or N*mm
     dimension: str | None  # "angle" or "length" as written with units; None: plain numbers
     unit: str
+    plain: bool  # some drive's value but 0 written without a unit (mm; refused for a spin)
 
     def __new__(
-        cls, drive: tuple[float, ...], value: tuple[float, ...], dimension: str | None, unit: str
+        cls,
+        drive: tuple[float, ...],
+        value: tuple[float, ...],
+        dimension: str | None,
+        unit: str,
+        plain: bool = False,
     ) -> DriveTable:
         self = super().__new__(cls, float(np.interp(0.0, drive, value)))
         for name, v in (("drive", drive), ("value", value), ("dimension", dimension)):
             object.__setattr__(self, name, v)
         object.__setattr__(self, "unit", unit)
+        object.__setattr__(self, "plain", plain)
         return self
 
     def __reduce__(self) -> tuple[Any, ...]:  # pickled whole (to worker processes)
-        return (DriveTable, (self.drive, self.value, self.dimension, self.unit))
+        return (DriveTable, (self.drive, self.value, self.dimension, self.unit, self.plain))
 
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError("a DriveTable is immutable")
@@ -74,13 +83,20 @@ def parse_table(value: Mapping[str, Any], dimension: str) -> DriveTable:
     drive: list[float] = []
     values: list[float] = []
     dimensions: set[str] = set()
+    plain = False
     for i, row in enumerate(rows):
         if not isinstance(row, list | tuple) or len(row) != 2:
             raise ValueError(
                 f"table row {i}: expected [drive, value], got {shown(row)}; write {EXAMPLE}"
             )
         x, y = row
-        if isinstance(x, str):
+        if is_plain(x):
+            try:
+                drive.append(to_base(x, "length"))  # mm, or refused for a spin (check_tables)
+            except ValueError as exc:
+                raise ValueError(f"table row {i}: the drive's value: {exc}") from None
+            plain = plain or drive[-1] != 0.0
+        elif isinstance(x, str):
             for kind in DRIVE_DIMENSIONS:
                 try:
                     drive.append(to_base(x, kind))
@@ -94,10 +110,10 @@ def parse_table(value: Mapping[str, Any], dimension: str) -> DriveTable:
                     "('90 deg') nor a length ('25 mm')"
                 )
         else:
-            try:
-                drive.append(to_base(x, "length"))  # a plain number: rad or mm, kept as written
-            except ValueError as exc:
-                raise ValueError(f"table row {i}: the drive's value: {exc}") from None
+            raise ValueError(
+                f"table row {i}: the drive's value {shown(x)} is neither an angle "
+                "('90 deg') nor a length ('25 mm')"
+            )
         try:
             values.append(to_base(y, dimension))
         except ValueError as exc:
@@ -119,7 +135,11 @@ def parse_table(value: Mapping[str, Any], dimension: str) -> DriveTable:
             "of the pose written in the file reads it at the drive's 0; extend it to 0"
         )
     return DriveTable(
-        tuple(drive), tuple(values), dimensions.pop() if dimensions else None, BASE_UNITS[dimension]
+        tuple(drive),
+        tuple(values),
+        dimensions.pop() if dimensions else None,
+        BASE_UNITS[dimension],
+        plain,
     )
 
 
@@ -128,7 +148,7 @@ def table_schema(dimension: str, quantity: dict[str, Any]) -> dict[str, Any]:
     drive = {
         "anyOf": [{"type": "number"}, {"type": "string"}],
         "description": "the drive's value: an angle ('90 deg') for a spin, a length ('25 mm') "
-        "for a slide; a plain number is rad or mm",
+        "for a slide; a plain number is mm (refused for a spin, but 0)",
     }
     return {
         "type": "object",

@@ -36,8 +36,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from jointplay.model.mechanism import Model, Requirement
-    from jointplay.proven import Resolution
-    from jointplay.result import JointResult
     from jointplay.studies.motion import MotionResult
 
 #: A band: its label ("5-95 %") and its lower and upper values per step (mm).
@@ -238,43 +236,13 @@ def joint_forces(result: MotionResult) -> dict[str, FloatArray]:
 
 
 def contact_switches(result: MotionResult) -> dict[str, tuple[int, ...]]:
-    """Per joint, the steps whose touching contacts differ from the step
-    before's: a contact starts or stops touching, or one touching at both
-    pushes the other way (its force, or its torque for a drive's backlash,
-    turned by more than a quarter turn: the play crossed). A force or torque
-    below what its answer proves has no side."""
-    out: dict[str, tuple[int, ...]] = {}
-    for name in joint_forces(result):
-        sides = [_sides(r.joints[name], r.resolution) for r in result.results]
-        out[name] = tuple(s for s in range(1, len(sides)) if _switched(sides[s - 1], sides[s]))
-    return out
-
-
-#: A touching contact's side: the directions of its force and of its torque
-#: (None where it is 0 to the answer's resolution).
-Side = tuple[FloatArray | None, FloatArray | None]
-
-
-def _sides(jr: JointResult, resolution: Resolution) -> dict[str, Side]:
-    def direction(v: FloatArray, zero: float) -> FloatArray | None:
-        size = float(np.linalg.norm(v))
-        return np.asarray(v) / size if size > zero else None
-
+    """Per joint, the steps whose touching contacts switch from the step
+    before's (``MotionResult.switched``: a contact starts or stops touching,
+    or one touching at both pushes the other way: the play crossed)."""
     return {
-        c.name: (direction(c.force, resolution.force), direction(c.torque, resolution.moment))
-        for c in jr.contacts
-        if c.in_contact
+        name: tuple(s for s in range(1, result.steps) if name in result.switched[s])
+        for name in joint_forces(result)
     }
-
-
-def _switched(before: dict[str, Side], now: dict[str, Side]) -> bool:
-    if before.keys() != now.keys():
-        return True
-    for name, side in now.items():
-        for u, w in zip(side, before[name], strict=True):
-            if u is not None and w is not None and float(u @ w) < 0.0:
-                return True
-    return False
 
 
 def draw_joint_forces(ax: Axes, result: MotionResult) -> None:

@@ -479,13 +479,18 @@ def render_motion(
         cells = [str(s), f"{result.shown_value(s):.6g}"]
         for k in range(len(result.point_names)):
             cells += [_vec(result.nominal[s, k], 6), _vec(result.displacement[s, k], 4)]
-        cells += [f"{result.drive_reaction[s]:.6g}", _touching_by_joint(result.results[s])]
+        cells += [
+            f"{result.drive_reaction[s]:.6g}",
+            _touching_by_joint(result.results[s], result.switched[s]),
+        ]
         cells += [
             value if isinstance(value, str) else f"{value:.4g}"
             for value in (values[s] for values in extra.values())
         ]
         table.add_row(*cells)
     tail = Text()
+    if any(result.switched):
+        tail.append(f"{SWITCHED}: {SWITCHED_LEGEND}\n")
     for q, name in enumerate(result.requirement_names):
         s = result.worst_step(q)
         ok = bool(np.all(result.measured[:, q] <= result.limits[q]))
@@ -503,13 +508,29 @@ def render_motion(
     console.print(_fit(console, head, table, tail))
 
 
-def _touching_by_joint(result: Any) -> str:
-    """The touching contacts, grouped by joint: 'pin (end-, end+), guide (x-)'."""
+#: Marks a contact in the motion's table that switched at that step.
+SWITCHED = "*"
+SWITCHED_LEGEND = (
+    "a contact that switches at that step: it starts touching, stops ('off'), or pushes the "
+    "other way (the play crossed: an impact in a running machine)"
+)
+
+
+def _touching_by_joint(result: Any, switched: Mapping[str, Sequence[str]] | None = None) -> str:
+    """The touching contacts, grouped by joint: 'pin (end-, end+), guide (x-)';
+    those in ``switched`` (per joint) marked, one that stopped touching as 'x+ off*'."""
     groups = []
     for name, joint in result.joints.items():
-        touching = [c.name for c in joint.contacts if c.in_contact]
-        if touching:
-            groups.append(f"{name} ({', '.join(touching)})")
+        marked = set((switched or {}).get(name, ()))
+        shown = [
+            c.name + (SWITCHED if c.name in marked else "")
+            if c.in_contact
+            else f"{c.name} off{SWITCHED}"
+            for c in joint.contacts
+            if c.in_contact or c.name in marked
+        ]
+        if shown:
+            groups.append(f"{name} ({', '.join(shown)})")
     return ", ".join(groups) or "-"
 
 

@@ -271,7 +271,8 @@ def nominal_poses(
         last = current
         for part in np.linspace(current, float(value), parts + 1)[1:]:
             guess = np.zeros(eqs.n) if not rates else 2 * rates[-1] - rates[0]
-            R, p, z = _solve_step(eqs, R, p, float(part), current, s, source, guess * (part - last))
+            step = _Step(s, current, float(value), float(part))
+            R, p, z = _solve_step(eqs, R, p, step, source, guess * (part - last))
             if part != last:
                 rates = [*rates[-1:], z / (part - last)]
             last = float(part)
@@ -281,20 +282,43 @@ def nominal_poses(
     return Poses(eqs.bodies, values, np.array(out_R), np.array(out_p))
 
 
+@dataclass(frozen=True)
+class _Step:
+    """Where a part of a step is: the user's step ``index`` runs from the
+    drive's value ``previous`` (the step before's, or the written pose's 0)
+    to ``value``; ``part`` is the value solved now, between them. Messages
+    name the user's values only."""
+
+    index: int
+    previous: float
+    value: float
+    part: float
+
+    def at(self, eqs: _Equations) -> str:
+        return f"step {self.index} (drive '{eqs.drive_joint}' at {_shown(eqs.drive, self.value)})"
+
+    def between(self, eqs: _Equations) -> str:
+        before = (
+            f"step {self.index - 1} ({_shown(eqs.drive, self.previous)})"
+            if self.index > 0
+            else f"the pose written in the file ({_shown(eqs.drive, self.previous)})"
+        )
+        return f"between {before} and step {self.index} ({_shown(eqs.drive, self.value)})"
+
+
 def _solve_step(
     eqs: _Equations,
     R0: FloatArray,
     p0: FloatArray,
-    value: float,
-    previous: float,
-    step: int,
+    step: _Step,
     source: str | None,
     z0: FloatArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The pose at drive ``value`` from the pose ``(R0, p0)`` at ``previous``,
+    """The pose at drive ``step.part`` from the pose ``(R0, p0)`` before it,
     least squares starting at the change ``z0`` (the last step's, in
     proportion: the same closure from fewer evaluations); with the change found."""
     settings = eqs.settings
+    value = step.part
     tol = max(settings.solve_tolerance, float(np.finfo(float).eps))
     seen: dict[bytes, tuple[FloatArray, FloatArray]] = {}
 
@@ -319,20 +343,17 @@ def _solve_step(
                           max_nfev=settings.evaluations).x  # fmt: skip
     R, p, Jl = eqs._pose(R0, p0, z)
     res, J = eqs.evaluate(R, p, Jl, value)
-    where = f"step {step}" if step >= 0 else "on the way from the written pose to the first step"
-    at = _shown(eqs.drive, value)
-    last = _shown(eqs.drive, previous)
     worst = float(np.max(np.abs(res)))
     if worst > settings.closure * eqs.ell:
         joints = eqs.joints_of(res)
         raise MotionError(
-            f"unreachable: at {where} (drive '{eqs.drive_joint}' at {at}) the ideal joints "
+            f"unreachable: at {step.at(eqs)} the ideal joints "
             f"{', '.join(repr(j) for j in joints)} cannot close (off by {worst:.3g} mm): the "
-            f"linkage does not reach that drive value, and turns back between {last} and {at}; "
+            f"linkage does not reach that drive value, and turns back {step.between(eqs)}; "
             "give a range the linkage reaches",
             kind="unreachable",
-            step=step,
-            value=value,
+            step=step.index,
+            value=step.value,
             joints=joints,
             source=source,
         )
@@ -340,13 +361,15 @@ def _solve_step(
     U, sigma, _ = np.linalg.svd(J * scale, full_matrices=False)
     if sigma.size and sigma[-1] < settings.dead_point * sigma[0]:
         joints = eqs.joints_of(U[:, -1])
+        # on the user's step, or on the way to it
+        where = f"at {step.at(eqs)}" if step.part == step.value else step.between(eqs)
         raise MotionError(
-            f"dead point: at {where} (drive '{eqs.drive_joint}' at {at}) the drive no longer "
-            f"decides the pose: joints {', '.join(repr(j) for j in joints)} are at a toggle, "
-            "which the drive cannot pass; stop the range short of it, or drive another joint",
+            f"dead point: {where} the drive no longer decides the pose: joints "
+            f"{', '.join(repr(j) for j in joints)} are at a toggle, which the drive cannot "
+            "pass; stop the range short of it, or drive another joint",
             kind="dead point",
-            step=step,
-            value=value,
+            step=step.index,
+            value=step.value,
             joints=joints,
             source=source,
         )

@@ -15,6 +15,7 @@ optimum).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -29,6 +30,9 @@ from jointplay.studies.kinematics import Poses, nominal_poses
 
 if TYPE_CHECKING:
     import pandas as pd
+
+    from jointplay.proven import Resolution
+    from jointplay.result import JointResult
 
 
 def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") -> Model:
@@ -82,6 +86,40 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
     return model_from_dict(data, source=source)
 
 
+#: A touching contact's side: the directions of its force and of its torque
+#: (None where it is 0 to the answer's resolution).
+Side = tuple[FloatArray | None, FloatArray | None]
+
+
+def _sides(jr: JointResult, resolution: Resolution) -> dict[str, Side]:
+    def direction(v: FloatArray, zero: float) -> FloatArray | None:
+        size = float(np.linalg.norm(v))
+        return np.asarray(v) / size if size > zero else None
+
+    return {
+        c.name: (direction(c.force, resolution.force), direction(c.torque, resolution.moment))
+        for c in jr.contacts
+        if c.in_contact
+    }
+
+
+def switched_contacts(before: Result, now: Result, joint: str) -> tuple[str, ...]:
+    """The contacts of ``joint`` that switch from the answer ``before`` to
+    ``now``: one starts or stops touching, or one touching at both pushes the
+    other way (its force, or its torque for a drive's backlash, turned by more
+    than a quarter turn: the play crossed, where a running machine knocks). A
+    force or torque below what its answer proves has no side. In the joint's
+    order of contacts."""
+    old = _sides(before.joints[joint], before.resolution)
+    new = _sides(now.joints[joint], now.resolution)
+    changed = set(old) ^ set(new)
+    for name in set(old) & set(new):
+        for u, w in zip(new[name], old[name], strict=True):
+            if u is not None and w is not None and float(u @ w) < 0.0:
+                changed.add(name)
+    return tuple(c.name for c in now.joints[joint].contacts if c.name in changed)
+
+
 def shown_drive(coordinate: str, value: float) -> float:
     """The drive's value as the user gives it: deg for a spin (to 12 digits:
     the turn from the range's degrees to radians and back leaves round-off,
@@ -125,6 +163,17 @@ class MotionResult:
     def reaction_unit(self) -> str:
         return "N*mm" if self.coordinate == "spin" else "N"
 
+    @cached_property
+    def switched(self) -> tuple[dict[str, tuple[str, ...]], ...]:
+        """Per step, each joint's contacts that switch from the step before
+        (``switched_contacts``; none at step 0), joints without one left out."""
+        out: list[dict[str, tuple[str, ...]]] = [{}]
+        for s in range(1, self.steps):
+            before, now = self.results[s - 1], self.results[s]
+            changes = {name: switched_contacts(before, now, name) for name in now.joints}
+            out.append({name: names for name, names in changes.items() if names})
+        return tuple(out[: self.steps])
+
     def worst_step(self, q: int) -> int:
         return int(np.argmax(self.measured[:, q]))
 
@@ -154,6 +203,11 @@ class MotionResult:
                     },
                     "drive_reaction": float(self.drive_reaction[s]),
                     "touching": list(self.touching[s]),
+                    "switched": [
+                        f"{joint}.{name}"
+                        for joint, names in self.switched[s].items()
+                        for name in names
+                    ],
                     "requirements": [r.to_dict() for r in result.requirements],
                 }
             )
@@ -192,6 +246,9 @@ class MotionResult:
                     row[f"{name} d{axis} (mm)"] = float(self.displacement[s, k, i])
             row[f"drive reaction ({self.reaction_unit})"] = float(self.drive_reaction[s])
             row["touching"] = " ".join(self.touching[s])
+            row["switched"] = " ".join(
+                f"{joint}.{name}" for joint, names in self.switched[s].items() for name in names
+            )
             rows.append(row)
         return pd.DataFrame(rows)
 
@@ -242,9 +299,57 @@ class Motion:
             return model
         section = {} if model.motion is None else model.motion.model_dump()
         section.update(given)
+        self._check_given(model, section)
         data = model.model_dump(by_alias=True, exclude_none=True)
         data["motion"] = section
         return model_from_dict(data, source=source)
+
+    def _check_given(self, model: Model, section: dict[str, Any]) -> None:
+        """``OptionError`` naming ``--drive`` or ``--range`` when the value given
+        here (the command line's) does not fit the model; what the file's
+        motion section alone gets wrong is the file's error, said on loading."""
+        from jointplay.errors import OptionError
+        from jointplay.model.mechanism import listing, suggest
+        from jointplay.model.motion import (
+            FILE_NAMES,
+            OPTION_NAMES,
+            MotionSection,
+            coordinate_of,
+            range_of,
+        )
+
+        names = [j.name for j in model.joints]
+        if self.drive is not None and self.drive not in names:
+            raise OptionError(
+                f"--drive {self.drive}: unknown joint; joints are: {listing(names)}; name the "
+                "joint whose spin or slide drives the motion" + suggest(self.drive, names)
+            )
+        if self.drive is None and self.range is None:
+            return
+        if "drive" not in section:
+            raise OptionError(
+                "--range: the model has no motion drive; give --drive JOINT, the joint whose "
+                f"spin or slide drives the motion, one of {listing(names)}"
+            )
+        if section["drive"] not in names:
+            return  # the file's unknown drive: the file's error
+        if "range" not in section:
+            raise OptionError(
+                f"--drive {self.drive}: the model has no motion range; give --range "
+                "START:STOP, e.g. --range '0 deg:360 deg'"
+            )
+        where = OPTION_NAMES if self.range is not None else FILE_NAMES
+        try:
+            start, stop = section["range"]
+            kind = coordinate_of(model.joint(section["drive"]), start, stop, where)
+            range_of(MotionSection(**section), kind, where)
+        except ValueError as exc:
+            if self.range is not None:
+                raise OptionError(str(exc)) from None
+            raise OptionError(
+                f"--drive {self.drive}: the model file's motion {exc}; give --range START:STOP "
+                "in the unit of the drive's coordinate"
+            ) from None
 
     def run(self, model: Model, source: str = "<model>") -> MotionResult:
         from jointplay.assembly import assemble

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import itertools
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -38,6 +39,9 @@ from jointplay.studies.montecarlo import PERCENTILES
 from jointplay.studies.motion import Motion, MotionResult, posed_model, shown_drive
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import deviation_map, load_map, nothing_varies, play_map
+
+#: ``progress(done, total)``: called after each pose a study has solved.
+Progress = Callable[[int, int], None]
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -518,7 +522,10 @@ class MotionEnvelope:
     loads: Literal["auto", "model", "probes"] = "auto"
     motion: Motion = field(default_factory=Motion)
 
-    def run(self, model: Model, *, source: str | None = None) -> MotionEnvelopeResult:
+    def run(
+        self, model: Model, *, source: str | None = None, progress: Progress | None = None
+    ) -> MotionEnvelopeResult:
+        """Every point's envelope at every pose; ``progress(done, total)`` after each pose."""
         from jointplay.studies.envelope import Envelope
 
         cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
@@ -541,6 +548,8 @@ class MotionEnvelope:
                     for name in names
                 )
             )
+            if progress is not None:
+                progress(s + 1, cycle.steps)
         return MotionEnvelopeResult(
             self,
             cycle.model.name,
@@ -656,12 +665,20 @@ class MotionContributions:
     step: float = 1e-3
     motion: Motion = field(default_factory=Motion)
 
-    def run(self, model: Model, *, source: str | None = None) -> MotionContributionsResult:
+    def run(
+        self, model: Model, *, source: str | None = None, progress: Progress | None = None
+    ) -> MotionContributionsResult:
+        """The contributions at every pose; ``progress(done, total)`` after each pose."""
         from jointplay.studies.contributions import Contributions
 
         cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
         study = Contributions(step=self.step, case=self.motion.case, variance="never")
-        found = tuple(study.run(cycle.posed(s), source=cycle.source) for s in range(cycle.steps))
+        found_at = []
+        for s in range(cycle.steps):
+            found_at.append(study.run(cycle.posed(s), source=cycle.source))
+            if progress is not None:
+                progress(s + 1, cycle.steps)
+        found = tuple(found_at)
         return MotionContributionsResult(
             self, cycle.model.name, cycle.drive, cycle.coordinate, cycle.values, found
         )
