@@ -5,9 +5,10 @@ A body's pose ``(R, p)`` places the point written at ``X`` at ``R X + p``
 joint's ideal constraint (``Joint.ideal``) is a list of scalar equations on
 the frame carried by its first body and the centre carried by its second,
 exact in finite rotations; the drive adds one equation, its coordinate at
-the step's value. Each step is solved by SciPy's ``least_squares``
-(Levenberg-Marquardt, analytic Jacobian) from the previous step's pose, so
-open chains and any number of loops are solved alike.
+the step's value. Each step is solved by SciPy's ``leastsq`` (MINPACK's
+Levenberg-Marquardt, analytic Jacobian; ``least_squares`` where there are
+fewer equations than unknowns) from the previous step's pose, so open chains
+and any number of loops are solved alike.
 """
 
 from __future__ import annotations
