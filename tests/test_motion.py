@@ -679,3 +679,17 @@ def test_an_unreachable_step_is_named_by_the_users_values(steps: int) -> None:
     shown = {float(v) for v in re.findall(r"(-?[\d.]+) deg", message)}
     assert shown <= {float(grid[n - 1]), float(grid[n])}, message
     assert err.value.value == pytest.approx(np.radians(grid[n]))
+
+
+def test_the_text_counts_the_steps_a_requirement_fails_at() -> None:
+    """The gallery's piston meets its limit at the file's pose and misses it
+    over most of the turn: the sentence says at how many steps, as the
+    result measures them."""
+    path = GALLERY / "slider_crank.yaml"
+    result = Motion().run(jointplay.load(path))
+    failing = int(np.sum(result.measured[:, 0] > result.limits[0]))
+    assert 0 < failing < result.steps
+    assert result.measured[0, 0] <= result.limits[0]  # the file's pose passes
+    proc = run("motion", str(path))
+    assert proc.returncode == 0, proc.stderr
+    assert f"FAILED at {failing} of {result.steps} steps" in proc.stdout
