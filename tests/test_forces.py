@@ -693,7 +693,7 @@ def test_a_heavy_part_elsewhere_leaves_a_light_part_s_split_as_it_is(block_load:
     so the rule leaves it unloaded and statics give the other three (51.5,
     24.25, 24.25 N). Beside it, a block welded to the ground under up to
     1e8 N shares no body with the table. The split's program is posed with
-    each such part's forces at their own size (``forces._part_scales``):
+    each such part's forces at their own size (``forces._parts``):
     posed at the size of all the loads, the block decided the table's split
     to its own tolerance, and foot3 pushed 0.046 N (1e5 N block) or 8.02 N
     (1e8 N). Judging the least squares' dips against all the loads (as the
@@ -747,7 +747,7 @@ def test_a_face_s_cone_is_one_part_of_the_split_s_program() -> None:
     split of least squares. A face's force touches the balance rows of
     the axial force, its force vector those of the tilts: by the balance
     alone they fell in two parts of the split's program, each part sized
-    on its own (``forces._part_scales``), and their cone was scaled apart:
+    on its own (``forces._parts``), and their cone was scaled apart:
     44.28 and 55.72 N, certified (a review's find). A cone is one part."""
     bodies = [{"name": "G", "ground": True}, {"name": "shaft"}]
     joints = [
@@ -768,7 +768,7 @@ def test_a_face_s_cone_is_one_part_of_the_split_s_program() -> None:
 
 
 def test_the_split_s_parts_are_joined_by_balance_wrench_and_cone() -> None:
-    """``forces._part_scales`` on a hand-made split: unknowns 0 and 1 share a
+    """``forces._parts`` on a hand-made split: unknowns 0 and 1 share a
     balance row; 2 shares none with them but is 1's cone's force vector;
     3 and 4 share only a wrench row; 5 is alone and carries nothing. Each
     part's size is the largest ``|b|`` on its balance rows: the cone keeps 2
@@ -782,9 +782,15 @@ def test_the_split_s_parts_are_joined_by_balance_wrench_and_cone() -> None:
     P = sp.csr_matrix(np.array([[0.0, 0, 0, 1, 1, 0], [0, 0, 0, 0, 0, 1]]))
     owner = np.array([0, 1, 1, 2, 3, -1])
     b = np.array([-5.0, 2.0, 10.0])
-    size_row, size = forces._part_scales(G, P, owner, b)  # per row, per unknown
-    np.testing.assert_array_equal(size_row, [5.0, 5.0, 10.0])
-    np.testing.assert_array_equal(size, [5.0, 5.0, 5.0, 10.0, 10.0, 0.0])
+    parts = forces._parts(G, P, owner)  # each row's, then each unknown's
+    rows, unknowns = parts[:3], parts[3:]
+    assert rows[0] == rows[1] == unknowns[0] == unknowns[1] == unknowns[2]
+    assert rows[2] == unknowns[3] == unknowns[4] != rows[0]
+    assert unknowns[5] not in rows  # alone, with no load: size 0
+    sizes = {int(p): 0.0 for p in parts}
+    for p, b_i in zip(rows, b, strict=True):
+        sizes[int(p)] = max(sizes[int(p)], abs(b_i))
+    assert [sizes[int(p)] for p in unknowns] == [5.0, 5.0, 5.0, 10.0, 10.0, 0.0]
 
 
 def test_the_lathe_slide_s_split_meets_the_rule_s_optimality_conditions() -> None:

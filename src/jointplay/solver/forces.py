@@ -157,8 +157,9 @@ def least_squares_rows(
         cones = (int(np.sum(s)), stack.k[a & stack.has_offset])
         keep = np.flatnonzero((owner < 0) | ~unloaded[rows[0]][np.maximum(owner, 0)])
         y, optimal = _least_squares(P, G, b_rows, keep, cones, settings)
-        for j in np.flatnonzero(~optimal & ~determinate):
-            y_j = _rule(P[j], G[j], b_rows[j], owner, cones, settings)
+        todo = np.flatnonzero(~optimal & ~determinate)
+        rules = _rules(P[todo], G[todo], b_rows[todo], owner, cones, settings)
+        for j, y_j in zip(todo, rules, strict=True):
             if y_j is not None:
                 y[j], optimal[j] = y_j, True
         z = (Z @ y[:, :, None])[:, :, 0]
@@ -184,30 +185,49 @@ def _rule(
     settings: SolverSettings,
     given: FloatArray | None = None,
 ) -> FloatArray | None:
-    """The split's ``y``. A dense model (``given`` None) first takes the
-    least squares (``_least_squares``): where it lies in every cone it is
-    the rule's. A sparse model's program starts from ``given``, the
-    route's split. The program's answer
-    (``_program``) is then finished on a dense model by the least squares
-    on the forces it leaves pushing, kept where that is the program's
-    optimum: the program stops at its tolerance, and a contact whose force
-    and multiplier both vanish at the optimum (a lathe slide's corner) ends
-    5e-5 of the largest force off it."""
-    dense = given is None
+    """The split's ``y`` of one answer: a dense model's by ``_rules``; a
+    sparse model's by the program from ``given``, the route's split."""
     if given is None:
-        y, optimal = _least_squares(
-            P[None], G[None], b[None], np.arange(G.shape[1]), cones, settings
+        return _rules(P[None], G[None], b[None], owner, cones, settings)[0]
+    parts = _parts(G, P, owner)
+    found = _program(P, G, b, given, parts, cones, settings, True)
+    return None if found is None else found[0]
+
+
+def _rules(
+    P: FloatArray,
+    G: FloatArray,
+    b: FloatArray,
+    owner: IntArray,
+    cones: Cones,
+    settings: SolverSettings,
+) -> list[FloatArray | None]:
+    """The split's ``y`` of each row of a dense stack (rows alike in their
+    unknowns). The least squares (``_least_squares``) first: where it lies
+    in every cone it is the rule's. The others' programs (``_program``) are
+    then finished by the least squares on the forces each leaves pushing,
+    kept where that is the program's optimum: the program stops at its
+    tolerance, and a contact whose force and multiplier both vanish at the
+    optimum (a lathe slide's corner) ends 5e-5 of the largest force off it."""
+    n_y = G.shape[2]
+    y, optimal = _least_squares(P, G, b, np.arange(n_y), cones, settings)
+    out: list[FloatArray | None] = [y[j] if optimal[j] else None for j in range(len(y))]
+    rest = np.flatnonzero(~optimal)
+    if not rest.size:
+        return out
+    # rows alike: the parts of their program are those of all of them
+    parts = _parts(np.any(G[rest] != 0, axis=0), np.any(P[rest] != 0, axis=0), owner)
+    for j in rest.tolist():
+        found = _program(P[j], G[j], b[j], np.zeros(n_y), parts, cones, settings, False)
+        if found is None:
+            continue
+        y_j, held = found
+        keep = np.setdiff1d(np.arange(n_y), held)
+        exact, fine = _least_squares(
+            P[j : j + 1], G[j : j + 1], b[j : j + 1], keep, cones, settings
         )
-        if optimal[0]:
-            return np.asarray(y[0])
-        given = np.zeros(G.shape[1])
-    found = _program(P, G, b, given, owner, cones, settings, not dense)
-    if found is None or not dense:
-        return None if found is None else found[0]
-    y, held = found
-    keep = np.setdiff1d(np.arange(len(y)), held)
-    exact, optimal = _least_squares(P[None], G[None], b[None], keep, cones, settings)
-    return exact[0] if optimal[0] else y
+        out[j] = exact[0] if fine[0] else y_j
+    return out
 
 
 def _least_squares(
@@ -266,7 +286,7 @@ def _program(
     G: Any,
     b: FloatArray,
     given: FloatArray,
-    owner: IntArray,
+    parts: IntArray,
     cones: Cones,
     settings: SolverSettings,
     sparse: bool,
@@ -276,15 +296,16 @@ def _program(
     (``conic.refined``). A sparse model's is written on ``z = y - given``,
     ``given`` a split that balances the loads, with ``G z = 0``: consistent
     even where G's rows depend on each other (a bearing chain's: written
-    ``G y = b``, its program ran out of steps). Each part
-    of the mechanism the program joins (``_part_scales``) is posed at its
-    own size, so that the tolerance applies to each part's forces. Also the
+    ``G y = b``, its program ran out of steps). Each of its ``parts``
+    (``_parts``: each row's of G, then each unknown's) is posed at its own
+    size, so that the tolerance applies to each part's forces. Also the
     one-sign unknowns the program holds at 0 (its dual above its value)."""
-    G, P = sp.csr_matrix(G), sp.csr_matrix(P)
-    size_row, size = _part_scales(G, P, owner, b)
+    m, n_y = G.shape
+    size = np.zeros(int(parts.max(initial=-1)) + 1)
+    np.maximum.at(size, parts[:m], np.abs(b))
+    size_row, size = size[parts[:m]], size[parts[m:]]
     miss = np.zeros_like(b) if sparse else b - G @ given
     given_hat = np.divide(given, size, out=np.zeros_like(given), where=size > 0)
-    m, n_y = G.shape
     n_s, k_faces = cones
     n_cone = n_s + int(np.sum(k_faces + 1))
     kinds: list[Any] = [clarabel.ZeroConeT(m)] if m else []
@@ -296,11 +317,16 @@ def _program(
     ]
     # y = size * y_hat: each part's rows and unknowns divided by its size
     # leave G and the optimum as they are (both separable across parts)
-    Q = sp.csc_matrix(P.T @ P)
+    if sparse:
+        Q = sp.csc_matrix(P.T @ P)
+        upper, rows = sp.triu(Q, format="csc"), sp.vstack([G, -sp.eye(n_cone, n_y)], format="csc")
+    else:  # a small dense program: built dense, then stored once
+        Q = P.T @ P
+        upper, rows = conic.csc(np.triu(Q)), conic.csc(np.vstack([G, -np.eye(n_cone, n_y)]))
     sol = clarabel.DefaultSolver(
-        sp.triu(Q, format="csc"),
+        upper,
         Q @ given_hat,
-        sp.vstack([G, -sp.eye(n_cone, n_y)], format="csc"),
+        rows,
         np.r_[
             np.divide(miss, size_row, out=np.zeros_like(b), where=size_row > 0), given_hat[:n_cone]
         ],
@@ -315,16 +341,16 @@ def _program(
     return (given_hat + np.asarray(sol.x)) * size, held
 
 
-def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The size of the part of the split's program each row of ``G`` and
-    each unknown is in: the largest ``|b|`` on the part's rows. A part is what
-    a row of ``G`` (a body's balance), a row of ``P`` (a wrench) or a cone
-    (``owner``) joins, directly or through others. Posed at the size of all
-    the loads, a table on four feet beside a block welded under a load 1e8
-    times the table's had its feet's split decided to the block's tolerance
-    (8 N off the rule's, of 60); the cone joins what the balance may not (a
-    face's force and its force vector: two thrust collars). A part with no
-    load has size 0: its split is 0."""
+def _parts(G: Any, P: Any, owner: IntArray) -> IntArray:
+    """The part of the split's program each row of ``G`` and then each
+    unknown is in (a label each): what a row of ``G`` (a body's balance), a
+    row of ``P`` (a wrench) or a cone (``owner``) joins, directly or through
+    others. ``_program`` poses each part at its size, the largest ``|b|`` on
+    its rows: posed at the size of all the loads, a table on four feet
+    beside a block welded under a load 1e8 times the table's had its feet's
+    split decided to the block's tolerance (8 N off the rule's, of 60); the
+    cone joins what the balance may not (a face's force and its force
+    vector: two thrust collars). A part with no load has size 0: its split is 0."""
     from scipy.sparse.csgraph import connected_components  # this route only: 0.02 s to import
 
     coned = np.flatnonzero(owner >= 0)
@@ -337,10 +363,8 @@ def _part_scales(G: Any, P: Any, owner: IntArray, b: FloatArray) -> tuple[FloatA
     pattern.data[:] = 1.0
     graph = sp.bmat([[None, pattern], [pattern.T, None]], format="csr")
     _, label = connected_components(graph, directed=False)
-    size = np.zeros(int(label.max()) + 1)
     m = G.shape[0]
-    np.maximum.at(size, label[:m], np.abs(b))
-    return size[label[:m]], size[label[pattern.shape[0] :]]
+    return np.concatenate([label[:m], label[pattern.shape[0] :]]).astype(np.intp)
 
 
 def _classes(
