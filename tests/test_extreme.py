@@ -159,9 +159,9 @@ def test_a_nearly_free_spin_is_held_or_reported() -> None:
     assert result.warnings
 
 
-def test_a_load_on_a_free_motion_below_the_drive_tolerance_is_ignored() -> None:
+def test_a_load_on_a_free_motion_below_the_rank_tolerance_is_ignored() -> None:
     """A torque about the shaft axis of 1e-12 of the load: round-off, not a
-    drive (settings.drive_tolerance = 1e-9). At 1e-6 it drives the spin."""
+    drive (settings.free_motion_rcond = 1e-9). At 1e-6 it drives the spin."""
     data = spherical_shaft()
     data["loads"] = [
         {"body": "S1", "at": [300, 0, 0], "force": [1, 1, 1]},

@@ -23,22 +23,21 @@ class SolverSettings:
     #: moving at all: below it, a length is the solver's round-off.
     feasibility_tolerance: float = 1e-9
     #: Balance: per body, in newtons, relative to the largest force in the
-    #: balance; also how far a force may fall below 0 or outside its cone.
+    #: balance; also how far a force may fall below 0 or outside its cone,
+    #: and below what fraction of the largest an active force is not
+    #: strictly positive (its contact may leave the active set).
     equilibrium_tolerance: float = 1e-8
-    #: Forces and moments print as 0 below this fraction of the largest force
-    #: (round-off is 1e-12 of it and less): a hundredth of the balance, so that
-    #: the components it zeroes change a body's balance by a small part of what
-    #: ``equilibrium_tolerance`` allows (zeroing at the balance itself can unbalance
-    #: a body past it).
-    force_resolution: float = 1e-10
-    #: A contact counts as touching when it uses this much of its own play:
-    #: the certificate's feasibility, with room for a play 10x smaller than
-    #: the largest.
-    touching: float = 1.0 - 1e-8
-    #: A contact this far from its reach (a fraction of its own play) is
-    #: clear, and must push with nothing (to ``equilibrium_tolerance``):
-    #: complementarity weighs a force by its slack only closer than this.
-    clear: float = 1e-6
+    #: What an interior-point answer resolves, as a fraction of the size it
+    #: is read against (about the square root of its gap): a contact this
+    #: far from its reach (of its own play) is clear and must push with
+    #: nothing (complementarity weighs a force by its slack only closer);
+    #: a cone within it of its apex rests there (a face flat, a ball
+    #: centred; its force vector this far inside its cone); forces (loads of
+    #: unit size) at this level are its round-off (rigid joints carrying the
+    #: loads; the split's program leaving a contact unloaded); a body moving
+    #: this little beside the biggest in its ray of unboundedness is left out
+    #: of it first and not named as moving along.
+    interior_resolution: float = 1e-6
 
     # -- the interior-point method (Clarabel) ---------------------------------
     #: Gap and feasibility tolerances (relative, scaled problem): the answer
@@ -62,10 +61,6 @@ class SolverSettings:
     #: at 1e-8 (4,000 shafts: 12 against 21).
     fine_ipm_regularization: float = 1e-10
     max_iterations: int = 200
-    #: Iterative refinement of each interior-point step's linear solve: with
-    #: stiff springs pressed far past their play, Clarabel's default leaves
-    #: some programs "AlmostSolved" at a 1e-7 gap.
-    ipm_refinement: float = 1e-14
     #: A large (sparse) model's interior point goes without it: there its
     #: answer is where Newton starts, which ends at round-off, and it doubles
     #: Clarabel's time (10,000-segment chain: 2.0 s and 16 iterations against
@@ -84,7 +79,8 @@ class SolverSettings:
 
     # -- rank and free motions -------------------------------------------------
     #: Singular values below this fraction of the largest count as zero: they
-    #: span the free motions, dependent rows, indeterminate forces. So do
+    #: span the free motions, dependent rows, indeterminate forces; a load
+    #: component on a free motion below this fraction of the load is 0. So do
     #: the LU pivots of a Newton system (an active set's KKT matrix), though
     #: an LU is not rank revealing: with none below it the system is
     #: regular, its flat face pins the position and its rows are independent
@@ -95,8 +91,6 @@ class SolverSettings:
     #: string (its forces the least squares' to 4.7e-15); ties and redundant
     #: contacts factor not at all, or with pivots of 1e-13 and below.
     free_motion_rcond: float = 1e-9
-    #: A load component on a free motion below this fraction of the load is 0.
-    drive_tolerance: float = 1e-9
     #: A body turning by more than this (rad) in the answer is reported as not
     #: held: a linear answer means nothing there. (Turns above 0.05 rad are
     #: answered with a warning, ``finite.py``; random mechanisms held by
@@ -106,7 +100,10 @@ class SolverSettings:
 
     # -- polishing on the active set (Newton on the KKT equations) -------------
     #: Double-precision round-off of a well-scaled quantity: where Newton
-    #: stops, and what results and eliminations treat as an exact zero.
+    #: stops, what results and eliminations treat as an exact zero, and where
+    #: the iterative refinement of each interior-point step's linear solve
+    #: stops (with stiff springs pressed far past their play, Clarabel's
+    #: default left some programs "AlmostSolved" at a 1e-7 gap).
     round_off: float = 1e-14
     #: Regularization of a singular KKT system (loads of unit norm): small
     #: against every pivot of a well-posed one, large against round-off (its
@@ -131,16 +128,6 @@ class SolverSettings:
     #: equations hold to this (relative): well above where it stops, well
     #: below the certificate.
     newton_accept: float = 1e-11
-    #: An active force below this fraction of the largest is not strictly
-    #: positive: its contact may leave the active set.
-    positive_force: float = 1e-8
-    #: Contact forces (loads of unit size) at this level are the interior-point
-    #: method's round-off: when rigid joints carry the loads, and when the
-    #: force split's cone program leaves a contact unloaded.
-    noise_force: float = 1e-6
-    #: A cone rests at its apex (a face flat, a ball centred) when |A_i x| is
-    #: below this fraction of its play and its force vector this far inside.
-    apex: float = 1e-6
     #: Newton runs on the interior point's active set, each correcting it
     #: (the contacts pushed past join, else the most negative force leaves):
     #: a degenerate bearing chain of 19 shafts drops one contact a run and
@@ -162,10 +149,6 @@ class SolverSettings:
     #: singular values below this fraction of the largest are dropped
     #: (round-off, not rank); a sparse one is regularized by it.
     lstsq_rcond: float = 1e-13
-    #: A body whose motion is below this fraction of the biggest one is not
-    #: named as moving along (words), and is left out of the interior point's
-    #: ray of unboundedness first, all such bodies at once (``held.needed_only``).
-    mover_share: float = 1e-6
 
     # -- exact rotations (``exact``) ------------------------------------------
     #: The exact geometry's overshoot of every clearance must stay below this
@@ -191,6 +174,22 @@ class SolverSettings:
     #: held for a tenth of them would miss 32 random rows 3 % of the time (a
     #: part of a few rows, on a large model, is no evidence).
     batch_guess_rows: int = 32
+
+    @property
+    def force_resolution(self) -> float:
+        """Forces and moments print as 0 below this fraction of the largest
+        force (round-off is 1e-12 of it and less): a hundredth of the balance,
+        so that the components it zeroes change a body's balance by a small
+        part of what ``equilibrium_tolerance`` allows (zeroing at the balance
+        itself can unbalance a body past it)."""
+        return self.equilibrium_tolerance / 100.0
+
+    @property
+    def touching(self) -> float:
+        """A contact counts as touching when it uses this much of its own
+        play: the certificate's feasibility, with room for a play 10x
+        smaller than the largest."""
+        return 1.0 - 10.0 * self.feasibility_tolerance
 
     def retry(self) -> SolverSettings:
         """The one retry's settings (an answer that does not certify, or a

@@ -472,7 +472,7 @@ def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
     if ws.N.shape[1] == 0:
         return
     drive = linalg.times(ws.N.T, work)  # work @ N
-    bad = np.linalg.norm(drive, axis=1) > ws.settings.drive_tolerance * norms
+    bad = np.linalg.norm(drive, axis=1) > ws.settings.free_motion_rcond * norms
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
         held.check_driven(ws, work[i])  # raises, naming the body and the motion
@@ -756,7 +756,7 @@ def _pinned(
     unloaded contact keeps none. Rows (B, m)."""
     stack, st = ws.stack, ws.settings
     B = x.shape[0]
-    loaded = lam > st.positive_force * np.max(lam, axis=1, keepdims=True)
+    loaded = lam > st.equilibrium_tolerance * np.max(lam, axis=1, keepdims=True)
     v, rho = stack.norms(x, c)
     f_norm = np.sqrt(stack.segment_sum(f * f))
     parts = [np.broadcast_to(linalg.dense(ws.Eq), (B, *ws.Eq.shape))]
@@ -771,7 +771,7 @@ def _pinned(
                 M = M[:, :k]
         else:  # a face flat at its apex may tilt about the rim its force reaches
             u = f[:, rows] / np.maximum(f_norm[:, i : i + 1], TINY)
-            tilt = stack.has_rim[i] & (f_norm[:, i] >= (1.0 - st.apex) * lam[:, i])
+            tilt = stack.has_rim[i] & (f_norm[:, i] >= (1.0 - st.interior_resolution) * lam[:, i])
         if np.any(tilt):
             w = np.concatenate([u, -np.ones((B, 1))], axis=1)
             w /= np.linalg.norm(w, axis=1, keepdims=True)

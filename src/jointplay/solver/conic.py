@@ -120,7 +120,7 @@ def options(
 ) -> Any:
     """Clarabel's settings for every cone program we run: quiet, our
     tolerance (default ``ipm_tolerance``) and iteration limit, ``refine``:
-    iterative refinement to ``ipm_refinement`` (or none), and the static
+    iterative refinement to ``round_off`` (or none), and the static
     regularization (default ``ipm_regularization``)."""
     out = clarabel.DefaultSettings()
     out.verbose = False
@@ -131,8 +131,8 @@ def options(
     # stiff springs pressed far past their play, or a deviation zone's tilt
     # against a long lever, the default leaves some programs "AlmostSolved"
     out.iterative_refinement_enable = refine
-    out.iterative_refinement_reltol = settings.ipm_refinement
-    out.iterative_refinement_abstol = settings.ipm_refinement
+    out.iterative_refinement_reltol = settings.round_off
+    out.iterative_refinement_abstol = settings.round_off
     out.static_regularization_constant = (
         settings.ipm_regularization if regularization is None else regularization
     )
@@ -195,7 +195,7 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
         sol = clarabel.DefaultSolver(prog.P, q, prog.A, prog.b, prog.cones, refined).solve()
     if outcome(sol) == "unbounded":  # a one-sided motion (_check_driven took the rest)
         motion = held.driven_motion(ws, -q[: ws.m], np.asarray(sol.x))
-        raise held.unbounded(ws.asm, motion, one_way=True)
+        raise held.unbounded(ws.asm, motion, ws.settings, one_way=True)
     if outcome(sol) == "infeasible":
         ray = infeasibility(ws)
         if ray is not None:
@@ -207,7 +207,7 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
         g = -q[: ws.m]
         ray = driven_ray(ws, g)
         if ray is not None:
-            raise held.unbounded(ws.asm, held.driven_motion(ws, g, ray), one_way=True)
+            raise held.unbounded(ws.asm, held.driven_motion(ws, g, ray), ws.settings, one_way=True)
         raise SolverError(
             f"the cone solver stopped with status {status_name(sol)} on this model. "
             + held.weak_hint(ws)
@@ -253,7 +253,7 @@ def driven_ray(ws: Workspace, g: FloatArray) -> FloatArray | None:
     d = np.asarray(sol.x)
     size = float(np.linalg.norm(d))
     st = ws.settings
-    if float(g @ d) <= st.drive_tolerance * float(np.linalg.norm(g)) or size == 0.0:
+    if float(g @ d) <= st.free_motion_rcond * float(np.linalg.norm(g)) or size == 0.0:
         return None
     d = d / size
     # the interior point's ray to its tolerance: it must hold no contact back
@@ -282,7 +282,9 @@ def unassembled(ws: Workspace, ray: FloatArray) -> UnassembledError:
     work from nothing)."""
     lam = np.abs(ray[ws.interior_program.soc_first])
     top = float(np.max(lam, initial=0.0))
-    cones = np.flatnonzero(lam > ws.settings.noise_force * top) if top > 0 else np.zeros(0, int)
+    cones = (
+        np.flatnonzero(lam > ws.settings.interior_resolution * top) if top > 0 else np.zeros(0, int)
+    )
     model = ws.asm.model
     joints = tuple(dict.fromkeys(model.joints[ws.balls[int(i)].joint_index].name for i in cones))
     named = ", ".join(f"'{j}'" for j in joints) or "the joints"

@@ -266,7 +266,7 @@ def active_set(
     if len(lam) == 0:
         return (), ()
     st = ws.settings
-    floor = st.noise_force if lam_scale is None else lam_scale
+    floor = st.interior_resolution if lam_scale is None else lam_scale
     lam_max = max(float(np.max(lam)), floor, TINY)
     _, rho, level = stack.levels(x)
     r = np.where(stack.r > 0, stack.r, ws.max_radius)
@@ -274,7 +274,8 @@ def active_set(
     held = np.flatnonzero(lam / lam_max > np.maximum(slack, st.feasibility_tolerance))
     f_norm = np.sqrt(stack.segment_sum(f * f))
     apex = (stack.k == 0) | (
-        (rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * np.maximum(lam, 0.0))
+        (rho <= st.interior_resolution * r)
+        & (f_norm < (1.0 - st.interior_resolution) * np.maximum(lam, 0.0))
     )
     surface = tuple(int(i) for i in held if not apex[i])
     linear = tuple(int(i) for i in held if apex[i])

@@ -139,7 +139,7 @@ def least_squares_rows(
     top = np.max(np.abs(lam_n), axis=1, keepdims=True, initial=0.0)
     # only one-sign unknowns are held at 0: a surface force, a one-sided
     # limit's (a ball at its centre has a vector of either sign)
-    unloaded = (lam_n <= settings.noise_force * top) & (surface | (apex & (stack.k == 0)))
+    unloaded = (lam_n <= settings.interior_resolution * top) & (surface | (apex & (stack.k == 0)))
     # rows whose contacts touch alike share the shape of their unknowns
     first_kind, kind = linalg.distinct_rows(np.hstack([surface, apex, pressed, unloaded]))
     for rows in (np.flatnonzero(kind == g) for g in range(len(first_kind))):

@@ -18,7 +18,7 @@ from jointplay.errors import UnboundedMechanismError
 from jointplay.geometry import FloatArray, describe_motion
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
-from jointplay.settings import DEFAULT, TINY
+from jointplay.settings import TINY, SolverSettings
 from jointplay.solver.workspace import limit_rows
 
 if TYPE_CHECKING:
@@ -29,9 +29,9 @@ def check_driven(ws: Workspace, g: FloatArray) -> None:
     if ws.N.shape[1] == 0:
         return
     drive = ws.N.T @ g
-    if np.linalg.norm(drive) <= ws.settings.drive_tolerance * np.linalg.norm(g):
+    if np.linalg.norm(drive) <= ws.settings.free_motion_rcond * np.linalg.norm(g):
         return
-    raise unbounded(ws.asm, ws.N @ drive)
+    raise unbounded(ws.asm, ws.N @ drive, ws.settings)
 
 
 def driven_motion(ws: Workspace, g: FloatArray, fallback: FloatArray) -> FloatArray:
@@ -93,9 +93,9 @@ def needed_only(ws: Workspace, g: FloatArray, ray: FloatArray) -> FloatArray:
     alone[top] = d[top]
     if holds_no_more(ws, g, d, alone):
         return alone * size
-    # then every body too little moved to be named (``mover_share``) at once:
+    # then every body too little moved to be named (``interior_resolution``) at once:
     # round-off moves them all, and one at a time costs a check each
-    faint = by_share[share[by_share] <= ws.settings.mover_share * share[by_share[-1]]]
+    faint = by_share[share[by_share] <= ws.settings.interior_resolution * share[by_share[-1]]]
     trial = d.copy()
     trial[(6 * faint[:, None] + np.arange(6)).ravel()] = 0.0
     if len(faint) and holds_no_more(ws, g, d, trial):
@@ -156,7 +156,7 @@ def check_turns(ws: Workspace, x: FloatArray) -> None:
     turns = np.linalg.norm(x.reshape(-1, 6)[:, 3:], axis=1) * asm.turn
     worst = int(np.argmax(turns))
     if turns[worst] > ws.settings.free_turn_rad:
-        raise unbounded(asm, x, one_way=True, turn=float(turns[worst]))
+        raise unbounded(asm, x, ws.settings, one_way=True, turn=float(turns[worst]))
 
 
 def weak_hint(ws: Workspace) -> str:
@@ -193,7 +193,11 @@ def column_max(a: Matrix, m: int) -> FloatArray:
 
 
 def unbounded(
-    asm: Assembly, direction: FloatArray, one_way: bool = False, turn: float | None = None
+    asm: Assembly,
+    direction: FloatArray,
+    settings: SolverSettings,
+    one_way: bool = False,
+    turn: float | None = None,
 ) -> UnboundedMechanismError:
     """Describe a driven free motion (scaled unknowns) in words (``one_way``:
     a motion the joints stop in one sense only, such as lifting off; ``turn``:
@@ -207,7 +211,7 @@ def unbounded(
         moves.append((size, name, omega, v_origin))
     moves.sort(key=lambda t: -t[0])
     biggest = moves[0][0]
-    moving = [mv for mv in moves if mv[0] > DEFAULT.mover_share * biggest]
+    moving = [mv for mv in moves if mv[0] > settings.interior_resolution * biggest]
     _, body, omega, v_origin = moving[0]
     motion = describe_motion(omega, v_origin, asm.ell, signed=one_way)
     others = [mv[1] for mv in moving[1:]]

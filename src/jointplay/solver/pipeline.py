@@ -336,7 +336,9 @@ def refine_active(
     r = np.where(stack.r > 0, stack.r, ws.max_radius)
     f_norm = np.sqrt(stack.segment_sum(point.f * point.f))
     st = ws.settings
-    at_apex = (stack.k == 0) | ((rho <= st.apex * r) & (f_norm < (1.0 - st.apex) * point.lam))
+    at_apex = (stack.k == 0) | (
+        (rho <= st.interior_resolution * r) & (f_norm < (1.0 - st.interior_resolution) * point.lam)
+    )
     active = {*key[0], *key[1]}
     if retry_of(ws) is None:
         top = float(np.max(point.lam, initial=0.0))
@@ -402,7 +404,9 @@ def active_set_steps(
         tilts = {
             int(i)
             for i in weak
-            if at_apex[i] and ws.stack.has_rim[i] and trial.lam[i] > st.positive_force * lam_top
+            if at_apex[i]
+            and ws.stack.has_rim[i]
+            and trial.lam[i] > st.equilibrium_tolerance * lam_top
         }
         at_apex = at_apex.copy()
         at_apex[list(tilts)] = False
@@ -414,7 +418,7 @@ def active_set_steps(
         if leaving and not past.size and not tilts:
             leaving = {min(leaving, key=lambda i: (trial.lam[i], i))}
         active = (active - leaving) | set(past.tolist())
-        x, lam = trial.x, np.maximum(trial.lam, st.positive_force * lam_scale)
+        x, lam = trial.x, np.maximum(trial.lam, st.equilibrium_tolerance * lam_scale)
     return None
 
 
@@ -439,7 +443,7 @@ def split_optimum(
     if not point.certificate.certified:
         return None
     # a contact with no force (to round-off) does not bound the tie
-    loaded = shared.lam > ws.settings.positive_force * float(np.max(shared.lam))
+    loaded = shared.lam > ws.settings.equilibrium_tolerance * float(np.max(shared.lam))
     point.active = (
         tuple(i for i in key[0] if loaded[i]),
         tuple(i for i in key[1] if loaded[i]),

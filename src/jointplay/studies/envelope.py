@@ -428,12 +428,12 @@ def _held_directions(
     _, sv, Vt = np.linalg.svd(C)
     # as a solve judges a load: its part on the free motions against the load itself
     probe_size = float(np.linalg.norm(W, 2))
-    rank = int(np.sum(sv > ws.settings.drive_tolerance * probe_size))
+    rank = int(np.sum(sv > ws.settings.free_motion_rcond * probe_size))
     if rank == 0:
         return directions, [], None
     basis = Vt[rank:].T  # (3, k): the probe directions that drive nothing
     driven = Vt[:rank]
-    why = held.unbounded(ws.asm, np.asarray(ws.N @ (C @ driven[0])))
+    why = held.unbounded(ws.asm, np.asarray(ws.N @ (C @ driven[0])), ws.settings)
     what = str(why).split(" is not held by any joint")[0]  # "body 'door': rotation about ..."
     not_held = [
         f"a force at the point with a part along {_words(driven[0])}"
@@ -456,7 +456,7 @@ def _is_held(ws: Workspace, g0: FloatArray, W: FloatArray, u: FloatArray) -> boo
         return True
     g = g0 + W @ u
     drive = np.asarray(ws.N.T @ g)
-    return bool(np.linalg.norm(drive) <= ws.settings.drive_tolerance * np.linalg.norm(g))
+    return bool(np.linalg.norm(drive) <= ws.settings.free_motion_rcond * np.linalg.norm(g))
 
 
 def _solved_rows(
