@@ -24,6 +24,7 @@ from jointplay.errors import (
     UnassembledError,
     UnboundedMechanismError,
 )
+from jointplay.settings import MOST_MOTION_STEPS
 from jointplay.units import LIMITS
 
 app = typer.Typer(
@@ -516,8 +517,22 @@ def motion(
             "--range", metavar="START:STOP", help="The drive's range, e.g. '0 deg:360 deg'."
         ),
     ] = None,
-    steps: Annotated[int | None, typer.Option("--steps", min=2, help="Steps, both ends.")] = None,
-    case: CaseOption = None,
+    steps: Annotated[
+        int | None,
+        typer.Option(
+            "--steps",
+            metavar="N",
+            help=f"Steps, both ends included: 2 to {MOST_MOTION_STEPS:,} (each is a solve).",
+        ),
+    ] = None,
+    case: Annotated[
+        str | None,
+        typer.Option(
+            "--case",
+            metavar="NAME",
+            help="The load case the motion is under (needed when the model has load cases).",
+        ),
+    ] = None,
     csv: Annotated[
         Path | None,
         typer.Option("--csv", metavar="FILE", help="Write the table (one row per step) as CSV."),
@@ -887,6 +902,7 @@ def _finish_study(
             result.to_dataframe().to_csv(csv, index=False)
         except OSError as exc:
             raise OptionError(f"--csv {csv}: cannot write it ({exc.strerror})") from None
+        _note(f"wrote {csv}")  # as --plot says its figure
     if plot is not None:
         _save_plot(figure(), plot)
     if as_json:
