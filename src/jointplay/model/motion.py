@@ -48,9 +48,7 @@ RANGE_EXAMPLE = "['0 deg', '360 deg']"
 def steps_problem(steps: int) -> str | None:
     """What is wrong with ``steps`` steps (None: nothing), with the fix."""
     if steps < FEWEST_STEPS:
-        return (
-            f"give at least {FEWEST_STEPS} steps: the range's start and stop are both steps"
-        )
+        return f"give at least {FEWEST_STEPS} steps: the range's start and stop are both steps"
     if steps > MOST_STEPS:
         return f"give at most {MOST_STEPS:,} steps (each step is a solve)"
     return None

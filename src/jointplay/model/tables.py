@@ -1,6 +1,6 @@
 """A load's component as a table over the drive's value (``motion``).
 
-``force: [{table: [["0 deg", -200], ["180 deg", -1500], ["360 deg", -200]]}, 0, 0]``:
+``force: [{table: [["0 deg", -1500], ["180 deg", -200], ["360 deg", -1500]]}, 0, 0]``:
 the first column is the drive's value (an angle for a spin, a length for a
 slide; a plain number is mm, and refused for a spin but 0, as the motion's
 range reads), the second
@@ -23,7 +23,7 @@ from jointplay.units import BASE_UNITS, shown, to_base
 
 #: The first column's dimension, by how its values are written.
 DRIVE_DIMENSIONS = ("angle", "length")
-EXAMPLE = "{table: [['0 deg', -200], ['180 deg', -1500], ['360 deg', -200]]}"
+EXAMPLE = "{table: [['0 deg', -1500], ['180 deg', -200], ['360 deg', -1500]]}"
 
 
 class DriveTable(float):

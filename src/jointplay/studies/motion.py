@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from jointplay.geometry import FloatArray
 from jointplay.errors import ModelError, OptionError
+from jointplay.geometry import FloatArray
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model
 from jointplay.model.tables import DriveTable
