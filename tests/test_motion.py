@@ -716,7 +716,7 @@ SPIN = ("--drive", "l2", "--range", "0 deg:10 deg", "--steps", "2")
 def test_an_unknown_case_is_the_case_option_s_error(study: list[str]) -> None:
     """As a solve says it: exit 2, one line naming --case; never a KeyError."""
     for path, case, words in (
-        (GALLERY / "four_bar.yaml", "foo", "--case foo: the model has no load cases"),
+        (GALLERY / "four_bar.yaml", "foo", "--case: no load case 'foo'; the model has none"),
         (SHAFT, "cuting", "--case: no load case 'cuting'"),
     ):
         spin = SPIN if path == SHAFT else ("--steps", "2")
@@ -724,7 +724,7 @@ def test_an_unknown_case_is_the_case_option_s_error(study: list[str]) -> None:
         assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
         assert "invalid option" in proc.stderr and words in proc.stderr, proc.stderr
         assert len(proc.stderr.strip().splitlines()) == 1
-    with pytest.raises(OptionError, match="--case foo"):
+    with pytest.raises(OptionError, match="no load case 'foo'"):
         Motion(case="foo").run(jointplay.load(GALLERY / "four_bar.yaml"))
 
 
@@ -807,3 +807,14 @@ def test_a_figure_name_without_a_suffix_is_told_the_suffixes() -> None:
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "--plot /tmp/figure: the name has no suffix" in proc.stderr
     assert ".png, .svg or .pdf" in proc.stderr
+
+
+def test_the_report_drives_the_motion_under_one_case_and_names_it() -> None:
+    """A report solves every case; its motion is under the first, said so."""
+    from jointplay.present.report import Report
+
+    data = yaml.safe_load((GALLERY / "four_bar.yaml").read_text())
+    data["motion"]["steps"] = 3
+    data["load_cases"] = {"light": [], "heavy": []}
+    page = Report(studies=False).render(model_from_dict(data), "bar.yaml")
+    assert "in 3 poses under load case &#x27;light&#x27; (the first;" in page

@@ -698,8 +698,8 @@ def check_case(model: Model, case: str | None, source: str) -> None:
         from jointplay.errors import OptionError
 
         raise OptionError(
-            f"--case {case}: the model has no load cases (no 'load_cases' section); leave "
-            "--case out",
+            f"--case: no load case {shown(case)}; the model has none (no 'load_cases' "
+            "section): leave --case out",
             source=source,
         )
     try:
