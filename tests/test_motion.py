@@ -788,12 +788,19 @@ def test_the_help_states_the_most_steps() -> None:
 def test_csv_cells_separate_names_that_hold_spaces(tmp_path: Path) -> None:
     """Contact names hold spaces ('main bearing.end-', 'guide.z x- y-'): the
     CSV's touching and switched cells split on '; ' back into the names the
-    JSON lists; the CLI says it wrote the file, as --plot does."""
+    JSON lists; the CLI says it wrote the file, as --plot does (but with
+    --json, whose stderr stays quiet)."""
     import pandas as pd
 
     path = tmp_path / "crank.csv"
     proc = run("motion", str(GALLERY / "slider_crank.yaml"), "--steps", "5", "--csv", str(path))
     assert proc.returncode == 0 and proc.stderr.strip() == f"jointplay: wrote {path}"
+    figure = tmp_path / "crank.svg"
+    proc = run("motion", str(GALLERY / "four_bar.yaml"), "--steps", "3", "--plot", str(figure))
+    assert proc.returncode == 0 and proc.stderr.strip() == f"jointplay: wrote {figure}"
+    args = ("--steps", "3", "--csv", str(path), "--plot", str(figure), "--json")
+    proc = run("motion", str(GALLERY / "four_bar.yaml"), *args)
+    assert proc.returncode == 0 and proc.stderr == "" and json.loads(proc.stdout)
     frame = pd.read_csv(path, keep_default_na=False)
     result = Motion(steps=5).run(jointplay.load(GALLERY / "slider_crank.yaml"))
     for s, step in enumerate(result.to_dict()["steps"]):

@@ -896,15 +896,17 @@ def _finish_study(
     render: Callable[[], None],
 ) -> None:
     """A study's outputs: the CSV table, the figure (``figure()`` draws it),
-    then the JSON document or the readable report."""
+    each said on stderr ("wrote FILE") but with --json, then the JSON
+    document or the readable report."""
     if csv is not None:
         try:
             result.to_dataframe().to_csv(csv, index=False)
         except OSError as exc:
             raise OptionError(f"--csv {csv}: cannot write it ({exc.strerror})") from None
-        _note(f"wrote {csv}")  # as --plot says its figure
+        if not as_json:  # --json: stdout is the document, stderr stays quiet
+            _note(f"wrote {csv}")
     if plot is not None:
-        _save_plot(figure(), plot)
+        _save_plot(figure(), plot, said=not as_json)
     if as_json:
         typer.echo(json.dumps(result.to_dict(), indent=2))
     else:
@@ -933,11 +935,12 @@ def _check_outputs(csv: Path | None, plot: Path | None) -> None:
         check_figure_path(plot, "--plot")
 
 
-def _save_plot(fig: Any, path: Path) -> None:
+def _save_plot(fig: Any, path: Path, said: bool = True) -> None:
     from jointplay.present.plot import save
 
     save(fig, path)
-    _note(f"wrote {path}")
+    if said:
+        _note(f"wrote {path}")
 
 
 def sweep_envelopes(model: Any, source: str) -> dict[str, Any]:
