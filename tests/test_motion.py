@@ -798,7 +798,7 @@ def test_csv_cells_separate_names_that_hold_spaces(tmp_path: Path) -> None:
     figure = tmp_path / "crank.svg"
     proc = run("motion", str(GALLERY / "four_bar.yaml"), "--steps", "3", "--plot", str(figure))
     assert proc.returncode == 0 and proc.stderr.strip() == f"jointplay: wrote {figure}"
-    args = ("--steps", "3", "--csv", str(path), "--plot", str(figure), "--json")
+    args = ("--steps", "3", "--csv", str(tmp_path / "bar.csv"), "--plot", str(figure), "--json")
     proc = run("motion", str(GALLERY / "four_bar.yaml"), *args)
     assert proc.returncode == 0 and proc.stderr == "" and json.loads(proc.stdout)
     frame = pd.read_csv(path, keep_default_na=False)
