@@ -251,7 +251,7 @@ class MotionResult:
                 for i, axis in enumerate("xyz"):
                     row[f"{name} d{axis} (mm)"] = float(self.displacement[s, k, i])
             row[f"drive reaction ({self.reaction_unit})"] = float(self.drive_reaction[s])
-            # names may hold spaces ("main bearing.radial"): "; " between them
+            # names may hold spaces ("guide.z x- y-"): "; " between them
             row["touching"] = CELL_SEPARATOR.join(self.touching[s])
             row["switched"] = CELL_SEPARATOR.join(
                 f"{joint}.{name}" for joint, names in self.switched[s].items() for name in names
