@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 import jointplay
-from jointplay.errors import ModelError, MotionError, UnboundedMechanismError
+from jointplay.errors import ModelError, MotionError, OptionError, UnboundedMechanismError
 from jointplay.io.modelfile import model_from_dict
 from jointplay.studies.kinematics import nominal_poses
 from jointplay.studies.motion import Motion, posed_model
@@ -101,6 +101,15 @@ def test_undriven_names_the_free_body() -> None:
         ({"drive": "main bearing", "range": ["0 mm", "1 mm"]}, "range[0]: expected an angle"),
         ({"drive": "guide", "range": ["0 deg", "1 deg"]}, "range[0]: expected a length"),
         ({"drive": "main bearing", "range": ["0 deg", "1 deg"], "steps": 1}, "motion.steps"),
+        # each with its fix
+        ({"drive": "main bearing", "range": "0 deg:360 deg"}, "give the range as [START, STOP]"),
+        ({"drive": "main bearing", "range": ["0 deg"]}, "needs START and STOP"),
+        ({"drive": "main bearing", "range": ["0 deg", "1 deg"], "steps": 0}, "at least 2 steps"),
+        ({"drvie": "main bearing", "range": ["0 deg", "1 deg"]}, "Did you mean 'drive'?"),
+        (
+            {"drive": "main bearing", "range": ["0 deg", "1 deg"], "step": 5},
+            "Did you mean 'steps'?",
+        ),
     ],
 )
 def test_bad_motion_entries(motion: dict[str, object], words: str) -> None:
@@ -532,8 +541,10 @@ def test_a_narrow_terminal_keeps_the_motion_numbers_whole() -> None:
         ([["0 mm", -200], ["360 mm", -200]], "give them in deg"),
         ([["0 deg", -200], ["180 deg", -200]], "extend the table over the motion's range"),
         ([[0, -200], ["3 rad", -200]], "extend the table over the motion's range"),
-        ([[0, -200], [7, -200]], "a drive's value has no unit"),  # 7 would be rad
-        ([[0, -200], ["7", -200]], "a drive's value has no unit"),
+        ([[0, -200], [7, -200]], "row 1: the drive's value 7 has no unit"),  # 7 would be rad
+        ([[0, -200], ["7", -200]], "row 1: the drive's value '7' has no unit"),
+        # beside angles, a plain number is a unit left out, not rows out of order
+        ([["0 deg", -200], ["345", -200], ["360 deg", -200]], "row 1: the drive's value '345' has"),
     ],
 )
 def test_bad_load_tables(table: list[Any], words: str) -> None:
@@ -640,6 +651,7 @@ def test_a_spin_range_of_zero_and_radians_with_their_unit_read() -> None:
         ("four_bar", ["--range", "0 mm:1 mm"], ["--range START: expected an angle"]),
         ("four_bar", ["--range", "0 deg"], ["--range 0 deg: expected START:STOP"]),
         ("four_bar", ["--drive", "nothing"], ["--drive nothing: unknown joint", "motor"]),
+        ("four_bar", ["--drive", "moter"], ["--drive moter", "motion. Did you mean 'motor'?"]),
         ("slider_crank", ["--drive", "guide"], ["--drive guide:", "give --range"]),
         ("slider_crank", ["--drive", "guide", "--range", "0 deg:9 deg"], ["--range START:"]),
         ("../paper/6.1.6.1", ["--range", "0 deg:9 deg"], ["--range: the model has no", "--drive"]),
@@ -693,3 +705,123 @@ def test_the_text_counts_the_steps_a_requirement_fails_at() -> None:
     proc = run("motion", str(path))
     assert proc.returncode == 0, proc.stderr
     assert f"FAILED at {failing} of {result.steps} steps" in proc.stdout
+
+
+# -- the load case, the options' values and the outputs, as a new user meets them ------
+SHAFT = GALLERY.parent / "studies" / "shaft_cases.yaml"
+SPIN = ("--drive", "l2", "--range", "0 deg:10 deg", "--steps", "2")
+
+
+@pytest.mark.parametrize("study", [[], ["--samples", "2"], ["--envelope"], ["--contributions"]])
+def test_an_unknown_case_is_the_case_option_s_error(study: list[str]) -> None:
+    """As a solve says it: exit 2, one line naming --case; never a KeyError."""
+    for path, case, words in (
+        (GALLERY / "four_bar.yaml", "foo", "--case: no load case 'foo'; the model has none"),
+        (SHAFT, "cuting", "--case: no load case 'cuting'"),
+    ):
+        spin = SPIN if path == SHAFT else ("--steps", "2")
+        proc = run("motion", str(path), *spin, "--case", case, *study)
+        assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+        assert "invalid option" in proc.stderr and words in proc.stderr, proc.stderr
+        assert len(proc.stderr.strip().splitlines()) == 1
+    with pytest.raises(OptionError, match="no load case 'foo'"):
+        Motion(case="foo").run(jointplay.load(GALLERY / "four_bar.yaml"))
+
+
+def test_a_model_with_load_cases_needs_its_case() -> None:
+    """Without --case the motion would be under no case the model has: refused,
+    naming the cases; with it the header names the case, and the first pose
+    is the solve of the model under that case."""
+    proc = run("motion", str(SHAFT), *SPIN)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert "the model has load cases (cutting, lifting): give --case NAME" in proc.stderr
+    proc = run("motion", str(SHAFT), *SPIN, "--case", "lifting")
+    assert proc.returncode == 0, proc.stderr
+    assert "load case 'lifting'" in proc.stdout.splitlines()[0]
+    doc = json.loads(run("motion", str(SHAFT), *SPIN, "--case", "lifting", "--json").stdout)
+    assert doc["case"] == "lifting"
+    model = jointplay.load(SHAFT)
+    result = Motion(drive="l2", range=("0 deg", "10 deg"), steps=2, case="lifting").run(model)
+    from jointplay.solver.workspace import Workspace
+
+    lifted = Workspace.of(model).solve(loads=model.loads_of("lifting"))
+    assert np.allclose(result.displacement[0, 0], lifted.points["tip"].displacement, atol=1e-9)
+    with pytest.raises(OptionError, match="cutting, lifting"):
+        Motion(drive="l2", range=("0 deg", "10 deg"), steps=2).run(model)
+
+
+@pytest.mark.parametrize(
+    ("model", "args", "words"),
+    [
+        ("four_bar", ["--steps", "1000000000"], ["--steps 1000000000: give at most 100,000"]),
+        ("four_bar", ["--steps", "1"], ["--steps 1: give at least 2 steps"]),
+        (
+            "slider_crank",
+            ["--range", "0 deg:400 deg", "--steps", "3"],
+            ["--range '0 deg:400 deg': the model file's loads[0]", "a --range that fits it"],
+        ),
+        (
+            "slider_crank",
+            ["--drive", "guide", "--range", "0 mm:-50 mm", "--steps", "3"],
+            ["--drive guide --range '0 mm:-50 mm': the model file's loads[0]", "give them in mm"],
+        ),
+    ],
+)
+def test_option_values_the_model_cannot_take_name_the_option(
+    model: str, args: list[str], words: list[str]
+) -> None:
+    """An option's value that the model cannot take is the option's error,
+    not the file's: 'invalid option', the option and the fix, exit 2."""
+    proc = run("motion", str(GALLERY / f"{model}.yaml"), *args)
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert "invalid option" in proc.stderr and "invalid model" not in proc.stderr
+    assert all(w in proc.stderr for w in words), proc.stderr
+
+
+def test_the_help_states_the_most_steps() -> None:
+    from jointplay.settings import MOST_MOTION_STEPS
+
+    assert f"2 to {MOST_MOTION_STEPS:,}" in run("motion", "--help").stdout
+
+
+def test_csv_cells_separate_names_that_hold_spaces(tmp_path: Path) -> None:
+    """Contact names hold spaces ('main bearing.end-', 'guide.z x- y-'): the
+    CSV's touching and switched cells split on '; ' back into the names the
+    JSON lists; the CLI says it wrote the file, as --plot does (but with
+    --json, whose stderr stays quiet)."""
+    import pandas as pd
+
+    path = tmp_path / "crank.csv"
+    proc = run("motion", str(GALLERY / "slider_crank.yaml"), "--steps", "5", "--csv", str(path))
+    assert proc.returncode == 0 and proc.stderr.strip() == f"jointplay: wrote {path}"
+    figure = tmp_path / "crank.svg"
+    proc = run("motion", str(GALLERY / "four_bar.yaml"), "--steps", "3", "--plot", str(figure))
+    assert proc.returncode == 0 and proc.stderr.strip() == f"jointplay: wrote {figure}"
+    args = ("--steps", "3", "--csv", str(tmp_path / "bar.csv"), "--plot", str(figure), "--json")
+    proc = run("motion", str(GALLERY / "four_bar.yaml"), *args)
+    assert proc.returncode == 0 and proc.stderr == "" and json.loads(proc.stdout)
+    frame = pd.read_csv(path, keep_default_na=False)
+    result = Motion(steps=5).run(jointplay.load(GALLERY / "slider_crank.yaml"))
+    for s, step in enumerate(result.to_dict()["steps"]):
+        assert any(" " in name for name in step["touching"])
+        assert frame["touching"][s].split("; ") == step["touching"]
+        assert frame["switched"][s] == "; ".join(step["switched"])
+
+
+def test_a_figure_name_without_a_suffix_is_told_the_suffixes() -> None:
+    proc = run("motion", str(GALLERY / "four_bar.yaml"), "--plot", "/tmp/figure")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "--plot /tmp/figure: the name has no suffix" in proc.stderr
+    assert ".png, .svg or .pdf" in proc.stderr
+
+
+def test_the_report_drives_the_motion_under_one_case_and_names_it() -> None:
+    """A report solves every case; its motion is under the first, said so."""
+    from jointplay.present.report import Report
+
+    data = yaml.safe_load((GALLERY / "four_bar.yaml").read_text())
+    data["motion"]["steps"] = 3
+    data["load_cases"] = {"light": [], "heavy": []}
+    page = Report(studies=False).render(model_from_dict(data), "bar.yaml")
+    assert "in 3 poses under load case &#x27;light&#x27; (the first;" in page

@@ -235,7 +235,7 @@ def test_the_text_json_and_csv_mark_the_guide_switch_where_the_rod_lies_along_it
         assert sorted(set(step["switched"]) - set(guide)) == (
             ["main bearing.drive"] if s in turned else []
         )
-        assert frame["switched"][s] == " ".join(step["switched"])
+        assert frame["switched"][s] == "; ".join(step["switched"])
 
 
 def test_the_joint_forces_are_the_reactions_and_the_rod_s_closed_form(

@@ -24,6 +24,7 @@ from jointplay.errors import (
     UnassembledError,
     UnboundedMechanismError,
 )
+from jointplay.settings import MOST_MOTION_STEPS
 from jointplay.units import LIMITS
 
 app = typer.Typer(
@@ -516,8 +517,22 @@ def motion(
             "--range", metavar="START:STOP", help="The drive's range, e.g. '0 deg:360 deg'."
         ),
     ] = None,
-    steps: Annotated[int | None, typer.Option("--steps", min=2, help="Steps, both ends.")] = None,
-    case: CaseOption = None,
+    steps: Annotated[
+        int | None,
+        typer.Option(
+            "--steps",
+            metavar="N",
+            help=f"Steps, both ends included: 2 to {MOST_MOTION_STEPS:,} (each is a solve).",
+        ),
+    ] = None,
+    case: Annotated[
+        str | None,
+        typer.Option(
+            "--case",
+            metavar="NAME",
+            help="The load case the motion is under (needed when the model has load cases).",
+        ),
+    ] = None,
     csv: Annotated[
         Path | None,
         typer.Option("--csv", metavar="FILE", help="Write the table (one row per step) as CSV."),
@@ -881,14 +896,17 @@ def _finish_study(
     render: Callable[[], None],
 ) -> None:
     """A study's outputs: the CSV table, the figure (``figure()`` draws it),
-    then the JSON document or the readable report."""
+    each said on stderr ("wrote FILE") but with --json, then the JSON
+    document or the readable report."""
     if csv is not None:
         try:
             result.to_dataframe().to_csv(csv, index=False)
         except OSError as exc:
             raise OptionError(f"--csv {csv}: cannot write it ({exc.strerror})") from None
+        if not as_json:  # --json: stdout is the document, stderr stays quiet
+            _note(f"wrote {csv}")
     if plot is not None:
-        _save_plot(figure(), plot)
+        _save_plot(figure(), plot, said=not as_json)
     if as_json:
         typer.echo(json.dumps(result.to_dict(), indent=2))
     else:
@@ -917,11 +935,12 @@ def _check_outputs(csv: Path | None, plot: Path | None) -> None:
         check_figure_path(plot, "--plot")
 
 
-def _save_plot(fig: Any, path: Path) -> None:
+def _save_plot(fig: Any, path: Path, said: bool = True) -> None:
     from jointplay.present.plot import save
 
     save(fig, path)
-    _note(f"wrote {path}")
+    if said:
+        _note(f"wrote {path}")
 
 
 def sweep_envelopes(model: Any, source: str) -> dict[str, Any]:

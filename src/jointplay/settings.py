@@ -264,3 +264,7 @@ class MotionSettings:
 
 
 MOTION = MotionSettings()
+
+#: The most steps a motion may have: each is a solve, and 100,000 poses (a
+#: point every 0.0036 deg of a turn) are far past any curve's need.
+MOST_MOTION_STEPS = 100_000

@@ -1116,4 +1116,6 @@ def _allowed_keys(loc: list[Any], data: dict[str, Any]) -> set[str]:
         return _SECTION_KEYS[section]
     if section == "load_cases" and len(loc) == 4:
         return _SECTION_KEYS["loads"]
+    if all(isinstance(part, str) for part in loc):  # a section that is one mapping: motion
+        return _nested_keys(Model, loc[:-1])
     return set()

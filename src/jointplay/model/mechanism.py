@@ -45,7 +45,7 @@ from jointplay.model.fields import (
 )
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.joints.base import Coordinate
-from jointplay.model.motion import DIMENSION, MotionSection, coordinate_of, range_of
+from jointplay.model.motion import DIMENSION, MotionSection, coordinate_of, no_unit, range_of
 from jointplay.model.tables import DriveTable
 from jointplay.model.tolerance import ANGULAR_PLAYS, Toleranced, play_unit
 from jointplay.units import shown
@@ -645,13 +645,13 @@ def _check_load_tables(model: Model, sections: list[tuple[str, Load]]) -> list[E
                     continue  # the motion section's own message says what is wrong
                 dimension = DIMENSION[coordinate]
                 unit = "deg" if coordinate == "spin" else "mm"
-                if coordinate == "spin" and table.plain:
+                if coordinate == "spin" and table.plain is not None:
+                    row, x, y = table.plain
+                    fix = f"[{shown(f'{str(x).strip()} deg')}, {shown(y)}]"
                     found.append(
                         EntryError(
                             entry,
-                            f"{where}: a drive's value has no unit; the drive '{joint.name}' is "
-                            "a spin, and a plain number would be read as radians: give its "
-                            "values with a unit, such as ['90 deg', -200] (or 'rad')",
+                            f"{where} row {row}: the drive's value {no_unit(x, joint.name, fix)}",
                         )
                     )
                     continue
@@ -694,6 +694,14 @@ def check_case(model: Model, case: str | None, source: str) -> None:
     """An ``OptionError`` naming the cases unless ``case`` is None or one of them."""
     if case is None:
         return
+    if not model.case_names:
+        from jointplay.errors import OptionError
+
+        raise OptionError(
+            f"--case: no load case {shown(case)}; the model has none (no 'load_cases' "
+            "section): leave --case out",
+            source=source,
+        )
     try:
         model.loads_of(case)
     except KeyError as exc:

@@ -17,8 +17,17 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt, StrictStr
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictFloat,
+    StrictInt,
+    StrictStr,
+    field_validator,
+)
 
+from jointplay.settings import MOST_MOTION_STEPS
 from jointplay.units import read_number, shown, to_base, without_plain_hint
 
 if TYPE_CHECKING:
@@ -29,7 +38,29 @@ Coordinate = Literal["spin", "slide"]
 #: What each coordinate is measured in, as the model reads units.
 DIMENSION: dict[str, str] = {"spin": "angle", "slide": "length"}
 #: The most steps a motion may have (each is a solve).
-MOST_STEPS = 100_000
+MOST_STEPS = MOST_MOTION_STEPS
+#: The fewest: the range's two ends.
+FEWEST_STEPS = 2
+#: A range as the file writes it.
+RANGE_EXAMPLE = "['0 deg', '360 deg']"
+
+
+def steps_problem(steps: int) -> str | None:
+    """What is wrong with ``steps`` steps (None: nothing), with the fix."""
+    if steps < FEWEST_STEPS:
+        return f"give at least {FEWEST_STEPS} steps: the range's start and stop are both steps"
+    if steps > MOST_STEPS:
+        return f"give at most {MOST_STEPS:,} steps (each step is a solve)"
+    return None
+
+
+def no_unit(value: Any, joint: str, fix: str) -> str:
+    """A spin's value written without a unit (the range's or a load table's):
+    what is wrong and ``fix``, the value as the user wrote it with a unit."""
+    return (
+        f"{shown(value)} has no unit; the spin of joint '{joint}' is an angle, and a plain "
+        f"number would be read as radians: give a unit, {fix} (or 'rad' if radians are meant)"
+    )
 
 
 class MotionSection(BaseModel):
@@ -40,7 +71,30 @@ class MotionSection(BaseModel):
 
     drive: StrictStr = Field(min_length=1)
     range: tuple[StrictFloat | StrictInt | StrictStr, StrictFloat | StrictInt | StrictStr]
-    steps: StrictInt = Field(73, ge=2, le=MOST_STEPS)
+    steps: StrictInt = Field(73, ge=FEWEST_STEPS, le=MOST_STEPS)
+
+    @field_validator("range", mode="before")
+    @classmethod
+    def _two_ends(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            raise ValueError(
+                f"expected a list [START, STOP], got the text {shown(value)}; give the range "
+                f"as [START, STOP], e.g. {RANGE_EXAMPLE}"
+            )
+        if isinstance(value, list | tuple) and len(value) != 2:
+            raise ValueError(
+                f"a range needs START and STOP, got {shown(list(value))}; e.g. {RANGE_EXAMPLE}"
+            )
+        return value
+
+    @field_validator("steps", mode="before")
+    @classmethod
+    def _step_count(cls, value: Any) -> Any:
+        if isinstance(value, int) and not isinstance(value, bool):
+            problem = steps_problem(value)
+            if problem is not None:
+                raise ValueError(f"got {value}; {problem}")
+        return value
 
 
 def is_plain(value: Any) -> bool:
@@ -124,11 +178,7 @@ def range_of(
     for i, value in enumerate(section.range):
         if coordinate == "spin" and plain_angle(value):
             fix = suggested_range(*section.range, "deg", names is OPTION_NAMES)
-            raise ValueError(
-                f"{names[i]}: {shown(value)} has no unit; the spin of joint '{section.drive}' "
-                f"is an angle, and a plain number would be read as radians: give a unit, {fix}"
-                " (or 'rad' if radians are meant)"
-            )
+            raise ValueError(f"{names[i]}: {no_unit(value, section.drive, fix)}")
         try:
             out.append(to_base(value, DIMENSION[coordinate]))
         except ValueError as exc:

@@ -1,6 +1,6 @@
 """A load's component as a table over the drive's value (``motion``).
 
-``force: [{table: [["0 deg", -200], ["180 deg", -1500], ["360 deg", -200]]}, 0, 0]``:
+``force: [{table: [["0 deg", -1500], ["180 deg", -200], ["360 deg", -1500]]}, 0, 0]``:
 the first column is the drive's value (an angle for a spin, a length for a
 slide; a plain number is mm, and refused for a spin but 0, as the motion's
 range reads), the second
@@ -23,7 +23,7 @@ from jointplay.units import BASE_UNITS, shown, to_base
 
 #: The first column's dimension, by how its values are written.
 DRIVE_DIMENSIONS = ("angle", "length")
-EXAMPLE = "{table: [['0 deg', -200], ['180 deg', -1500], ['360 deg', -200]]}"
+EXAMPLE = "{table: [['0 deg', -1500], ['180 deg', -200], ['360 deg', -1500]]}"
 
 
 class DriveTable(float):
@@ -34,7 +34,9 @@ class DriveTable(float):
     value: tuple[float, ...]  # N or N*mm
     dimension: str | None  # "angle" or "length" as written with units; None: plain numbers
     unit: str
-    plain: bool  # some drive's value but 0 written without a unit (mm; refused for a spin)
+    #: the first row whose drive's value (not 0) is written without a unit, as
+    #: (row, drive's value, value) as written: mm for a slide, refused for a spin
+    plain: tuple[int, Any, Any] | None
 
     def __new__(
         cls,
@@ -42,7 +44,7 @@ class DriveTable(float):
         value: tuple[float, ...],
         dimension: str | None,
         unit: str,
-        plain: bool = False,
+        plain: tuple[int, Any, Any] | None = None,
     ) -> DriveTable:
         self = super().__new__(cls, float(np.interp(0.0, drive, value)))
         for name, v in (("drive", drive), ("value", value), ("dimension", dimension)):
@@ -83,7 +85,7 @@ def parse_table(value: Mapping[str, Any], dimension: str) -> DriveTable:
     drive: list[float] = []
     values: list[float] = []
     dimensions: set[str] = set()
-    plain = False
+    plain: tuple[int, Any, Any] | None = None
     for i, row in enumerate(rows):
         if not isinstance(row, list | tuple) or len(row) != 2:
             raise ValueError(
@@ -95,7 +97,8 @@ def parse_table(value: Mapping[str, Any], dimension: str) -> DriveTable:
                 drive.append(to_base(x, "length"))  # mm, or refused for a spin (check_tables)
             except ValueError as exc:
                 raise ValueError(f"table row {i}: the drive's value: {exc}") from None
-            plain = plain or drive[-1] != 0.0
+            if plain is None and drive[-1] != 0.0:
+                plain = (i, x, y)
         elif isinstance(x, str):
             for kind in DRIVE_DIMENSIONS:
                 try:
@@ -123,6 +126,10 @@ def parse_table(value: Mapping[str, Any], dimension: str) -> DriveTable:
             "table: the drive's values mix angles and lengths; give them all in the drive's "
             "unit (an angle for a spin, a length for a slide)"
         )
+    if plain is not None and "angle" in dimensions:
+        # a plain number (mm) beside angles: a unit left out, which the model
+        # names against its drive (check_tables); the rows' order means nothing yet
+        return DriveTable(tuple(drive), tuple(values), "angle", BASE_UNITS[dimension], plain)
     for i in range(1, len(drive)):
         if not drive[i] > drive[i - 1]:
             raise ValueError(

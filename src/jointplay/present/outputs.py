@@ -16,9 +16,19 @@ def check_output_path(path: Path | str, suffixes: Sequence[str], option: str, fi
     """``path`` if it names a file of one of ``suffixes`` in a folder that
     exists, else an ``OptionError`` ('{suffix}' in ``fix`` is the name's own)."""
     out = Path(path)
+    if not out.suffix:  # the suffix tells the format: say which ones there are
+        raise OptionError(
+            f"{option} {out}: the name has no suffix, which tells the format; name the "
+            f"file {_either(suffixes)}, e.g. {out}{suffixes[0]}"
+        )
     if out.suffix.lower() not in suffixes:
-        raise OptionError(f"{option} {out}: " + fix.format(suffix=out.suffix or "no suffix"))
+        raise OptionError(f"{option} {out}: " + fix.format(suffix=out.suffix))
     return check_file_path(out, option)
+
+
+def _either(suffixes: Sequence[str]) -> str:
+    """'.png, .svg or .pdf'."""
+    return ", ".join(suffixes[:-1]) + " or " + suffixes[-1] if len(suffixes) > 1 else suffixes[0]
 
 
 def check_file_path(path: Path | str, option: str) -> Path:

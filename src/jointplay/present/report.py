@@ -109,7 +109,9 @@ class Report:
             from jointplay.studies.motion import Motion
 
             say(f"the motion, {model.motion.steps} poses")
-            page.motion(model, Motion(case=self.case).run(model, source))
+            # a motion is under one load case: the one asked for, else the first
+            motion = Motion(case=cases[0]).run(model, source)
+            page.motion(model, motion, others=len(cases) > 1)
         if self.studies or self.sweep is not None:
             page.section("Studies")
         if self.studies:
@@ -1027,15 +1029,22 @@ class _Page:
                 words = f"{r.requirement.describe()}: {r.beyond_words(samples)}."
                 self.parts.append(f"<p><strong>{html.escape(words)}</strong></p>")
 
-    def motion(self, model: Model, mr: MotionResult) -> None:
+    def motion(self, model: Model, mr: MotionResult, others: bool = False) -> None:
+        """The motion's section; ``others``: the model's other load cases are
+        solved above but not driven through the motion."""
         from jointplay.present.motion_plots import motion_figure, poses_figure
 
         self.section("Motion")
+        under = ""
+        if mr.case is not None:
+            under = f" under load case '{mr.case}'" + (
+                " (the first; jointplay motion MODEL --case NAME for another)" if others else ""
+            )
         self.paragraph(
             f"The mechanism driven by '{mr.drive}' from {mr.shown_value(0):g} to "
-            f"{mr.shown_value(mr.steps - 1):g} {mr.unit} in {mr.steps} poses, the clearance "
-            "equilibrium solved at each. The table of every step: jointplay motion MODEL "
-            "--csv FILE; these figures: jointplay motion MODEL --plot FILE."
+            f"{mr.shown_value(mr.steps - 1):g} {mr.unit} in {mr.steps} poses{under}, the "
+            "clearance equilibrium solved at each. The table of every step: jointplay motion "
+            "MODEL --csv FILE; these figures: jointplay motion MODEL --plot FILE."
         )
         if mr.requirement_names:
             rows = []

@@ -460,7 +460,9 @@ def render_motion(
     head = Text()
     head.append(
         f"{result.model_name or source}: motion of {result.steps} steps, drive "
-        f"'{result.drive}' ({result.coordinate})\n",
+        f"'{result.drive}' ({result.coordinate})"
+        + ("" if result.case is None else f", load case '{result.case}'")
+        + "\n",
         style="bold",
     )
     head.append(f"every step certified: {CERTIFIED}")

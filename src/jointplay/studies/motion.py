@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from jointplay.errors import ModelError, OptionError
 from jointplay.geometry import FloatArray
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model
@@ -86,6 +87,9 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
     return model_from_dict(data, source=source)
 
 
+#: Between the names in a CSV cell of contacts (a name may hold spaces).
+CELL_SEPARATOR = "; "
+
 #: A touching contact's side: the directions of its force and of its torque
 #: (None where it is 0 to the answer's resolution).
 Side = tuple[FloatArray | None, FloatArray | None]
@@ -147,6 +151,7 @@ class MotionResult:
     requirement_names: tuple[str, ...]
     measured: FloatArray  # (S, Q) mm
     limits: FloatArray  # (Q,)
+    case: str | None = None  # the load case the motion is under
 
     @property
     def steps(self) -> int:
@@ -213,6 +218,7 @@ class MotionResult:
             )
         return {
             "study": "motion",
+            "case": self.case,
             "drive": {
                 "joint": self.drive,
                 "coordinate": self.coordinate,
@@ -245,8 +251,9 @@ class MotionResult:
                 for i, axis in enumerate("xyz"):
                     row[f"{name} d{axis} (mm)"] = float(self.displacement[s, k, i])
             row[f"drive reaction ({self.reaction_unit})"] = float(self.drive_reaction[s])
-            row["touching"] = " ".join(self.touching[s])
-            row["switched"] = " ".join(
+            # names may hold spaces ("guide.z x- y-"): "; " between them
+            row["touching"] = CELL_SEPARATOR.join(self.touching[s])
+            row["switched"] = CELL_SEPARATOR.join(
                 f"{joint}.{name}" for joint, names in self.switched[s].items() for name in names
             )
             rows.append(row)
@@ -281,13 +288,22 @@ class Motion:
     settings: MotionSettings = MOTION
 
     def resolve(self, model: Model, source: str = "<model>") -> Model:
-        """``model`` with its motion section replaced by these settings."""
+        """``model`` with its motion section replaced by these settings; an
+        ``OptionError`` naming the option (``--case``, ``--steps``, ``--drive``,
+        ``--range``) whose value does not fit the model."""
+        self._check_case(model, source)
         given = {
             k: v
             for k, v in (("drive", self.drive), ("range", self.range), ("steps", self.steps))
             if v is not None
         }
-        if not given:
+        if self.steps is not None:
+            from jointplay.model.motion import steps_problem
+
+            problem = steps_problem(self.steps)
+            if problem is not None:
+                raise OptionError(f"--steps {self.steps}: {problem}", source=source)
+        if self.drive is None and self.range is None:
             if model.motion is None:
                 from jointplay.errors import StudyError
 
@@ -296,19 +312,51 @@ class Motion:
                     "range: ['0 deg', '360 deg'], steps: 73}, or give --drive and --range",
                     source=source,
                 )
-            return model
+            if not given:
+                return model
         section = {} if model.motion is None else model.motion.model_dump()
         section.update(given)
         self._check_given(model, section)
         data = model.model_dump(by_alias=True, exclude_none=True)
         data["motion"] = section
-        return model_from_dict(data, source=source)
+        try:
+            return model_from_dict(data, source=source)
+        except ModelError as exc:
+            # the model was valid without these options: they do not fit it
+            raise self._not_fitting(exc) from None
+
+    def _not_fitting(self, exc: ModelError) -> OptionError:
+        """``exc``, the model's error with the motion options given, as theirs."""
+        given = [f"--drive {self.drive}"] if self.drive is not None else []
+        if self.range is not None:
+            given.append(f"--range '{self.range[0]}:{self.range[1]}'")
+        if not given:
+            return OptionError(exc.problem, source=exc.source)
+        names = " and ".join(g.split(" ")[0] for g in given)
+        where = f"the model file's {exc.entry}: " if exc.entry else ""
+        return OptionError(
+            f"{' '.join(given)}: {where}{exc.problem.rstrip('.')}, or give a {names} that "
+            + ("fit it" if len(given) > 1 else "fits it"),
+            source=exc.source,
+        )
+
+    def _check_case(self, model: Model, source: str) -> None:
+        """The load case the motion is under: one of the model's, and given
+        when the model has some (the top-level loads alone are no case of it)."""
+        from jointplay.model.mechanism import check_case, listing
+
+        check_case(model, self.case, source)
+        if self.case is None and model.case_names:
+            raise OptionError(
+                f"--case: the model has load cases ({listing(model.case_names)}): give --case "
+                "NAME, the load case the motion is under",
+                source=source,
+            )
 
     def _check_given(self, model: Model, section: dict[str, Any]) -> None:
         """``OptionError`` naming ``--drive`` or ``--range`` when the value given
         here (the command line's) does not fit the model; what the file's
         motion section alone gets wrong is the file's error, said on loading."""
-        from jointplay.errors import OptionError
         from jointplay.model.mechanism import listing, suggest
         from jointplay.model.motion import (
             FILE_NAMES,
@@ -322,7 +370,7 @@ class Motion:
         if self.drive is not None and self.drive not in names:
             raise OptionError(
                 f"--drive {self.drive}: unknown joint; joints are: {listing(names)}; name the "
-                "joint whose spin or slide drives the motion" + suggest(self.drive, names)
+                "joint whose spin or slide drives the motion." + suggest(self.drive, names)
             )
         if self.drive is None and self.range is None:
             return
@@ -408,4 +456,5 @@ class Motion:
             tuple(q.point for q in model.requirements),
             measured,
             np.array([q.max_displacement for q in model.requirements], dtype=float),
+            self.case,
         )
