@@ -603,6 +603,7 @@ def motion(
                     model,
                     source=source,
                     progress=_stage(bar, "contributions at every pose", nominal.steps),
+                    workers=workers,
                 )
                 if contributions
                 else None,
