@@ -428,6 +428,58 @@ def test_a_grashof_rocker_turned_a_full_turn_is_out_of_reach(tmp_path: Path) -> 
     assert len(proc.stderr.strip().splitlines()) == 1
 
 
+#: Drives that another joint's held spin locks: (model, drive, the joint
+#: whose backlash holds it, --range where the model's motion drives another kind).
+LOCKED = [
+    ("four_bar", "pin D", "motor", []),
+    ("spindle", "front bearing", "rear bearing", ["--range", "0 deg:90 deg"]),
+    ("slider_crank", "wrist pin", "main bearing", []),
+]
+
+
+@pytest.mark.parametrize(("name", "drive", "holder", "span"), LOCKED)
+def test_a_drive_another_joint_holds_cannot_move(
+    name: str, drive: str, holder: str, span: list[str]
+) -> None:
+    """A joint with a backlash (a drive) holds its spin; driving another
+    joint of its loop, no range moves: before any step the message says the
+    drive cannot move, names the joint that holds it and the fix; exit 2,
+    one line, --json says it too."""
+    path = str(GALLERY / f"{name}.yaml")
+    proc = run("motion", path, "--drive", drive, *span, "--steps", "3")
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    words = [
+        f"the drive '{drive}' cannot move",
+        f"joint '{holder}' holds the spin it would turn (its backlash: a drive)",
+        f"drive '{holder}' instead, or remove its backlash",
+    ]
+    assert all(w in proc.stderr for w in words), proc.stderr
+    assert "unreachable" not in proc.stderr and "range" not in proc.stderr.split("motion:")[-1]
+    doc = json.loads(run("motion", path, "--drive", drive, *span, "--steps", "3", "--json").stdout)
+    assert doc["status"] == "invalid" and words[0] in doc["message"]
+    model = jointplay.load(path)
+    bounds = None if not span else tuple(span[1].split(":"))
+    with pytest.raises(MotionError) as err:
+        Motion(drive=drive, range=bounds, steps=3).run(model, path)
+    assert err.value.kind == "locked" and err.value.joints == (holder,)
+    assert err.value.exit_code == 2
+
+
+def test_without_the_backlash_that_held_it_the_drive_moves() -> None:
+    """The four-bar's motor without its backlash: driven by its rocker's
+    pivot, the linkage moves, and the crank-rocker's rocker swings the
+    crank (no lock, the linkage's own kinematics)."""
+    data = jointplay.load(GALLERY / "four_bar.yaml").model_dump(by_alias=True, exclude_none=True)
+    [motor] = [j for j in data["joints"] if j["name"] == "motor"]
+    del motor["backlash"]
+    data["motion"] = {"drive": "pin D", "range": ["0 deg", "2 deg"], "steps": 3}
+    model = model_from_dict(data, source="four_bar")
+    poses = nominal_poses(model, np.radians([0.0, 1.0, 2.0]))
+    crank = poses.turn(2, "crank")
+    assert abs(np.arctan2(crank[1, 0], crank[0, 0])) > np.radians(1.0)
+
+
 @pytest.mark.parametrize("force", [-1500.0, 800.0], ids=["compressed", "pulled"])
 def test_a_shared_deviation_turns_with_its_body(force: float) -> None:
     """The crank's features made in one setup ('deviations', on the crank):

@@ -13,8 +13,9 @@ anywhere in the cycle.
 
 ``MotionEnvelope().run(model)`` takes each point's worst-case envelope
 (``Envelope``) on the posed model at every step; ``MotionContributions()``
-takes the contributions (``Contributions``) at every step, and names the
-play that drives each measure where it is worst.
+takes the contributions (``Contributions``, its rule for a measure that is
+not linear included) at every step, and names the play that drives each
+measure where it varies most.
 """
 
 from __future__ import annotations
@@ -830,9 +831,7 @@ def _contribution_findings(con: MotionContributionsResult, k: int, measure: str)
     share = float(np.max(con.shares(k)[s]))
     at = f"at step {s} (drive {con.shown_value(s):.6g} {_unit(con.coordinate)})"
     if con.linear(k)[s]:
-        spread = (
-            f"worst-case spread {con.spread(k)[s]:.6g} mm, RSS sigma {con.sigma(k)[s]:.6g} mm"
-        )
+        spread = f"worst-case spread {con.spread(k)[s]:.6g} mm, RSS sigma {con.sigma(k)[s]:.6g} mm"
         of = "of the worst-case stack"
     else:
         spread = f"sigma {con.sigma(k)[s]:.6g} mm; the linear stack and RSS do not hold there"
