@@ -146,7 +146,8 @@ class _Equations:
             driven = coordinate if j.name == joint.name else None
             equations = j.ideal(driven)
             self.rows += [(jdx, a, b, eq) for eq in equations]
-            freed = {c: set(j.ideal(c)) for c in ("spin", "slide") if c != driven}
+            kinds: tuple[Coordinate, ...] = ("spin", "slide")
+            freed = {c: set(j.ideal(c)) for c in kinds if c != driven}
             self.holds += [
                 next((c for c, kept in freed.items() if eq not in kept), None) for eq in equations
             ]
