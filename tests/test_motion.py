@@ -473,6 +473,32 @@ def test_a_drive_another_joint_holds_cannot_move(
     assert err.value.exit_code == 2
 
 
+def test_two_held_spins_that_lock_together_are_both_named() -> None:
+    """Backlash at the motor and at the rocker's pivot: driving the coupler's
+    pin, neither alone locks it but both together do; both are named, and
+    removing both is the fix (driving one leaves the other's hold). A weld in
+    the loop locks it with no play to remove: its joints are named."""
+    data = jointplay.load(GALLERY / "four_bar.yaml").model_dump(by_alias=True, exclude_none=True)
+    data["joints"] = list(data["joints"])
+    [pivot] = [j for j in data["joints"] if j["name"] == "pin D"]
+    pivot["backlash"] = "0.2 deg"
+    data["motion"] = {"drive": "pin B", "range": ["0 deg", "1 deg"], "steps": 2}
+    with pytest.raises(MotionError) as err:
+        nominal_poses(model_from_dict(data, source="four_bar"), np.radians([0.0, 1.0]))
+    assert err.value.kind == "locked" and set(err.value.joints) == {"motor", "pin D"}
+    assert "remove all of: the backlash of 'motor', the backlash of 'pin D'" in str(err.value)
+    data["joints"] = [j for j in data["joints"] if j["name"] != "pin D"]
+    data["joints"].append(
+        {"name": "weld", "type": "rigid", "between": ["frame", "rocker"], "at": [200, 0, 0]}
+    )
+    del data["joints"][0]["backlash"]
+    data["motion"]["drive"] = "motor"
+    with pytest.raises(MotionError) as err:
+        nominal_poses(model_from_dict(data, source="four_bar"), np.radians([0.0, 1.0]))
+    assert err.value.kind == "locked" and "weld" in err.value.joints
+    assert "the drive 'motor' cannot move" in str(err.value)
+
+
 def test_without_the_backlash_that_held_it_the_drive_moves() -> None:
     """The four-bar's motor without its backlash: driven by its rocker's
     pivot, the linkage moves, and the crank-rocker's rocker swings the

@@ -425,32 +425,51 @@ def _check_movable(eqs: _Equations, R: FloatArray, p: FloatArray, source: str | 
     rows = np.arange(len(eqs.rows), dtype=np.intp)
     if _moves(J, rows, rcond):
         return
-    holding: list[tuple[str, Coordinate]] = []
+    # per joint, the rows holding a coordinate that driving it would free
+    held: dict[str, tuple[IntArray, Coordinate]] = {}
     for jdx, name in enumerate(eqs.joint_names):
-        held = [r for r in rows if eqs.rows[r][0] == jdx and eqs.holds[r] is not None]
-        if held and _moves(J, np.setdiff1d(rows, held), rcond):
-            coordinate = eqs.holds[held[0]]
+        own = np.array([r for r in rows if eqs.rows[r][0] == jdx and eqs.holds[r] is not None])
+        if own.size:
+            coordinate = eqs.holds[int(own[0])]
             assert coordinate is not None
-            holding.append((name, coordinate))
+            held[name] = (own.astype(np.intp), coordinate)
+    alone = [n for n, (own, _) in held.items() if _moves(J, np.setdiff1d(rows, own), rcond)]
+    together = not alone and bool(held)
+    if together:
+        every = np.concatenate([own for own, _ in held.values()])
+        together = _moves(J, np.setdiff1d(rows, every), rcond)
+    holding = alone or (list(held) if together else [])
     drive = f"the drive '{eqs.drive_joint}' cannot move at the pose written in the file"
     if holding:
-        why = "; ".join(
-            f"joint '{name}' holds the {c} it would {_HELD_BY[c][2]} "
-            f"(its {_HELD_BY[c][0]}{': ' + _HELD_BY[c][1] if _HELD_BY[c][1] else ''})"
-            for name, c in holding
-        )
-        fix = " or ".join(
-            f"drive '{name}' instead, or remove its {_HELD_BY[c][0]}" for name, c in holding
-        )
-        joints = tuple(name for name, _ in holding)
-        message = f"{drive}: {why}; {fix}"
+
+        def what(name: str) -> tuple[str, str]:
+            field, role, verb = _HELD_BY[held[name][1]]
+            return (
+                f"joint '{name}' holds the {held[name][1]} it would {verb} "
+                f"(its {field}{': ' + role if role else ''})",
+                f"the {field} of '{name}'",
+            )
+
+        joints = tuple(holding)
+        if len(holding) == 1:
+            [name] = holding
+            fix = f"drive '{name}' instead, or remove its {_HELD_BY[held[name][1]][0]}"
+        else:
+            each = ", ".join(what(n)[1] for n in holding)
+            # held together, every one must go: driving one leaves the others'
+            fix = (
+                f"drive one of them instead, or remove one of: {each}"
+                if alone
+                else (f"remove all of: {each}")
+            )
+        message = f"{drive}: {'; '.join(what(n)[0] for n in holding)}; {fix}"
     else:
         # the other rows' combination that makes the drive's: the joints it weighs most
         weights = np.linalg.lstsq(J[rows].T, J[-1], rcond=None)[0]
         joints = tuple(j for j in eqs.joints_of(weights) if j != eqs.drive_joint)
         message = (
-            f"{drive}: the ideal joints {', '.join(repr(j) for j in joints)} hold its "
-            f"{eqs.drive} (the linkage is locked without it); drive another joint"
+            f"{drive}: the ideal joints {', '.join(repr(j) for j in joints)} leave its "
+            f"{eqs.drive} no motion (they fix the linkage without it); drive another joint"
         )
     raise MotionError(message, kind="locked", step=0, value=0.0, joints=joints, source=source)
 
