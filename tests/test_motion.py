@@ -70,10 +70,17 @@ def test_a_full_turn_returns_the_start_pose() -> None:
 
 
 def test_unreachable_range_names_step_and_joints() -> None:
+    """The piston pushed 50 mm up its guide, 0.08 mm short of its top dead
+    centre (the main bearing without its backlash, which would hold the
+    crank and lock the piston): the first step is out of reach."""
     model = _with_motion(GALLERY / "slider_crank.yaml", drive="guide", range=["0 mm", "50 mm"])
+    data = model.model_dump(by_alias=True, exclude_none=True)
+    [main] = [j for j in data["joints"] if j["name"] == "main bearing"]
+    del main["backlash"]
+    model = model_from_dict(data, source="slider_crank.yaml")
     with pytest.raises(MotionError, match="unreachable") as err:
         nominal_poses(model, np.linspace(0.0, 50.0, 11))
-    assert err.value.exit_code == 2 and err.value.step >= 0 and err.value.joints
+    assert err.value.exit_code == 2 and err.value.step == 1 and err.value.joints
 
 
 def test_undriven_names_the_free_body() -> None:
@@ -435,6 +442,84 @@ def test_a_grashof_rocker_turned_a_full_turn_is_out_of_reach(tmp_path: Path) -> 
     assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
     assert f"unreachable: at step {err.value.step}" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+#: Drives that another joint's held spin locks: (model, drive, the joint
+#: whose backlash holds it, --range where the model's motion drives another kind).
+LOCKED = [
+    ("four_bar", "pin D", "motor", []),
+    ("spindle", "front bearing", "rear bearing", ["--range", "0 deg:90 deg"]),
+    ("slider_crank", "wrist pin", "main bearing", []),
+]
+
+
+@pytest.mark.parametrize(("name", "drive", "holder", "span"), LOCKED)
+def test_a_drive_another_joint_holds_cannot_move(
+    name: str, drive: str, holder: str, span: list[str]
+) -> None:
+    """A joint with a backlash (a drive) holds its spin; driving another
+    joint of its loop, no range moves: before any step the message says the
+    drive cannot move, names the joint that holds it and the fix; exit 2,
+    one line, --json says it too."""
+    path = str(GALLERY / f"{name}.yaml")
+    proc = run("motion", path, "--drive", drive, *span, "--steps", "3")
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    words = [
+        f"the drive '{drive}' cannot move",
+        f"joint '{holder}' holds the spin it would turn (its backlash: a drive)",
+        f"drive '{holder}' instead, or remove its backlash",
+    ]
+    assert all(w in proc.stderr for w in words), proc.stderr
+    assert "unreachable" not in proc.stderr and "range" not in proc.stderr.split("motion:")[-1]
+    doc = json.loads(run("motion", path, "--drive", drive, *span, "--steps", "3", "--json").stdout)
+    assert doc["status"] == "invalid" and words[0] in doc["message"]
+    model = jointplay.load(path)
+    bounds = None if not span else tuple(span[1].split(":"))
+    with pytest.raises(MotionError) as err:
+        Motion(drive=drive, range=bounds, steps=3).run(model, path)
+    assert err.value.kind == "locked" and err.value.joints == (holder,)
+    assert err.value.exit_code == 2
+
+
+def test_two_held_spins_that_lock_together_are_both_named() -> None:
+    """Backlash at the motor and at the rocker's pivot: driving the coupler's
+    pin, neither alone locks it but both together do; both are named, and
+    removing both is the fix (driving one leaves the other's hold). A weld in
+    the loop locks it with no play to remove: its joints are named."""
+    data = jointplay.load(GALLERY / "four_bar.yaml").model_dump(by_alias=True, exclude_none=True)
+    data["joints"] = list(data["joints"])
+    [pivot] = [j for j in data["joints"] if j["name"] == "pin D"]
+    pivot["backlash"] = "0.2 deg"
+    data["motion"] = {"drive": "pin B", "range": ["0 deg", "1 deg"], "steps": 2}
+    with pytest.raises(MotionError) as err:
+        nominal_poses(model_from_dict(data, source="four_bar"), np.radians([0.0, 1.0]))
+    assert err.value.kind == "locked" and set(err.value.joints) == {"motor", "pin D"}
+    assert "remove all of: the backlash of 'motor', the backlash of 'pin D'" in str(err.value)
+    data["joints"] = [j for j in data["joints"] if j["name"] != "pin D"]
+    data["joints"].append(
+        {"name": "weld", "type": "rigid", "between": ["frame", "rocker"], "at": [200, 0, 0]}
+    )
+    del data["joints"][0]["backlash"]
+    data["motion"]["drive"] = "motor"
+    with pytest.raises(MotionError) as err:
+        nominal_poses(model_from_dict(data, source="four_bar"), np.radians([0.0, 1.0]))
+    assert err.value.kind == "locked" and "weld" in err.value.joints
+    assert "the drive 'motor' cannot move" in str(err.value)
+
+
+def test_without_the_backlash_that_held_it_the_drive_moves() -> None:
+    """The four-bar's motor without its backlash: driven by its rocker's
+    pivot, the linkage moves, and the crank-rocker's rocker swings the
+    crank (no lock, the linkage's own kinematics)."""
+    data = jointplay.load(GALLERY / "four_bar.yaml").model_dump(by_alias=True, exclude_none=True)
+    [motor] = [j for j in data["joints"] if j["name"] == "motor"]
+    del motor["backlash"]
+    data["motion"] = {"drive": "pin D", "range": ["0 deg", "2 deg"], "steps": 3}
+    model = model_from_dict(data, source="four_bar")
+    poses = nominal_poses(model, np.radians([0.0, 1.0, 2.0]))
+    crank = poses.turn(2, "crank")
+    assert abs(np.arctan2(crank[1, 0], crank[0, 0])) > np.radians(1.0)
 
 
 @pytest.mark.parametrize("force", [-1500.0, 800.0], ids=["compressed", "pulled"])

@@ -27,6 +27,7 @@ from jointplay.studies.motion_studies import (
     MotionContributions,
     MotionEnvelope,
     MotionMonteCarlo,
+    MotionStudiesResult,
 )
 from jointplay.studies.variation import load_map, play_map
 
@@ -174,18 +175,67 @@ def test_envelope_at_a_pose_is_the_posed_models_envelope() -> None:
     json.loads(json.dumps(result.to_dict()))
 
 
+#: Sobol' base sets of parts in the contributions tests: fewer than the
+#: default, the same on both sides of each comparison.
+SOBOL_SAMPLES = 64
+
+
 def test_contributions_per_step_are_the_posed_models() -> None:
+    """At every pose the motion's contributions are ``jointplay
+    contributions`` on the posed model: its slopes, its linearity check and,
+    where the measure is not linear, its shares of the variance. The
+    four-bar's out-of-plane push changes the contacts at its nominal value
+    (slopes of opposite signs): its linear share is 0, but it drives the
+    fingertip, and the motion says so."""
     model = _load("four_bar.yaml")
-    result = MotionContributions(motion=Motion(steps=3)).run(model)
+    study = MotionContributions(samples=SOBOL_SAMPLES, motion=Motion(steps=3))
+    result = study.run(model)
     poses = nominal_poses(model, np.linspace(0.0, 2 * np.pi, 3))
     for s in range(3):
-        direct = Contributions(variance="never").run(posed_model(model, poses, s))
-        _close(result.results[s].sensitivity, direct.sensitivity)
-        k = int(np.argmax(direct.worst_case[0]))
-        assert result.leading(0, s) == direct.plays[k]
+        direct = Contributions(samples=SOBOL_SAMPLES).run(posed_model(model, poses, s))
+        found = result.results[s]
+        _close(found.sensitivity, direct.sensitivity)
+        assert found.linearity == direct.linearity
+        assert result.linear(0)[s] == direct.linear(0)
+        assert not direct.linear(0) and direct.sobol is not None and found.sobol is not None
+        _close(found.sobol.total, direct.sobol.total)
+        _close(result.shares(0)[s], 100 * direct.sobol.total[0])
+        assert np.isnan(result.spread(0)[s])
+        assert result.sigma(0)[s] == pytest.approx(float(np.sqrt(direct.sobol.variance[0])))
+        k = int(np.argmax(direct.sobol.total[0]))
+        assert result.leading(0, s) == direct.plays[k] == "loads[0].force[2]"
+        assert result.shares(0)[s, k] > 50.0
+        assert result.why(0, s) == direct.linearity[0].why() != ""
     worst = result.worst_step(0)
-    assert result.spread(0)[worst] == max(r.worst_case_range[0] for r in result.results)
-    json.loads(json.dumps(result.to_dict()))
+    assert result.sigma(0)[worst] == max(result.sigma(0))
+    doc = json.loads(json.dumps(result.to_dict()))
+    [measure] = doc["measures"]
+    assert measure["linear"] == [False] * 3 and all(measure["not_linear_why"])
+    assert measure["shares_of"] == ["variance"] * 3
+    assert min(measure["share_percent"]["loads[0].force[2]"]) > 50.0
+    nominal = Motion(steps=3).run(model)
+    findings = " ".join(MotionStudiesResult(nominal, contributions=result).findings())
+    assert "driven by loads[0].force[2]" in findings
+    assert "not linear over the ranges at 3 of 3 steps" in findings
+
+
+def test_linear_contributions_at_a_pose_are_the_linear_study() -> None:
+    """Where the measure is linear over the ranges (the slider-crank's
+    piston under its gas force), the shares at a pose are the plain study's
+    worst-case shares and its spread the linear stack."""
+    model = _load("slider_crank.yaml")
+    study = MotionContributions(samples=SOBOL_SAMPLES, motion=Motion(steps=3))
+    result = study.run(model)
+    assert all(result.linear(k).all() for k in range(len(result.measures)))
+    poses = nominal_poses(model, np.linspace(0.0, 2 * np.pi, 3))
+    for s in range(3):
+        direct = Contributions(samples=SOBOL_SAMPLES).run(posed_model(model, poses, s))
+        for k in range(len(direct.measures)):
+            assert result.linear(k)[s] == direct.linear(k)
+            if direct.linear(k):
+                _close(result.shares(k)[s], direct.worst_case[k])
+                assert result.spread(k)[s] == direct.worst_case_range[k]
+                assert result.sigma(k)[s] == direct.rss_sigma[k]
 
 
 def run_cli(*args: str) -> subprocess.CompletedProcess[str]:

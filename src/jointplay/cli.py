@@ -618,6 +618,7 @@ def motion(
                     model,
                     source=source,
                     progress=_stage(bar, "contributions at every pose", nominal.steps),
+                    workers=workers,
                 )
                 if contributions
                 else None,

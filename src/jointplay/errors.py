@@ -97,8 +97,10 @@ class MotionError(ModelError):
     (the drive at ``value``, in its own unit) its ideal joints ``joints``
     cannot close (``kind`` "unreachable": no pose closes them at that drive
     value) or the drive no longer decides the pose (``kind`` "dead point": the
-    linkage at a toggle, which the drive cannot pass). Exit code 2: the
-    model's motion asks for what its linkage cannot do; the fix is its range."""
+    linkage at a toggle, which the drive cannot pass), or, before any step,
+    the drive cannot move at all (``kind`` "locked": ``joints`` hold the
+    coordinate it would change, step 0). Exit code 2: the model's motion asks
+    for what its linkage cannot do; the fix is its range, or its drive."""
 
     label = "cannot move"
 

@@ -8,7 +8,10 @@ exact in finite rotations; the drive adds one equation, its coordinate at
 the step's value. Each step is solved by SciPy's ``leastsq`` (MINPACK's
 Levenberg-Marquardt, analytic Jacobian; ``least_squares`` where there are
 fewer equations than unknowns) from the previous step's pose, so open chains
-and any number of loops are solved alike.
+and any number of loops are solved alike. Before the first step, the rank
+rule of the mobility check says whether the drive can move at all: a
+drive's equation that depends on the other joints' rows (another joint's
+held spin locks the loop) moves nothing, whatever the range.
 """
 
 from __future__ import annotations
@@ -133,12 +136,21 @@ class _Equations:
         self.settings = settings
         # one row per equation: (joint index, body a, body b, Ideal)
         self.rows: list[tuple[int, int, int, Ideal]] = []
+        #: per row, the coordinate it holds that the joint's type frees when
+        #: driven (a drive's spin, an axial play's slide), or None
+        self.holds: list[Coordinate | None] = []
         self.frames = []
         for jdx, j in enumerate(model.joints):
             a, b = (index.get(name, -1) for name in j.between)
             self.frames.append((j.R_world_joint, np.array(j.at, dtype=float)))
             driven = coordinate if j.name == joint.name else None
-            self.rows += [(jdx, a, b, eq) for eq in j.ideal(driven)]
+            equations = j.ideal(driven)
+            self.rows += [(jdx, a, b, eq) for eq in equations]
+            kinds: tuple[Coordinate, ...] = ("spin", "slide")
+            freed = {c: set(j.ideal(c)) for c in kinds if c != driven}
+            self.holds += [
+                next((c for c, kept in freed.items() if eq not in kept), None) for eq in equations
+            ]
         self.drive_index = [j.name for j in model.joints].index(joint.name)
         self.joint_names = tuple(j.name for j in model.joints)
         self.n = 6 * len(self.bodies)
@@ -259,6 +271,7 @@ def nominal_poses(
     B = len(eqs.bodies)
     R = np.repeat(np.eye(3)[None], B, axis=0)
     p = np.zeros((B, 3))
+    _check_movable(eqs, R, p, source)
     _check_driven(eqs, R, p, model)
     values = np.asarray(values, dtype=float)
     limit = settings.largest_step * (1.0 if eqs.drive == "spin" else eqs.ell)
@@ -383,6 +396,82 @@ def _column_scale(eqs: _Equations) -> FloatArray:
     for i in range(eqs.n // 6):
         scale[6 * i : 6 * i + 3] = 1.0 / eqs.ell
     return scale
+
+
+#: What in a joint holds a coordinate its type frees when driven, and what the drive does to it.
+_HELD_BY = {"spin": ("backlash", "a drive", "turn"), "slide": ("axial_clearance", "", "move")}
+
+
+def _moves(J: FloatArray, others: IntArray, rcond: float) -> bool:
+    """Whether the last row of ``J`` (the drive's) is independent of the rows
+    ``others``: the mobility's rank rule, both ranks against J's largest
+    singular value."""
+    full = np.linalg.svd(J, compute_uv=False)
+    if not full.size or full[0] == 0.0:
+        return False
+    kept = np.linalg.svd(J[others], compute_uv=False) if others.size else np.zeros(0)
+    return int(np.sum(full > rcond * full[0])) > int(np.sum(kept > rcond * full[0]))
+
+
+def _check_movable(eqs: _Equations, R: FloatArray, p: FloatArray, source: str | None) -> None:
+    """``MotionError`` (exit 2) if, at the written pose, the other joints'
+    ideal constraints leave the driven coordinate no motion at all (the
+    drive's equation depends on their rows), naming the joints whose held
+    coordinate (a drive's spin, an axial play's slide) locks it."""
+    Jl = np.repeat(np.eye(3)[None], len(R), axis=0)
+    _, J = eqs.evaluate(R, p, Jl, 0.0)
+    J = J * _column_scale(eqs)
+    rcond = eqs.settings.mobility_rcond
+    rows = np.arange(len(eqs.rows), dtype=np.intp)
+    if _moves(J, rows, rcond):
+        return
+    # per joint, the rows holding a coordinate that driving it would free
+    held: dict[str, tuple[IntArray, Coordinate]] = {}
+    for jdx, name in enumerate(eqs.joint_names):
+        own = np.array([r for r in rows if eqs.rows[r][0] == jdx and eqs.holds[r] is not None])
+        if own.size:
+            coordinate = eqs.holds[int(own[0])]
+            assert coordinate is not None
+            held[name] = (own.astype(np.intp), coordinate)
+    alone = [n for n, (own, _) in held.items() if _moves(J, np.setdiff1d(rows, own), rcond)]
+    together = not alone and bool(held)
+    if together:
+        every = np.concatenate([own for own, _ in held.values()])
+        together = _moves(J, np.setdiff1d(rows, every), rcond)
+    holding = alone or (list(held) if together else [])
+    drive = f"the drive '{eqs.drive_joint}' cannot move at the pose written in the file"
+    if holding:
+
+        def what(name: str) -> tuple[str, str]:
+            field, role, verb = _HELD_BY[held[name][1]]
+            return (
+                f"joint '{name}' holds the {held[name][1]} it would {verb} "
+                f"(its {field}{': ' + role if role else ''})",
+                f"the {field} of '{name}'",
+            )
+
+        joints = tuple(holding)
+        if len(holding) == 1:
+            [name] = holding
+            fix = f"drive '{name}' instead, or remove its {_HELD_BY[held[name][1]][0]}"
+        else:
+            each = ", ".join(what(n)[1] for n in holding)
+            # held together, every one must go: driving one leaves the others'
+            fix = (
+                f"drive one of them instead, or remove one of: {each}"
+                if alone
+                else (f"remove all of: {each}")
+            )
+        message = f"{drive}: {'; '.join(what(n)[0] for n in holding)}; {fix}"
+    else:
+        # the other rows' combination that makes the drive's: the joints it weighs most
+        weights = np.linalg.lstsq(J[rows].T, J[-1], rcond=None)[0]
+        joints = tuple(j for j in eqs.joints_of(weights) if j != eqs.drive_joint)
+        message = (
+            f"{drive}: the ideal joints {', '.join(repr(j) for j in joints)} leave its "
+            f"{eqs.drive} no motion (they fix the linkage without it); drive another joint"
+        )
+    raise MotionError(message, kind="locked", step=0, value=0.0, joints=joints, source=source)
 
 
 def _check_driven(eqs: _Equations, R: FloatArray, p: FloatArray, model: Model) -> None:

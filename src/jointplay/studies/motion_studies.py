@@ -13,8 +13,9 @@ anywhere in the cycle.
 
 ``MotionEnvelope().run(model)`` takes each point's worst-case envelope
 (``Envelope``) on the posed model at every step; ``MotionContributions()``
-takes the contributions (``Contributions``) at every step, and names the
-play that drives each measure where it is worst.
+takes the contributions (``Contributions``, its rule for a measure that is
+not linear included) at every step, and names the play that drives each
+measure where it varies most.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ Progress = Callable[[int, int], None]
 if TYPE_CHECKING:
     import pandas as pd
 
-    from jointplay.studies.contributions import ContributionsResult
+    from jointplay.studies.contributions import Contributions, ContributionsResult
     from jointplay.studies.envelope import EnvelopeResult
 
 
@@ -658,24 +659,40 @@ class MotionEnvelopeResult:
 
 @dataclass(frozen=True)
 class MotionContributions:
-    """Settings of the contributions at every pose (``Contributions`` on
-    each posed model, linear shares only); ``run`` returns a
+    """Settings of the contributions at every pose: ``Contributions`` with
+    these settings on each posed model, so a pose gets what ``jointplay
+    contributions`` gives there (the linear shares where the measure is
+    linear over the ranges; where it is not, its reason and, with
+    ``variance="auto"``, the shares of the variance); ``run`` returns a
     ``MotionContributionsResult``."""
 
     step: float = 1e-3
+    variance: Literal["auto", "always", "never"] = "auto"
+    samples: int = 1024
+    seed: int = 0
     motion: Motion = field(default_factory=Motion)
 
-    def run(
-        self, model: Model, *, source: str | None = None, progress: Progress | None = None
-    ) -> MotionContributionsResult:
-        """The contributions at every pose; ``progress(done, total)`` after each pose."""
+    def study(self) -> Contributions:
+        """The plain study taken at every pose."""
         from jointplay.studies.contributions import Contributions
 
+        return Contributions(self.step, self.motion.case, self.variance, self.samples, self.seed)
+
+    def run(
+        self,
+        model: Model,
+        *,
+        source: str | None = None,
+        progress: Progress | None = None,
+        workers: int | None = 1,
+    ) -> MotionContributionsResult:
+        """The contributions at every pose; ``progress(done, total)`` after
+        each pose; ``workers``: local processes for a pose's Sobol' study."""
         cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
-        study = Contributions(step=self.step, case=self.motion.case, variance="never")
+        study = self.study()
         found_at = []
         for s in range(cycle.steps):
-            found_at.append(study.run(cycle.posed(s), source=cycle.source))
+            found_at.append(study.run(cycle.posed(s), source=cycle.source, workers=workers))
             if progress is not None:
                 progress(s + 1, cycle.steps)
         found = tuple(found_at)
@@ -710,23 +727,69 @@ class MotionContributionsResult:
     def shown_value(self, s: int) -> float:
         return shown_drive(self.coordinate, float(self.values[s]))
 
+    def linear(self, k: int) -> np.ndarray[Any, np.dtype[np.bool_]]:
+        """(S,) whether measure ``k`` is linear over the ranges at each step
+        (where not, its linear stack, RSS and shares do not hold there)."""
+        return np.array([r.linear(k) for r in self.results], dtype=bool)
+
+    def by_variance(self, k: int, step: int) -> bool:
+        """Whether measure ``k``'s shares at ``step`` are of its variance:
+        not linear there, and the Sobol' study taken."""
+        r = self.results[step]
+        return not r.linear(k) and r.sobol is not None
+
     def worst_case(self, k: int) -> FloatArray:
-        """(S, nv) % of measure ``k``'s arithmetic stack per step and play."""
+        """(S, nv) % of measure ``k``'s arithmetic stack per step and play
+        (the linear shares; they hold only where ``linear``)."""
         return np.array([r.worst_case[k] for r in self.results])
 
+    def shares(self, k: int) -> FloatArray:
+        """(S, nv) % per step and play, as ``jointplay contributions`` ranks
+        them there: the worst-case share where the shares are linear, the
+        total Sobol' index where they are of the variance (``by_variance``)."""
+        return np.array(
+            [
+                100.0 * r.sobol.total[k]  # type: ignore[union-attr]
+                if self.by_variance(k, s)
+                else r.worst_case[k]
+                for s, r in enumerate(self.results)
+            ]
+        )
+
     def spread(self, k: int) -> FloatArray:
-        """(S,) mm: measure ``k``'s linear worst-case spread ``sum |s| T`` per step."""
-        return np.array([float(r.worst_case_range[k]) for r in self.results])
+        """(S,) mm: measure ``k``'s linear worst-case spread ``sum |s| T`` per
+        step; NaN where it is not linear over the ranges."""
+        return np.array(
+            [float(r.worst_case_range[k]) if r.linear(k) else np.nan for r in self.results]
+        )
+
+    def sigma(self, k: int) -> FloatArray:
+        """(S,) mm: measure ``k``'s standard deviation per step: RSS's where
+        linear, the Sobol' study's sample where the shares are of the variance."""
+        return np.array(
+            [
+                float(np.sqrt(r.sobol.variance[k]))  # type: ignore[union-attr]
+                if self.by_variance(k, s)
+                else float(r.rss_sigma[k])
+                for s, r in enumerate(self.results)
+            ]
+        )
 
     def worst_step(self, k: int) -> int:
-        """The step where measure ``k``'s worst-case spread is largest."""
-        return int(np.argmax(self.spread(k)))
+        """The step where measure ``k`` varies most from part to part (its
+        ``sigma``: a figure every step has, linear or not)."""
+        return int(np.argmax(self.sigma(k)))
 
     def leading(self, k: int, step: int | None = None) -> str:
-        """The play with the largest worst-case share of measure ``k`` at
+        """The play with the largest share (``shares``) of measure ``k`` at
         ``step`` (default: its worst step)."""
         s = self.worst_step(k) if step is None else step
-        return self.plays[int(np.argmax(self.results[s].worst_case[k]))]
+        return self.plays[int(np.argmax(self.shares(k)[s]))]
+
+    def why(self, k: int, step: int) -> str:
+        """Why measure ``k``'s linear figures do not hold at ``step`` ('' where they do)."""
+        r = self.results[step]
+        return r.linearity[k].why() if r.linearity else ""
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -737,7 +800,17 @@ class MotionContributionsResult:
             "measures": [
                 {
                     "measure": name,
+                    "linear": [bool(v) for v in self.linear(k)],
+                    "not_linear_why": [self.why(k, s) for s in range(self.steps)],
+                    "shares_of": [
+                        "variance" if self.by_variance(k, s) else "worst_case"
+                        for s in range(self.steps)
+                    ],
                     "spread": _floats(self.spread(k)),
+                    "sigma": _floats(self.sigma(k)),
+                    "share_percent": {
+                        play: _floats(self.shares(k)[:, i]) for i, play in enumerate(self.plays)
+                    },
                     "worst_case_percent": {
                         play: _floats(self.worst_case(k)[:, i]) for i, play in enumerate(self.plays)
                     },
@@ -748,6 +821,49 @@ class MotionContributionsResult:
                 for k, name in enumerate(self.measures)
             ],
         }
+
+
+def _contribution_findings(con: MotionContributionsResult, k: int, measure: str) -> list[str]:
+    """Measure ``k``'s sentences: where it varies most and which play drives
+    it there, by the shares ``jointplay contributions`` gives at that pose;
+    the steps where it is not linear over the ranges, and why."""
+    s = con.worst_step(k)
+    share = float(np.max(con.shares(k)[s]))
+    at = f"at step {s} (drive {con.shown_value(s):.6g} {_unit(con.coordinate)})"
+    if con.linear(k)[s]:
+        spread = f"worst-case spread {con.spread(k)[s]:.6g} mm, RSS sigma {con.sigma(k)[s]:.6g} mm"
+        of = "of the worst-case stack"
+    else:
+        spread = f"sigma {con.sigma(k)[s]:.6g} mm; the linear stack and RSS do not hold there"
+        of = "total share of the variance" if con.by_variance(k, s) else "linear share"
+    out = [
+        f"contributions to {measure}: it varies most {at}: {spread}; driven by "
+        f"{con.leading(k)} ({share:.3g} % {of})"
+    ]
+    bent = np.flatnonzero(~con.linear(k))
+    if bent.size:
+        b = s if s in bent else int(bent[0])
+        shares = (
+            "the shares there are of the variance (Sobol' indices)"
+            if all(con.by_variance(k, int(b)) for b in bent)
+            else "the linear shares there do not hold"
+        )
+        out.append(
+            f"  {measure} is not linear over the ranges at {bent.size} of {con.steps} steps "
+            f"({_step_runs(bent)}); {shares}; at step {b}: {con.why(k, b)}"
+        )
+    return out
+
+
+def _step_runs(steps: Any) -> str:
+    """'0-4, 9, 12-20': runs of consecutive steps."""
+    runs: list[list[int]] = []
+    for step in (int(v) for v in steps):
+        if runs and step == runs[-1][-1] + 1:
+            runs[-1].append(step)
+        else:
+            runs.append([step])
+    return ", ".join(str(r[0]) if len(r) == 1 else f"{r[0]}-{r[-1]}" for r in runs)
 
 
 # -- the motion with its studies -------------------------------------------------
@@ -799,12 +915,11 @@ class MotionStudiesResult:
                     out[f"{name} {label} envelope min (mm)"] = _values(lo)
                 out[f"{name} {label} envelope max (mm)"] = _values(hi)
         if self.contributions is not None:
-            for k, measure in enumerate(self.contributions.measures):
-                share = self.contributions.worst_case(k)
-                out[f"{measure} leading play"] = [
-                    self.contributions.leading(k, s) for s in range(self.motion.steps)
-                ]
-                out[f"{measure} leading share (%)"] = [float(row.max()) for row in share]
+            con = self.contributions
+            for k, measure in enumerate(con.measures):
+                out[f"{measure} linear"] = ["yes" if v else "no" for v in con.linear(k)]
+                out[f"{measure} leading play"] = [con.leading(k, s) for s in range(con.steps)]
+                out[f"{measure} leading share (%)"] = [float(row.max()) for row in con.shares(k)]
         return out
 
     def picture_extras(
@@ -857,13 +972,7 @@ class MotionStudiesResult:
             )
         for k, measure in enumerate(con.measures if con is not None else ()):
             assert con is not None
-            s = con.worst_step(k)
-            share = float(np.max(con.worst_case(k)[s]))
-            out.append(
-                f"contributions to {measure}: largest worst-case spread "
-                f"{con.spread(k)[s]:.6g} mm at step {s} (drive {con.shown_value(s):.6g} "
-                f"{_unit(con.coordinate)}), driven by {con.leading(k)} ({share:.3g} %)"
-            )
+            out.extend(_contribution_findings(con, k, measure))
         return out
 
     def to_dataframe(self) -> pd.DataFrame:
