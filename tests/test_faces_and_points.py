@@ -409,7 +409,7 @@ def test_the_certificate_refuses_the_table_lifted_off_its_loaded_foot() -> None:
 
 
 def test_the_certificate_refuses_a_faint_force_on_a_contact_just_clear() -> None:
-    """A contact clear by more than ``interior_resolution`` of its play pushes with
+    """A contact clear by more than ``clear`` of its play pushes with
     nothing. Weighed by its slack alone, the low foot's faint force (1e-7 of
     the largest) with 2 % of its play unused made 2e-9 and passed: that is
     how a route once printed a contact pushing 7.5e-6 N while 0.000226 mm
@@ -431,6 +431,6 @@ def test_the_certificate_refuses_a_faint_force_on_a_contact_just_clear() -> None
     assert cert.feasibility_mm <= st.feasibility_tolerance * largest_play
     assert cert.equilibrium_residual <= st.equilibrium_tolerance
     assert cert.complementarity > 1e-8 and not cert.certified
-    weighed = replace(ws.settings, interior_resolution=1.0)  # every slack weighs the force: passes
+    weighed = replace(ws.settings, clear=1.0)  # every slack weighs the force: passes
     ws_weighed = Workspace(ws.asm, weighed)
     assert certificate.certify(ws_weighed, g_hat, sigma, lifted).certified

@@ -170,6 +170,33 @@ def test_every_pose_of_a_turn_is_the_posed_models_solve() -> None:
         )
 
 
+def test_a_welded_loop_s_reactions_over_a_turn_are_the_posed_models_solve() -> None:
+    """A grip welded to the coupler twice (a weld in a closed loop: the rigid
+    joints share the load by the documented split, not as any balance would
+    have it): each pose's rigid and contact reactions are the posed model's
+    solve, to the certificate's tolerance."""
+    data = yaml.safe_load((GALLERY / "four_bar.yaml").read_text())
+    data["bodies"].append({"name": "grip", "mass": "0.5 kg", "center_of_mass": [100, 140, 0]})
+    for name, at in (("w1", [100, 130, 0]), ("w2", [90, 140, 0])):
+        data["joints"].append(
+            {"name": name, "type": "rigid", "between": ["coupler", "grip"], "at": at}
+        )
+    data["loads"][0]["body"] = "grip"
+    data["motion"]["steps"] = 13
+    model = model_from_dict(data, source="<welded four-bar>")
+    result = Motion().run(model)
+    for s in range(result.steps):
+        direct = jointplay.solve(posed_model(model, result.poses, s))
+        force = max(np.linalg.norm(j.reaction_force) for j in direct.joints.values())
+        moment = max(np.linalg.norm(j.reaction_moment) for j in direct.joints.values())
+        for name, joint in direct.joints.items():
+            mine = result.results[s].joints[name]
+            assert np.allclose(mine.reaction_force, joint.reaction_force, atol=1e-8 * force)
+            assert np.allclose(mine.reaction_moment, joint.reaction_moment, atol=1e-8 * moment)
+            for c, d in zip(mine.contacts, joint.contacts, strict=True):
+                assert np.allclose(c.force, d.force, atol=1e-8 * force)
+
+
 # -- the clearance answer over the motion against closed forms ------------------------
 #: The clearance answer meets a closed form to this (mm): the brief's promise.
 PLAY_TOL = 1e-6

@@ -23,23 +23,25 @@ class SolverSettings:
     #: moving at all: below it, a length is the solver's round-off.
     feasibility_tolerance: float = 1e-9
     #: Balance: per body, in newtons, relative to the largest force in the
-    #: balance; also how far a force may fall below 0 or outside its cone,
-    #: and below what fraction of the largest an active force is not
-    #: strictly positive (its contact may leave the active set).
+    #: balance; also how far a force may fall below 0 or outside its cone.
     equilibrium_tolerance: float = 1e-8
-    #: What an interior-point answer resolves, as a fraction of the size it
-    #: is read against (about the square root of its gap): a contact this
-    #: far from its reach (of its own play) is clear and must push with
-    #: nothing (complementarity weighs a force by its slack only closer);
-    #: a cone within it of its apex rests there (a face flat, a ball
-    #: centred; its force vector this far inside its cone); forces (loads of
-    #: unit size) at this level are its round-off (rigid joints carrying the
-    #: loads; the split's program leaving a contact unloaded); a body moving
-    #: this little beside the biggest in its ray of unboundedness is left out
-    #: of it first and not named as moving along.
-    interior_resolution: float = 1e-6
+    #: A contact this far from its reach (a fraction of its own play) is
+    #: clear, and must push with nothing (to ``equilibrium_tolerance``):
+    #: complementarity weighs a force by its slack only closer than this. The
+    #: certificate's own (a route's thresholds below are apart from it, so
+    #: that tuning a route never loosens what an answer must prove).
+    clear: float = 1e-6
 
     # -- the interior-point method (Clarabel) ---------------------------------
+    #: What an interior-point answer resolves, as a fraction of the size it
+    #: is read against (about the square root of its gap): a cone within it
+    #: of its apex rests there (a face flat, a ball centred; its force vector
+    #: this far inside its cone); forces (loads of unit size) at this level
+    #: are its round-off (rigid joints carrying the loads; the split's
+    #: program leaving a contact unloaded); a body moving this little beside
+    #: the biggest in its ray of unboundedness is left out of it first and
+    #: not named as moving along.
+    interior_resolution: float = 1e-6
     #: Gap and feasibility tolerances (relative, scaled problem): the answer
     #: then certifies on its own on every paper model.
     ipm_tolerance: float = 1e-10
@@ -61,7 +63,8 @@ class SolverSettings:
     #: at 1e-8 (4,000 shafts: 12 against 21).
     fine_ipm_regularization: float = 1e-10
     max_iterations: int = 200
-    #: A large (sparse) model's interior point goes without it: there its
+    #: A large (sparse) model's interior point goes without the iterative
+    #: refinement of its steps (to ``round_off``): there its
     #: answer is where Newton starts, which ends at round-off, and it doubles
     #: Clarabel's time (10,000-segment chain: 2.0 s and 16 iterations against
     #: 0.86 s and 11). So do its split rule's cone program, whose answer is
@@ -133,6 +136,11 @@ class SolverSettings:
     #: a degenerate bearing chain of 19 shafts drops one contact a run and
     #: needs 5; the example cases need one.
     newton_runs: int = 6
+    #: An active force below this fraction of the largest is not strictly
+    #: positive: its contact may leave the active set. The certificate's
+    #: balance in value, apart from it in role: a stricter balance must not
+    #: let round-off forces pin a position.
+    positive_force: float = 1e-8
     #: Proximal weight of Newton's steps on a face that may be tied: the steps
     #: along the tie stay short ...
     tie_prox: float = 1e-9

@@ -116,16 +116,25 @@ class Start:
 
 def extrapolated(before: Start | None, last: Start | None) -> Start | None:
     """The start for the next of evenly spaced nearby models (a motion's
-    poses): ``last``'s answer moved on by its change since ``before`` when
-    both hold one active set (Newton's start, not an answer: it takes the
-    pose's curvature in fewer steps), else ``last``."""
+    poses): ``last`` moved on by its change since ``before`` when both hold
+    one active set, its loads, plays and centres with its answer (Newton's
+    start, not an answer: it takes the pose's curvature in fewer steps, and
+    the batch predicts from it only what the extrapolation misses), else
+    ``last``."""
     if before is None or last is None or before.key != last.key:
         return last
+
+    def on(a: FloatArray, b: FloatArray) -> FloatArray:
+        return b + (b - a)
+
     return replace(
         last,
-        x=last.x + (last.x - before.x),
-        lam=np.maximum(last.lam + (last.lam - before.lam), 0.0),
-        f=last.f + (last.f - before.f),
+        g_hat=on(before.g_hat, last.g_hat),
+        r=on(before.r, last.r),
+        c=on(before.c, last.c),
+        x=on(before.x, last.x),
+        lam=np.maximum(on(before.lam, last.lam), 0.0),
+        f=on(before.f, last.f),
     )
 
 
@@ -197,26 +206,38 @@ def follow(
     ``loads``) as a batch of one whose Newton starts from ``start`` (the
     same sample's answer on a nearby model: the pose before, in a motion),
     with its answer as the start of the next; the full solve where there is
-    no start or Newton's answer from it is not the optimum."""
+    no start or Newton's answer from it is not the optimum. Either way its
+    forces are the single solve's: the split, rigid joints' included
+    (``pipeline.split``), then the certificate."""
     began = time.perf_counter()
-    loads, g = pipeline.loads_and_work(ws, loads)
-    scale = pipeline.load_scale(ws, float(np.linalg.norm(g)))
-    if ws.asm.sparse or scale == 0.0:
-        return pipeline.solve_loads(ws, loads), None
     with linalg.one_blas_thread():
-        solved = _solve_batch(ws, g[None], None, None, True, (), (start,))
-    assert solved.own_starts is not None
-    after = solved.own_starts[0]
-    if after is None:  # the answer has no active set to start the next from
-        return pipeline.solve_loads(ws, loads), None
-    g_hat = g / scale
-    point = faces.Point(after.x, after.lam, after.f, method="Newton from a nearby answer")
-    nu = pipeline.rigid_multipliers(ws, g_hat, point)
-    point.certificate = certificate.certify(ws, g_hat, ws.softness(scale), point, nu)
-    point.nu = nu
-    if not point.certificate.certified:  # the batch's rows passed it: round-off apart
-        return pipeline.solve_loads(ws, loads), None
-    return pipeline.result_of(ws, point, scale, loads, g, began), after
+        loads, g = pipeline.loads_and_work(ws, loads)
+        held.check_driven(ws, g)
+        scale = pipeline.load_scale(ws, float(np.linalg.norm(g)))
+        g_hat = g / scale if scale else g
+        sigma = ws.softness(scale)
+        dense = not ws.asm.sparse and scale > 0
+        point: faces.Point | None = None
+        if start is not None and dense:
+            followed = _solve_batch(ws, g[None], None, None, True, (), (start,)).own_starts
+            after = None if followed is None else followed[0]
+            if after is not None:
+                found = faces.Point(
+                    after.x, after.lam, after.f, method="Newton from a nearby answer"
+                )
+                found = pipeline.certified(
+                    ws, g_hat, sigma, pipeline.split(ws, g_hat, sigma, found)
+                )
+                if found.certificate is not None and found.certificate.certified:
+                    point = found
+        if point is None:
+            point = pipeline.optimum(ws, g_hat, sigma)
+            key = point.active if point.active is not None else point.tie
+            after = None
+            if key is not None and dense:
+                r, c = ws.stack.r, ws.stack.centres()
+                after = Start(g_hat, r, c, point.x, point.lam, point.f, key)
+        return pipeline.result_of(ws, point, scale, loads, g, began), after
 
 
 def _solve_batch(
@@ -756,7 +777,7 @@ def _pinned(
     unloaded contact keeps none. Rows (B, m)."""
     stack, st = ws.stack, ws.settings
     B = x.shape[0]
-    loaded = lam > st.equilibrium_tolerance * np.max(lam, axis=1, keepdims=True)
+    loaded = lam > st.positive_force * np.max(lam, axis=1, keepdims=True)
     v, rho = stack.norms(x, c)
     f_norm = np.sqrt(stack.segment_sum(f * f))
     parts = [np.broadcast_to(linalg.dense(ws.Eq), (B, *ws.Eq.shape))]

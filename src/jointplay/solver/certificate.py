@@ -114,7 +114,7 @@ def check(
         own_reach = play + sigma * np.maximum(lam, 0.0)
         own = np.where(own_reach > 0, own_reach, ws.max_radius)
         slack = np.abs(reach - level) / own
-        slack = np.where(slack > ws.settings.interior_resolution, 1.0, slack)
+        slack = np.where(slack > ws.settings.clear, 1.0, slack)
         turned = np.abs(lam * rho - stack.segment_sum(f * v)) / own
         comp = (np.abs(lam) * slack + turned).max(axis=1)
         min_force = lam.min(axis=1)

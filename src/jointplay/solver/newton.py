@@ -40,7 +40,7 @@ def weak_rows(ws: Workspace, lam: FloatArray, f: FloatArray, key: faces.FaceKey)
     """(B, cones of ``key``): ``weak_forces`` of each row's forces."""
     surface, linear = key
     lam_a = lam[:, [*surface, *linear]]
-    strict = ws.settings.equilibrium_tolerance
+    strict = ws.settings.positive_force
     weak: BoolArray = lam_a <= strict * np.max(lam_a, axis=1, keepdims=True, initial=0.0)
     if linear:
         lin = ws.stack.take(linear)

@@ -222,11 +222,16 @@ def retry_of(ws: Workspace) -> Workspace | None:
 def answer(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, loaded: bool) -> faces.Point:
     """The route's answer, with its certificate (which may refuse it)."""
     if not loaded:
-        point = rest_position(ws)
-    else:
-        point = split(ws, g_hat, sigma, contacts_optimum(ws, g_hat, sigma))
-    # a cone with no play and no offset holds only at its apex: whatever the
-    # route, its force is |f| (the interior point's lam may be any above it)
+        return certified(ws, g_hat, sigma, rest_position(ws))
+    return certified(ws, g_hat, sigma, split(ws, g_hat, sigma, contacts_optimum(ws, g_hat, sigma)))
+
+
+def certified(
+    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point
+) -> faces.Point:
+    """``point`` with its certificate (which may refuse it). A cone with no
+    play and no offset holds only at its apex: whatever the route, its force
+    is |f| (the interior point's lam may be any above it)."""
     tight = np.flatnonzero(ws.stack.r == 0).tolist()
     if tight:
         before = point.lam[tight].copy()
@@ -404,9 +409,7 @@ def active_set_steps(
         tilts = {
             int(i)
             for i in weak
-            if at_apex[i]
-            and ws.stack.has_rim[i]
-            and trial.lam[i] > st.equilibrium_tolerance * lam_top
+            if at_apex[i] and ws.stack.has_rim[i] and trial.lam[i] > st.positive_force * lam_top
         }
         at_apex = at_apex.copy()
         at_apex[list(tilts)] = False
@@ -418,7 +421,7 @@ def active_set_steps(
         if leaving and not past.size and not tilts:
             leaving = {min(leaving, key=lambda i: (trial.lam[i], i))}
         active = (active - leaving) | set(past.tolist())
-        x, lam = trial.x, np.maximum(trial.lam, st.equilibrium_tolerance * lam_scale)
+        x, lam = trial.x, np.maximum(trial.lam, st.positive_force * lam_scale)
     return None
 
 
@@ -443,7 +446,7 @@ def split_optimum(
     if not point.certificate.certified:
         return None
     # a contact with no force (to round-off) does not bound the tie
-    loaded = shared.lam > ws.settings.equilibrium_tolerance * float(np.max(shared.lam))
+    loaded = shared.lam > ws.settings.positive_force * float(np.max(shared.lam))
     point.active = (
         tuple(i for i in key[0] if loaded[i]),
         tuple(i for i in key[1] if loaded[i]),
