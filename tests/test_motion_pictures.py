@@ -162,6 +162,24 @@ def test_bands_and_an_envelope_are_drawn_as_given(
         displacement_series(result, "piston top", [("short", d[:3], d[:3])])
 
 
+def test_no_curve_beside_bands_is_drawn_in_the_limit_s_colour(
+    four_bar: tuple[jointplay.Model, MotionResult],
+) -> None:
+    """Two bands took the colour cycle's first two, and dz came out red: the
+    limit's colour (found by a new user's try-out)."""
+    from matplotlib.colors import to_hex
+
+    from jointplay.present.plot import TOUCHING
+
+    _, result = four_bar
+    d = np.linalg.norm(result.displacement[:, 0], axis=1)
+    bands = [("0.135-99.865 %", d - 0.02, d + 0.02), ("2.5-97.5 %", d - 0.01, d + 0.01)]
+    ax = motion_figure(result, MotionPictures(bands={"fingertip": bands})).axes[0]
+    curves = [line for line in ax.lines if line.get_label() in ("|d|", "dx", "dy", "dz")]
+    assert len(curves) == 4
+    assert all(to_hex(line.get_color()) != to_hex(TOUCHING) for line in curves)
+
+
 def test_the_path_is_the_nominal_plus_the_magnified_play(
     compressed: tuple[jointplay.Model, MotionResult],
 ) -> None:

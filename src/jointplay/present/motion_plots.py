@@ -147,8 +147,14 @@ def draw_displacement(ax: Axes, series: DisplacementSeries, drive: str) -> None:
         ax.plot(series.drive, upper, "--", color="#555555", lw=1.0)
     for i, (label, values) in enumerate(series.curves):
         main = i == 0  # the measure; the components thinner
+        colour = CURVE_COLOURS[i % len(CURVE_COLOURS)]  # not the cycle: bands take its first
         ax.plot(
-            series.drive, values, label=label, lw=1.8 if main else 0.9, alpha=1 if main else 0.8
+            series.drive,
+            values,
+            label=label,
+            color=colour,
+            lw=1.8 if main else 0.9,
+            alpha=1 if main else 0.8,
         )
     if series.limit is not None:
         ax.axhline(series.limit, color=TOUCHING, linewidth=1.2, label=f"limit {series.limit:g} mm")
