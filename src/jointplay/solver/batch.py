@@ -162,10 +162,14 @@ def solved_start(
             point = pipeline.optimum(solver, g_hat, ws.softness(scale))
     except (UnassembledError, SolverError):
         return None  # no start: the batch meets this sample's trouble itself, if at all
+    return _start_of(point, g_hat, r, c)
+
+
+def _start_of(point: faces.Point, g_hat: FloatArray, r: FloatArray, c: FloatArray) -> Start | None:
+    """A full solve's answer as a ``Start``; None where it has no active set
+    (nor a tie's) to start from."""
     key = point.active if point.active is not None else point.tie
-    if key is None:
-        return None
-    return Start(g_hat, r, c, point.x, point.lam, point.f, key)
+    return None if key is None else Start(g_hat, r, c, point.x, point.lam, point.f, key)
 
 
 def _check_starts(ws: Workspace, starts: Sequence[Start]) -> None:
@@ -232,11 +236,7 @@ def follow(
                     point = found
         if point is None:
             point = pipeline.optimum(ws, g_hat, sigma)
-            key = point.active if point.active is not None else point.tie
-            after = None
-            if key is not None and dense:
-                r, c = ws.stack.r, ws.stack.centres()
-                after = Start(g_hat, r, c, point.x, point.lam, point.f, key)
+            after = _start_of(point, g_hat, ws.stack.r, ws.stack.centres()) if dense else None
         return pipeline.result_of(ws, point, scale, loads, g, began), after
 
 
