@@ -42,7 +42,7 @@ import jointplay
 from bench_paper import per_solve_times
 from jointplay.assembly import Assembly, assemble
 from jointplay.numerics.linalg import dense
-from jointplay.solver import Workspace
+from jointplay.solver.solve import Workspace
 
 try:  # CVXPY is the optional "bench" extra
     import cvxpy as cp

@@ -290,7 +290,7 @@ def _with_and_without(
 def studies(name: str, target: int, samples: int, workers: int, check: int) -> None:
     """Monte Carlo on examples/studies/NAME.yaml: samples/s by processes,
     sample count and chunk size, against a full solve per sample."""
-    from jointplay.solver import Workspace
+    from jointplay.solver.solve import Workspace
     from jointplay.studies.montecarlo import solve_chunk
 
     path = Path(__file__).resolve().parents[1] / "examples" / "studies" / f"{name}.yaml"

@@ -49,7 +49,7 @@ from scipy.optimize import minimize
 
 import jointplay
 from jointplay.assembly import assemble
-from jointplay.solver import Workspace
+from jointplay.solver.solve import Workspace
 
 try:  # CVXPY is the optional "bench" extra
     import cvxpy as cp

@@ -99,8 +99,8 @@ def measure(kind: str, n: int, cvxpy: bool) -> dict[str, Any]:
     import jointplay
     from jointplay.assembly import assemble
     from jointplay.io.generate import bearing_chain, tube_string
-    from jointplay.solver import Workspace
     from jointplay.solver import pipeline as solver_module
+    from jointplay.solver.solve import Workspace
 
     model = bearing_chain(n) if kind == "bearing" else tube_string(n, closed=(kind == "loops"))
     base_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

@@ -59,10 +59,10 @@ def test_a_kept_solver_answers_each_cost_as_a_new_solver_does(
     promise: positions to MM, multipliers to the certificate's balance."""
     import numpy as np
 
-    from jointplay.solver import Workspace
+    from jointplay.solver.solve import Workspace
 
     ws = Workspace.of(jointplay.load(PAPER / "6.1.6.1.yaml"))
-    prog = ws.interior_program
+    prog = conic.interior_program(ws)
     if not allowed:
         monkeypatch.setattr(clarabel.DefaultSolver, "is_data_update_allowed", lambda self: False)
     kept = conic.KeptSolver(prog.P, prog.A, prog.b, prog.cones, prog.settings)

@@ -524,7 +524,7 @@ def test_a_row_whose_set_crosses_another_contact_leaves_that_set(monkeypatch: An
     the first set cost the example's study a quarter of its time."""
     import jointplay.solver.batch as batch_module
     from jointplay.solver import pipeline
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
 
     real = batch_module._newton_batch
     tries: list[tuple[Any, bytes]] = []
@@ -803,7 +803,7 @@ def tilted_carriage_samples(
     """The carriage with a tilt on its guide (default: a 0.02 mrad zone): a
     workspace and B samples' (work, radii, centres; no centres when nothing
     is drawn)."""
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
     from jointplay.studies.variation import deviation_map, play_map
 
     path = EXAMPLE.parent / "carriage.yaml"
@@ -978,7 +978,7 @@ def test_a_start_from_before_the_batch_is_given_up_only_on_a_part_of_many_rows(
     from jointplay.io.generate import tube_string_dict
     from jointplay.settings import SolverSettings
     from jointplay.solver import batch as batch_module
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
     from jointplay.studies.variation import play_map
 
     data = tube_string_dict(20)
@@ -1036,7 +1036,7 @@ def test_a_face_that_sets_the_tilt_keeps_its_rim_point_in_newton_s_start(
     tilt zone) holds: no other contact spans the face's rows, so Newton's
     start keeps its neighbour's rim point. Left out, as for the carriage's
     nut, every sample took 4.5 Newton steps instead of one (review)."""
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
     from jointplay.studies.variation import deviation_map, play_map
 
     model = jointplay.model_from_dict(
@@ -1085,7 +1085,7 @@ def test_a_position_zone_on_a_tight_ball_is_batched() -> None:
     force vector outside it. The polish was refused, no active set seeded
     the batch, and every sample was a full solve (103 samples/s against
     17,800 without the zone; review). Its force is ``|f|``."""
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
     from jointplay.studies.variation import deviation_map, play_map
 
     model = pivoted_shaft(
@@ -1124,7 +1124,7 @@ def test_a_tight_ball_s_force_is_that_of_its_force_vector_on_every_route(
     force (2.91 N against 0.5 N, both certified; review). Here the polish is
     made to fail, so the interior point's answer is kept."""
     from jointplay.solver import pipeline
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
 
     # the polish fails by hand: the interior point's answer is kept on every machine
     monkeypatch.setattr(pipeline, "refine_active", lambda *args, **kwargs: None)

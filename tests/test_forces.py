@@ -180,7 +180,8 @@ def test_the_certificate_refuses_forces_that_leave_a_body_unbalanced() -> None:
     """The one certificate (``certificate.check``, shared by every route and
     by batches) checks each body's balance in newtons: forces off by 3e-8 of
     the largest force fail it, on the one body they act on."""
-    from jointplay.solver import Workspace, certificate, pipeline
+    from jointplay.solver import certificate, pipeline
+    from jointplay.solver.solve import Workspace
 
     ws = Workspace.of(model_from_dict(spherical_shaft()))
     g = ws.asm.g / np.linalg.norm(ws.asm.g)
@@ -383,7 +384,8 @@ def test_a_face_whose_force_reaches_its_rim_gets_the_rule_s_split() -> None:
     answer is good to its tolerance there (a rim is not a linear limit the
     least-squares finish can hold), so the limits are
     checked to the certificate's balance and the gradient to 1e-6."""
-    from jointplay.solver import Workspace, forces, pipeline
+    from jointplay.solver import forces, pipeline
+    from jointplay.solver.solve import Workspace
 
     model = jointplay.load(Path(__file__).parents[1] / "examples" / "studies" / "carriage.yaml")
     ws = Workspace.of(model)
@@ -565,7 +567,7 @@ def test_a_batch_row_with_no_load_keeps_its_spring_pressed() -> None:
     play is drawn wider (0.03 mm: the spring 30 N), are solved with the
     springs' preload as their scale, like a single solve."""
     from jointplay.assembly import assemble
-    from jointplay.solver import Workspace
+    from jointplay.solver.solve import Workspace
 
     asm = assemble(ball_pressed_between_two_stops(0.02, 1.0))
     ws = Workspace(asm)
@@ -591,7 +593,8 @@ def test_a_preload_with_no_load_is_still_balanced_by_the_certificate() -> None:
     from dataclasses import replace
 
     from jointplay.assembly import assemble
-    from jointplay.solver import Workspace, certificate, pipeline
+    from jointplay.solver import certificate, pipeline
+    from jointplay.solver.solve import Workspace
 
     ws = Workspace(assemble(ball_pressed_between_two_stops(0.02, None)))
     scale = pipeline.load_scale(ws, 0.0)
@@ -622,7 +625,7 @@ def test_a_batch_s_faint_loads_beside_a_preload_are_batched() -> None:
     forces are the closed form's to the balance of the preload, whichever
     route a row takes."""
     from jointplay.assembly import assemble
-    from jointplay.solver import Workspace
+    from jointplay.solver.solve import Workspace
 
     asm = assemble(ball_pressed_between_two_stops(0.02, 1.0))
     loads = [1.0, 1e-4, 2e-4, 1e-9, 0.0, -1e-4, 3e-4]
@@ -642,7 +645,8 @@ def test_a_compliant_face_pressed_flat_has_its_centre_of_pressure_split_by_the_r
     4e-4 N on the guide's corners). Here: two routes' forces that both
     balance the loads, with the face's centre of pressure elsewhere, give the
     same split, and the face keeps its force."""
-    from jointplay.solver import Workspace, forces, pipeline
+    from jointplay.solver import forces, pipeline
+    from jointplay.solver.solve import Workspace
 
     path = Path(__file__).parent / "property_cases" / "order_compliant_face_pressed_flat.yaml"
     ws = Workspace.of(jointplay.load(path))
@@ -804,7 +808,8 @@ def test_the_lathe_slide_s_split_meets_the_rule_s_optimality_conditions() -> Non
     the printed forces): the two corners carry no force, the gradient of
     ``|P y|^2 / 2`` is balanced by multipliers of the balance and of the
     unloaded corners (>= 0), to 1e-9 of its largest entry."""
-    from jointplay.solver import Workspace, forces, pipeline
+    from jointplay.solver import forces, pipeline
+    from jointplay.solver.solve import Workspace
 
     model = jointplay.load(Path(__file__).parents[1] / "examples" / "gallery" / "lathe_slide.yaml")
     ws = Workspace.of(model)
@@ -840,7 +845,7 @@ def test_a_batch_of_loads_on_four_feet_shares_each_as_equal_springs_would() -> N
     splits every row where it lies in every cone, instead of one cone
     program per row (the rows it does not settle take the program)."""
     from jointplay.assembly import assemble
-    from jointplay.solver import Workspace
+    from jointplay.solver.solve import Workspace
 
     a, b, F = 120.0, 80.0, 100.0
     asm = assemble(model_from_dict(table_on_feet([0.0, 0.0, 0.0])))

@@ -16,7 +16,8 @@ from jointplay.io.generate import bearing_chain, tube_string
 from jointplay.numerics import linalg
 from jointplay.numerics.free_motions import Eliminated, null_basis
 from jointplay.settings import DEFAULT
-from jointplay.solver import Workspace, pipeline
+from jointplay.solver import pipeline
+from jointplay.solver.solve import Workspace
 
 RCOND, ROUND_OFF = DEFAULT.free_motion_rcond, DEFAULT.round_off
 

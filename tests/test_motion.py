@@ -854,7 +854,7 @@ def test_a_model_with_load_cases_needs_its_case() -> None:
     assert doc["case"] == "lifting"
     model = jointplay.load(SHAFT)
     result = Motion(drive="l2", range=("0 deg", "10 deg"), steps=2, case="lifting").run(model)
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
 
     lifted = Workspace.of(model).solve(loads=model.loads_of("lifting"))
     assert np.allclose(result.displacement[0, 0], lifted.points["tip"].displacement, atol=1e-9)

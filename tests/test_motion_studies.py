@@ -380,7 +380,7 @@ def test_each_part_started_from_its_last_pose_is_the_monte_carlo_at_each_pose() 
 
 
 def test_own_starts_are_one_per_row() -> None:
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
 
     asm = assemble(_load("four_bar.yaml"))
     work = np.tile(load_map(asm, None).g0, (2, 1))

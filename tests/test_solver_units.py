@@ -18,7 +18,8 @@ import jointplay
 from conftest import BALANCE, MM, assert_same_answer
 from jointplay.numerics import linalg
 from jointplay.settings import DEFAULT
-from jointplay.solver import Workspace, conic, faces, newton, pipeline
+from jointplay.solver import conic, faces, newton, pipeline, records
+from jointplay.solver.solve import Workspace
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Exact to round-off: the maps copy entries, they compute nothing.
@@ -43,7 +44,7 @@ def test_the_cone_program_maps_every_row_back_to_its_contact(carriage: Workspace
     ``soc_first[i]`` and ``-A_i x`` at its ``f_rows``; the cones' sizes are
     the contacts' rows plus one."""
     ws = carriage
-    prog = ws.interior_program
+    prog = conic.interior_program(ws)
     x = np.random.default_rng(1).standard_normal(ws.m)
     s = prog.b - prog.A @ x
     n_eq = ws.Eq.shape[0]
@@ -352,7 +353,7 @@ def test_the_certificate_measures_a_rigid_turn_across_the_mechanism(
     turn = 1e-10  # rad, S2 alone, about the joint's axis (x) or z: only its turn rows see it
     x = point.x.copy()
     x[6 * 1 + axis] += turn / ws.asm.turn[1]
-    opened = faces.Point(x, point.lam, point.f, point.method)
+    opened = records.Point(x, point.lam, point.f, point.method)
     got = certificate.certify(ws, g_hat, sigma, opened, point.nu).feasibility_mm
     assert ws.asm.ell >= 100.0  # the shaft: 1e-8 mm or more, not 1e-10 (nor 2e-7 a drive)
     assert got == pytest.approx(turn * ws.asm.ell, rel=1e-6)
@@ -363,11 +364,11 @@ def test_the_status_map_and_the_program_agree_on_a_solve(paper: Workspace) -> No
     words, and its dual is the optimum's contact forces before the polish."""
     ws = paper
     g_hat = ws.asm.g / np.linalg.norm(ws.asm.g)
-    sol = conic.run(ws, ws.interior_program, -g_hat)
+    sol = conic.run(ws, conic.interior_program(ws), -g_hat)
     assert conic.outcome(sol) == "optimal"
     point = pipeline.optimum(ws, g_hat, np.zeros(len(ws.balls)))
     z = np.asarray(sol.z)
-    assert np.allclose(z[ws.interior_program.soc_first], point.lam, rtol=1e-6, atol=1e-9)
+    assert np.allclose(z[conic.interior_program(ws).soc_first], point.lam, rtol=1e-6, atol=1e-9)
 
 
 def test_the_batched_rank_test_gives_the_svds_verdict() -> None:
@@ -697,10 +698,10 @@ def test_a_large_model_s_interior_point_goes_unrefined() -> None:
     from jointplay.io.generate import bearing_chain, tube_string
 
     small, large = Workspace(assemble(bearing_chain(5))), Workspace(assemble(tube_string(300)))
-    assert small.interior_program.settings.iterative_refinement_enable
-    assert not large.interior_program.settings.iterative_refinement_enable
+    assert conic.interior_program(small).settings.iterative_refinement_enable
+    assert not conic.interior_program(large).settings.iterative_refinement_enable
     retry = large.with_settings(large.settings.retry())
-    assert retry.interior_program.settings.iterative_refinement_enable
+    assert conic.interior_program(retry).settings.iterative_refinement_enable
     refined = Workspace(large.asm, replace(DEFAULT, sparse_interior_refinement=True))
     plain, fine = large.solve(), refined.solve()
     for result in (plain, fine):
@@ -963,7 +964,7 @@ def test_a_face_without_its_unloaded_contacts_is_tested_for_a_tie(
     weak = newton.weak_forces
     dropped: list[int] = []
 
-    def one_unloaded(ws_: Workspace, point: faces.Point, key: faces.FaceKey) -> Any:
+    def one_unloaded(ws_: Workspace, point: records.Point, key: records.FaceKey) -> Any:
         out = weak(ws_, point, key)
         if out.size or point.regular_on is None:
             return out

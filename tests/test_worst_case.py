@@ -15,9 +15,8 @@ import pytest
 
 import jointplay
 from conftest import MM, ROOT, spherical_shaft
-from jointplay.studies.contributions import _measures
 from jointplay.studies.montecarlo import MonteCarlo, _wilson
-from jointplay.studies.parts import inputs_of, measured
+from jointplay.studies.parts import inputs_of, measured, measures_of
 from jointplay.studies.tolerances import Tolerances
 from jointplay.studies.worstcase import worst_cases
 from test_cli import run
@@ -147,7 +146,7 @@ def test_no_sample_passes_the_worst_case_on_any_bundled_example(path: Path) -> N
     point's |d| and each requirement's measure stay within the worst case in
     every sample (300 a model: the suite stays fast)."""
     model = jointplay.load(path)
-    measures = _measures(model, str(path))
+    measures = measures_of(model, str(path))
     reaches = worst_cases(model, measures, None, source=str(path))
     mc = MonteCarlo(samples=300, seed=5).run(model)
     y = measured(model, measures, mc.displacement)

@@ -32,8 +32,7 @@ if TYPE_CHECKING:
     )
     from jointplay.settings import SolverSettings
     from jointplay.solver.batch import BatchSolution
-    from jointplay.solver.solve import solve, solve_cases
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace, solve, solve_cases
     from jointplay.studies.contributions import Contributions, ContributionsResult
     from jointplay.studies.envelope import Envelope, EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
@@ -73,7 +72,7 @@ _LAZY = {
     "BatchSolution": "solver.batch",
     "solve": "solver.solve",
     "solve_cases": "solver.solve",
-    "Workspace": "solver.workspace",
+    "Workspace": "solver.solve",
     "Motion": "studies.motion",
     "MotionResult": "studies.motion",
     "MotionMonteCarlo": "studies.motion_studies",

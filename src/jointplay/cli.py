@@ -211,7 +211,7 @@ def solve(
     """
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
 
     failed = False
 
@@ -787,7 +787,7 @@ def plot(
     domain, the contacts (red: touching), the contact forces and the loads, in
     3D and in the three views; and each joint seen along its axis."""
     from jointplay.io.modelfile import load
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
 
     def run() -> None:
         from jointplay.model.mechanism import check_case

@@ -158,6 +158,17 @@ def read_number(text: str) -> float:
     return value
 
 
+def is_plain(value: Any) -> bool:
+    """A number written without a unit (``90``, ``"90"``)."""
+    if isinstance(value, str):
+        try:
+            read_number(value.strip())
+        except ValueError:
+            return False
+        return True
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 #: What a quantity written as text looks like (the model file's JSON Schema):
 #: a number first, then its unit (or nothing: the base unit).
 NUMBER_FIRST = r"^\s*" + _NUMBER.pattern

@@ -28,7 +28,7 @@ from pydantic import (
 )
 
 from jointplay.settings import MOST_MOTION_STEPS
-from jointplay.units import read_number, shown, to_base, without_plain_hint
+from jointplay.units import is_plain, shown, to_base, without_plain_hint
 
 if TYPE_CHECKING:
     from jointplay.model.joints.base import Joint
@@ -95,17 +95,6 @@ class MotionSection(BaseModel):
             if problem is not None:
                 raise ValueError(f"got {value}; {problem}")
         return value
-
-
-def is_plain(value: Any) -> bool:
-    """A number written without a unit (``90``, ``"90"``)."""
-    if isinstance(value, str):
-        try:
-            read_number(value.strip())
-        except ValueError:
-            return False
-        return True
-    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def plain_angle(value: Any) -> bool:

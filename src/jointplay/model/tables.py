@@ -18,8 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from jointplay.model.motion import is_plain
-from jointplay.units import BASE_UNITS, shown, to_base
+from jointplay.units import BASE_UNITS, is_plain, shown, to_base
 
 #: The first column's dimension, by how its values are written.
 DRIVE_DIMENSIONS = ("angle", "length")

@@ -85,7 +85,7 @@ class Report:
         """Solve, study and write the page. ``source``: the model file's name.
         ``note(text)`` hears what is being done (for a progress line)."""
         from jointplay.model.mechanism import check_case
-        from jointplay.solver.workspace import Workspace
+        from jointplay.solver.solve import Workspace
 
         say = note or (lambda _text: None)
         check_case(model, self.case, source)

@@ -1,15 +1,13 @@
 """The numeric core: from an assembled model to a certified equilibrium.
 
-Layers, bottom up, each importing only those below: ``workspace`` (one
-model's matrices, free motions and balance maps, made once); ``certificate``
-(the one check every answer passes) and ``held`` (motions the joints do not
-hold); ``conic`` (Clarabel's statuses) and ``newton``; ``ties`` and ``forces``
-(the documented split of hyperstatic forces); ``pipeline`` (the single
-solve); ``batch`` (many loads and plays at once) and ``exact`` (finite
-rotations); ``solve`` (the public functions). See docs/solver.md."""
-
-from jointplay.solver.batch import BatchSolution
-from jointplay.solver.solve import solve, solve_cases
-from jointplay.solver.workspace import Workspace
-
-__all__ = ["BatchSolution", "Workspace", "solve", "solve_cases"]
+Layers, bottom up, each importing only those below: ``records`` (points,
+faces, cone programs: plain data); ``workspace`` (one model's matrices, free
+motions and balance maps, made once); ``faces``, ``held`` (motions the
+joints do not hold) and ``certificate`` (the one check every answer
+passes); ``conic`` (Clarabel's statuses) and ``newton``; ``ties`` and
+``forces`` (the documented split of hyperstatic forces); ``pipeline`` (the
+single solve); ``batch`` (many loads and plays at once) and ``exact``
+(finite rotations); ``solve`` (the public ``Workspace``, ``solve`` and
+``solve_cases``, which ``jointplay`` hands on). This file imports none of
+them, so that importing a lower layer loads no higher one. See
+docs/solver.md."""

@@ -33,13 +33,13 @@ from jointplay.numerics.linalg import Matrix
 from jointplay.result import Result
 from jointplay.settings import DEFAULT, TINY, SolverSettings
 from jointplay.solver import certificate, faces, forces, held, newton, pipeline
+from jointplay.solver.records import Face, FaceKey, Point
 
 BoolArray = NDArray[np.bool_]
 
 if TYPE_CHECKING:
     from jointplay.settings import SolverSettings
-    from jointplay.solver.faces import Face, FaceKey
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.workspace import WorkspaceData
 
 #: Entries of the (rows, n, n) stack of one batched Newton (8 MB): fewer
 #: rows cost Python overhead per call, more leave the cache.
@@ -139,7 +139,7 @@ def extrapolated(before: Start | None, last: Start | None) -> Start | None:
 
 
 def solved_start(
-    ws: Workspace,
+    ws: WorkspaceData,
     work: FloatArray,
     radii: FloatArray | None = None,
     centres: FloatArray | None = None,
@@ -165,14 +165,14 @@ def solved_start(
     return _start_of(point, g_hat, r, c)
 
 
-def _start_of(point: faces.Point, g_hat: FloatArray, r: FloatArray, c: FloatArray) -> Start | None:
+def _start_of(point: Point, g_hat: FloatArray, r: FloatArray, c: FloatArray) -> Start | None:
     """A full solve's answer as a ``Start``; None where it has no active set
     (nor a tie's) to start from."""
     key = point.active if point.active is not None else point.tie
     return None if key is None else Start(g_hat, r, c, point.x, point.lam, point.f, key)
 
 
-def _check_starts(ws: Workspace, starts: Sequence[Start]) -> None:
+def _check_starts(ws: WorkspaceData, starts: Sequence[Start]) -> None:
     shapes = (ws.m, len(ws.balls), ws.stack.A.shape[0])
     for known in starts:
         parts = (known.g_hat, known.r, known.c, known.x, known.lam, known.f)
@@ -184,7 +184,7 @@ def _check_starts(ws: Workspace, starts: Sequence[Start]) -> None:
 
 
 def solve_batch(
-    ws: Workspace,
+    ws: WorkspaceData,
     work: FloatArray,
     radii: FloatArray | None = None,
     centres: FloatArray | None = None,
@@ -204,7 +204,7 @@ def solve_batch(
 
 
 def follow(
-    ws: Workspace, start: Start | None, loads: Sequence[Load] | None = None
+    ws: WorkspaceData, start: Start | None, loads: Sequence[Load] | None = None
 ) -> tuple[Result, Start | None]:
     """The certified equilibrium of ``ws``'s model under its loads (or
     ``loads``) as a batch of one whose Newton starts from ``start`` (the
@@ -221,14 +221,12 @@ def follow(
         g_hat = g / scale if scale else g
         sigma = ws.softness(scale)
         dense = not ws.asm.sparse and scale > 0
-        point: faces.Point | None = None
+        point: Point | None = None
         if start is not None and dense:
             followed = _solve_batch(ws, g[None], None, None, True, (), (start,)).own_starts
             after = None if followed is None else followed[0]
             if after is not None:
-                found = faces.Point(
-                    after.x, after.lam, after.f, method="Newton from a nearby answer"
-                )
+                found = Point(after.x, after.lam, after.f, method="Newton from a nearby answer")
                 found = pipeline.certified(
                     ws, g_hat, sigma, pipeline.split(ws, g_hat, sigma, found)
                 )
@@ -241,7 +239,7 @@ def follow(
 
 
 def _solve_batch(
-    ws: Workspace,
+    ws: WorkspaceData,
     work: FloatArray,
     radii: FloatArray | None,
     centres: FloatArray | None,
@@ -477,7 +475,7 @@ def _per_row(name: str, given: FloatArray | None, default: FloatArray, B: int) -
     return out
 
 
-def _preloads(ws: Workspace, norms: FloatArray, r: FloatArray, c: FloatArray) -> FloatArray:
+def _preloads(ws: WorkspaceData, norms: FloatArray, r: FloatArray, c: FloatArray) -> FloatArray:
     """``norms``, and each unloaded row's ``pipeline.load_scale`` (the
     preload of springs its plays and centres press, a program each)."""
     scales = norms.copy()
@@ -489,7 +487,7 @@ def _preloads(ws: Workspace, norms: FloatArray, r: FloatArray, c: FloatArray) ->
     return scales
 
 
-def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
+def _check_driven(ws: WorkspaceData, work: FloatArray, norms: FloatArray) -> None:
     if ws.N.shape[1] == 0:
         return
     drive = linalg.times(ws.N.T, work)  # work @ N
@@ -500,7 +498,7 @@ def _check_driven(ws: Workspace, work: FloatArray, norms: FloatArray) -> None:
 
 
 def _newton_batch(
-    ws: Workspace,
+    ws: WorkspaceData,
     key: FaceKey,
     g_hat: FloatArray,
     sigma: FloatArray,
@@ -767,13 +765,13 @@ def _predicted(
 
 
 def _pinned(
-    ws: Workspace, key: FaceKey, x: FloatArray, lam: FloatArray, f: FloatArray, c: FloatArray
+    ws: WorkspaceData, key: FaceKey, x: FloatArray, lam: FloatArray, f: FloatArray, c: FloatArray
 ) -> BoolArray:
     """Whether the forces ``lam``, ``f`` (rows) pin each row's position
     down: any other optimum keeps every loaded contact where it is, so the
     position is unique if their rows (and the equalities) have full rank.
     A surface cone with an offset, or a face whose force reaches its rim,
-    keeps only the rows across its tilt (see ``Workspace._determined``); an
+    keeps only the rows across its tilt (see ``faces.is_determined``); an
     unloaded contact keeps none. Rows (B, m)."""
     stack, st = ws.stack, ws.settings
     B = x.shape[0]
@@ -808,7 +806,7 @@ def _pinned(
 
 
 def _independent_rows(
-    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray
+    ws: WorkspaceData, face: Face, x: FloatArray, centre: FloatArray
 ) -> tuple[IntArray, IntArray] | None:
     """None if the active rows of ``face`` at ``x`` (each surface cone's
     gradient and the equalities) are independent. Else they are redundant

@@ -33,8 +33,8 @@ from jointplay.result import Certificate
 
 if TYPE_CHECKING:
     from jointplay.settings import SolverSettings
-    from jointplay.solver.faces import Point
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.records import Point
+    from jointplay.solver.workspace import WorkspaceData
 
 
 @dataclass(frozen=True)
@@ -84,7 +84,7 @@ class Checks:
 
 
 def check(
-    ws: Workspace,
+    ws: WorkspaceData,
     g_hat: FloatArray,
     x: FloatArray,
     lam: FloatArray,
@@ -142,7 +142,11 @@ def check(
 
 
 def certify(
-    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: Point, nu: FloatArray | None = None
+    ws: WorkspaceData,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    point: Point,
+    nu: FloatArray | None = None,
 ) -> Certificate:
     """The certificate (``certificate.check``) of one answer."""
     c = check(
@@ -165,7 +169,7 @@ def certify(
     )
 
 
-def refusal(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: Point) -> str:
+def refusal(ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray, point: Point) -> str:
     """What the answer ``point`` fails of its certificate, in words: each
     check it fails, with its value and its limit (for a decline's message)."""
     nu = None if point.nu is None else point.nu[None]

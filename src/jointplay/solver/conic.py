@@ -7,7 +7,7 @@ status that a new Clarabel release adds stops the solve with its name.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import clarabel
@@ -20,10 +20,11 @@ from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
 from jointplay.solver import held
+from jointplay.solver.records import ConeProgram
 
 if TYPE_CHECKING:
     from jointplay.settings import SolverSettings
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.workspace import WorkspaceData
 
 Outcome = Literal["optimal", "inaccurate", "infeasible", "unbounded", "stopped"]
 
@@ -62,7 +63,7 @@ def has_answer(solution: Any) -> bool:
 
 
 def cone_program(
-    ws: Workspace,
+    ws: WorkspaceData,
     P: Matrix | None,
     Eq: Matrix,
     e: FloatArray,
@@ -101,6 +102,16 @@ def cone_program(
     ]
     settings = options(ws.settings, tolerance, max_iter, refine, regularization)
     return ConeProgram(_upper(P, ws.m), A, b, cones, settings, soc_first, ball_rows)
+
+
+def interior_program(ws: WorkspaceData) -> ConeProgram:
+    """The cone program of the hard problem (its loads are set per solve),
+    built on first use and kept on the workspace."""
+    if ws.interior_program is None:
+        e = np.zeros(ws.Eq.shape[0])
+        refine = refined(ws.settings, ws.asm.sparse)
+        ws.interior_program = cone_program(ws, None, ws.Eq, e, ws.stack, refine=refine)
+    return ws.interior_program
 
 
 def refined(settings: SolverSettings, sparse: bool) -> bool:
@@ -182,7 +193,7 @@ def _upper(P: Matrix | None, m: int) -> sp.csc_matrix:
     return csc(np.triu(P))
 
 
-def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
+def run(ws: WorkspaceData, prog: ConeProgram, q: FloatArray) -> Any:
     # a new solver each time: one kept and updated answers as a new one
     # does to the interior-point tolerance only (3.5e-12 apart on the
     # paper's shaft), so a workspace's answers would depend on its history
@@ -215,7 +226,7 @@ def run(ws: Workspace, prog: ConeProgram, q: FloatArray) -> Any:
     return sol
 
 
-def driven_ray(ws: Workspace, g: FloatArray) -> FloatArray | None:
+def driven_ray(ws: WorkspaceData, g: FloatArray) -> FloatArray | None:
     """A motion of unit size that the loads' work ``g`` drives and that no
     contact, spring or rigid row stops however far it goes (the recession
     cone of the clearances: ``|A_i d| <= -B_i d``, ``E d = 0``, and ``K d = 0``
@@ -260,14 +271,14 @@ def driven_ray(ws: Workspace, g: FloatArray) -> FloatArray | None:
     return d if held.holds_no_more(ws, g, np.zeros(m), d) else None
 
 
-def infeasibility(ws: Workspace) -> FloatArray | None:
+def infeasibility(ws: WorkspaceData) -> FloatArray | None:
     """Clarabel's certificate that no position lies inside every clearance,
     or None if some does. Without deviations x = 0 does; with them the plain
     cone program with no loads decides (an "infeasible" status of another
     program, a tie's say, is round-off)."""
     if ws.stack.centre is None:
         return None
-    prog = ws.interior_program
+    prog = interior_program(ws)
     refined = options(ws.settings)  # a verdict's solve (``run``)
     sol = clarabel.DefaultSolver(
         prog.P, np.zeros(prog.A.shape[1]), prog.A, prog.b, prog.cones, refined
@@ -275,12 +286,12 @@ def infeasibility(ws: Workspace) -> FloatArray | None:
     return np.asarray(sol.z) if outcome(sol) == "infeasible" else None
 
 
-def unassembled(ws: Workspace, ray: FloatArray) -> UnassembledError:
+def unassembled(ws: WorkspaceData, ray: FloatArray) -> UnassembledError:
     """The error for clearances with no position inside them all, naming the
     joints whose cones carry Clarabel's certificate of infeasibility ``ray``
     of the plain program (forces that, pushing together, would have to do
     work from nothing)."""
-    lam = np.abs(ray[ws.interior_program.soc_first])
+    lam = np.abs(ray[interior_program(ws).soc_first])
     top = float(np.max(lam, initial=0.0))
     cones = (
         np.flatnonzero(lam > ws.settings.interior_resolution * top) if top > 0 else np.zeros(0, int)
@@ -295,17 +306,6 @@ def unassembled(ws: Workspace, ray: FloatArray) -> UnassembledError:
         "that joint's play times the lever).",
         joints=joints,
     )
-
-
-@dataclass(frozen=True)
-class ConeProgram:
-    P: sp.csc_matrix
-    A: sp.csc_matrix
-    b: FloatArray
-    cones: list[Any]
-    settings: Any
-    soc_first: IntArray  # row of each cone's first entry (its multiplier lam)
-    f_rows: IntArray  # rows of the cones' other entries (their force vectors f)
 
 
 class KeptSolver:

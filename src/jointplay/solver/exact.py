@@ -53,14 +53,14 @@ from jointplay.result import (
     points_of,
     requirements_of,
 )
-from jointplay.solver import certificate, conic, faces, pipeline
+from jointplay.solver import certificate, conic, pipeline, records
 from jointplay.solver.workspace import Balance
 
 if TYPE_CHECKING:
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.workspace import WorkspaceData
 
 
-def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
+def solve_exact(ws: WorkspaceData, loads: Sequence[Load] | None = None) -> Result:
     """The equilibrium of ``ws``'s model with exact rotations (see module doc)."""
     start = time.perf_counter()
     asm = ws.asm
@@ -94,7 +94,7 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     g_hat = g / scale if scale else g
     sigma = ws.softness(scale)
     method = f"exact rotations ({iterations} re-linearizations)"
-    point = faces.Point(np.zeros(asm.m), lam, f, method, iterations, nu=nu)
+    point = records.Point(np.zeros(asm.m), lam, f, method, iterations, nu=nu)
     cert = certificate.certify(here, g_hat, sigma, point, nu)
     if not cert.certified:
         raise SolverError(
@@ -117,7 +117,7 @@ def solve_exact(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
     return result
 
 
-def _at_placement(ws: Workspace, stack: BallStack, fixed: FloatArray) -> Workspace:
+def _at_placement(ws: WorkspaceData, stack: BallStack, fixed: FloatArray) -> WorkspaceData:
     """``ws`` with the cones ``stack`` and rigid rows ``fixed`` of the exact
     geometry linearized at a placement (unknowns: the step from it), for the
     certificate."""
@@ -211,8 +211,8 @@ def _parts_jacobian(asm: Assembly, x: FloatArray) -> FloatArray:
 
 
 def _step(
-    ws: Workspace, x: FloatArray, parts: _Parts, g: FloatArray, scale: float
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, Workspace]:
+    ws: WorkspaceData, x: FloatArray, parts: _Parts, g: FloatArray, scale: float
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, WorkspaceData]:
     """One linearized cone program: (step, lam, f, fixed multipliers), scaled:
     the loads' work divided by ``scale`` (``pipeline.load_scale``), and the
     workspace of that linearization (``_at_placement``).
@@ -266,7 +266,7 @@ def _step(
 
 
 def _build(
-    ws: Workspace,
+    ws: WorkspaceData,
     x: FloatArray,
     lam: FloatArray,
     f: FloatArray,

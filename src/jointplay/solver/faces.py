@@ -1,100 +1,28 @@
 """Active sets: which contacts hold a candidate optimum, and the face of
 positions they leave.
 
-A ``Point`` is one candidate answer in scaled unknowns with its multipliers.
-A ``Face`` is an active set's equations, built once per workspace and kept
-(``Workspace.faces``): the batch and the single solves meet the same sets
-again and again. Whether a face pins the position down decides between a
+A ``Face`` (``records``) is an active set's equations, built once per
+workspace and kept (``WorkspaceData.faces``): the batch and the single
+solves meet the same sets again and again. Whether a face pins the position down decides between a
 plain Newton polish and the least-norm rule for ties (``ties.py``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from jointplay.assembly import BallStack, IntArray
+from jointplay.assembly import BallStack
 from jointplay.geometry import FloatArray
 from jointplay.numerics import free_motions, linalg
 from jointplay.numerics.linalg import Matrix
-from jointplay.result import Certificate
 from jointplay.settings import TINY
+from jointplay.solver.records import Face, FaceKey, Point
 
 if TYPE_CHECKING:
-    from jointplay.solver.workspace import Workspace
-
-#: An active set: (cones on their surface, cones whose rows all hold as equalities).
-FaceKey = tuple[tuple[int, ...], tuple[int, ...]]
-
-
-@dataclass
-class Point:
-    """A candidate optimum in scaled unknowns, with its multipliers."""
-
-    x: FloatArray
-    lam: FloatArray  # per ball contact (scaled)
-    f: FloatArray  # force vectors, stacked like the rows of BallStack.A (scaled)
-    method: str = "interior-point"
-    iterations: int = 0
-    certificate: Certificate | None = None
-    active: FaceKey | None = None  # the active set that determines x, if any
-    nu: FloatArray | None = None  # the rigid rows' multipliers (None: least squares)
-    #: The active set of a tie: its face holds every optimum, x is its least-norm point.
-    tie: FaceKey | None = None
-    #: The active set on which Newton's system was regular (``Factors.regular``,
-    #: at ``free_motion_rcond``): while ``active`` is that set, its face pins x
-    #: and its rows are independent (``pins_by_newton``).
-    regular_on: FaceKey | None = None
-
-
-@dataclass(frozen=True)
-class Face:
-    """An active set, split by how its cones are held.
-
-    ``surface``: cones on their curved surface, ``|A_i x| + B_i x = r_i``
-    with ``A_i x != 0`` (their force is along ``A_i x``). ``linear``: cones
-    whose rows all hold as equalities: one-sided limits (no rows) and faces
-    resting flat at their apex (``A_i x = c_i``, ``B_i x = r_i``; their force
-    vector is free inside ``|f_i| <= lam_i``). The linear cones' rows ``L x = l``
-    join the equalities; ``lam_rows`` are the rows of L that carry a cone's
-    ``lam`` (and its compliance), ``f_rows`` the rows that carry its ``f``.
-    """
-
-    key: FaceKey
-    stack: BallStack  # the surface cones
-    L: Matrix
-    rhs: FloatArray
-    lam_rows: IntArray
-    f_rows: IntArray
-    Eq: Matrix  # the workspace's equalities, then L
-    e: FloatArray
-    surface_rows: IntArray  # rows of the full stack's A (and f) of the surface cones
-    linear_rows: IntArray  # ... and of the linear cones
-    #: A surface cone with an offset (a face on its rim): the motions the face
-    #: leaves free then depend on x (``is_determined``).
-    tilting: bool
-    #: Whether the active cones and equalities determine x uniquely; None when
-    #: that depends on x (a tilting face: see ``is_determined``).
-    #: Computed when first asked (a null space): most trial faces never are.
-    _determine: Callable[[], bool | None] = field(repr=False, compare=False)
-    _ties: Callable[[], FloatArray | None] = field(repr=False, compare=False)
-
-    @cached_property
-    def determined(self) -> bool | None:
-        return self._determine()
-
-    @cached_property
-    def tie_rows(self) -> FloatArray | None:
-        """For a tie: rows ``T^T M`` (T the directions the face leaves free, M
-        the least-norm metric) whose zero picks the least-norm point of the
-        face's affine hull, as the free motions' rows ``K`` do for the
-        mechanism. None for a face that pins x, tilts, or is large (sparse)."""
-        return None if self.determined is not False else self._ties()
+    from jointplay.solver.workspace import WorkspaceData
 
 
 def pins_by_newton(point: Point) -> bool:
@@ -104,7 +32,7 @@ def pins_by_newton(point: Point) -> bool:
     return point.active is not None and point.regular_on == point.active
 
 
-def face_of(ws: Workspace, key: FaceKey) -> Face:
+def face_of(ws: WorkspaceData, key: FaceKey) -> Face:
     """The face of the active set ``key`` (built on first use, then kept)."""
     face = ws.faces.get(key)
     if face is None:
@@ -159,7 +87,7 @@ def face_of(ws: Workspace, key: FaceKey) -> Face:
     return face
 
 
-def pins_position(ws: Workspace, rows: Matrix) -> bool:
+def pins_position(ws: WorkspaceData, rows: Matrix) -> bool:
     """Whether ``rows`` with the workspace's equalities leave no motion free.
 
     ``rows`` are contact rows, so the free motions ``N`` move none of them,
@@ -177,14 +105,14 @@ def pins_position(ws: Workspace, rows: Matrix) -> bool:
     return linalg.full_column_rank(all_rows, ws.m, ws.settings.free_motion_rcond)
 
 
-def _eliminated(ws: Workspace, rows: Matrix) -> free_motions.Eliminated:
+def _eliminated(ws: WorkspaceData, rows: Matrix) -> free_motions.Eliminated:
     """The elimination of ``rows`` with the joints' equalities ``E``, at the
     free motions' threshold (``pins_position``)."""
     C = linalg.vstack([ws.E, rows], ws.m)
     return free_motions.Eliminated(C, ws.m, ws.settings.free_motion_rcond, ws.limit_scale)
 
 
-def is_determined(ws: Workspace, face: Face, x: FloatArray) -> bool:
+def is_determined(ws: WorkspaceData, face: Face, x: FloatArray) -> bool:
     """Whether the optimum on ``face`` is unique. On a tilting face
     (``|A_i x| + B_i x = r_i`` with ``B_i != 0``) two optima may trade
     tilt for shift along ``(A_i d, B_i d) ~ (u_i, -1)``, so only the rows
@@ -195,7 +123,7 @@ def is_determined(ws: Workspace, face: Face, x: FloatArray) -> bool:
     return rows is not None and pins_position(ws, rows)
 
 
-def _held_rows(ws: Workspace, face: Face, x: FloatArray) -> Matrix | None:
+def _held_rows(ws: WorkspaceData, face: Face, x: FloatArray) -> Matrix | None:
     """The rows whose motions ``face`` holds at ``x`` (``is_determined``);
     None when a tilting cone rests at its apex (it holds no direction)."""
     sub = face.stack
@@ -212,7 +140,7 @@ def _held_rows(ws: Workspace, face: Face, x: FloatArray) -> Matrix | None:
 
 
 def determined_rows(
-    ws: Workspace, face: Face, x: FloatArray, centre: FloatArray
+    ws: WorkspaceData, face: Face, x: FloatArray, centre: FloatArray
 ) -> NDArray[np.bool_]:
     """``is_determined`` for each row of ``x`` (B, m), the cones' centres
     rows of ``centre`` (dense models): one stack of rows per row, whose
@@ -251,7 +179,7 @@ def rimless_forces(stack: BallStack, linear: list[int], lam: FloatArray, f: Floa
 
 
 def active_set(
-    ws: Workspace,
+    ws: WorkspaceData,
     x: FloatArray,
     lam: FloatArray,
     f: FloatArray,

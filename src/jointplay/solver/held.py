@@ -22,10 +22,10 @@ from jointplay.settings import TINY, SolverSettings
 from jointplay.solver.workspace import limit_rows
 
 if TYPE_CHECKING:
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.workspace import WorkspaceData
 
 
-def check_driven(ws: Workspace, g: FloatArray) -> None:
+def check_driven(ws: WorkspaceData, g: FloatArray) -> None:
     if ws.N.shape[1] == 0:
         return
     drive = ws.N.T @ g
@@ -34,7 +34,7 @@ def check_driven(ws: Workspace, g: FloatArray) -> None:
     raise unbounded(ws.asm, ws.N @ drive, ws.settings)
 
 
-def driven_motion(ws: Workspace, g: FloatArray, fallback: FloatArray) -> FloatArray:
+def driven_motion(ws: WorkspaceData, g: FloatArray, fallback: FloatArray) -> FloatArray:
     """A motion that the joints let go on for ever and the loads ``g``
     drive (a body lifting off its point contacts, say), in the simplest
     words found: a translation or a rotation of one body, or of all the
@@ -69,7 +69,7 @@ def driven_motion(ws: Workspace, g: FloatArray, fallback: FloatArray) -> FloatAr
     return best if best_work > 0.0 else needed_only(ws, g, best)
 
 
-def needed_only(ws: Workspace, g: FloatArray, ray: FloatArray) -> FloatArray:
+def needed_only(ws: WorkspaceData, g: FloatArray, ray: FloatArray) -> FloatArray:
     """The interior point's ray of unboundedness ``ray`` without the bodies
     it moves needlessly: its round-off can carry a held body along a little
     (a property test's case: a share of 3e-6, pressing on a point contact,
@@ -112,7 +112,7 @@ def needed_only(ws: Workspace, g: FloatArray, ray: FloatArray) -> FloatArray:
 
 
 def holds_no_more(
-    ws: Workspace,
+    ws: WorkspaceData,
     g: FloatArray,
     d: FloatArray,
     trial: FloatArray,
@@ -147,7 +147,7 @@ def _rows_by_body(M: Matrix, m: int) -> Callable[[int], IntArray]:
     return rows
 
 
-def check_turns(ws: Workspace, x: FloatArray) -> None:
+def check_turns(ws: WorkspaceData, x: FloatArray) -> None:
     """A body that the loads turn by more than ``free_turn_rad`` is not
     held in any sense a small-displacement answer can describe."""
     asm = ws.asm
@@ -159,7 +159,7 @@ def check_turns(ws: Workspace, x: FloatArray) -> None:
         raise unbounded(asm, x, ws.settings, one_way=True, turn=float(turns[worst]))
 
 
-def weak_hint(ws: Workspace) -> str:
+def weak_hint(ws: WorkspaceData) -> str:
     """Words on the motion the joints hold most weakly, for a solve that
     fails: a nearly free mechanism is the usual cause."""
     C = limit_rows(ws)

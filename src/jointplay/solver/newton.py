@@ -21,22 +21,22 @@ from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix, solve_rows
 from jointplay.settings import SolverSettings
-from jointplay.solver import faces
+from jointplay.solver import faces, records
 
 BoolArray = NDArray[np.bool_]
 
 if TYPE_CHECKING:
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.workspace import WorkspaceData
 
 
-def weak_forces(ws: Workspace, point: faces.Point, key: faces.FaceKey) -> IntArray:
+def weak_forces(ws: WorkspaceData, point: records.Point, key: records.FaceKey) -> IntArray:
     """The cones of ``key`` whose force is not strictly positive (or, at
     the apex of a face, not strictly inside its cone)."""
     both = np.array([*key[0], *key[1]], dtype=np.intp)
     return np.asarray(both[weak_rows(ws, point.lam[None], point.f[None], key)[0]])
 
 
-def weak_rows(ws: Workspace, lam: FloatArray, f: FloatArray, key: faces.FaceKey) -> BoolArray:
+def weak_rows(ws: WorkspaceData, lam: FloatArray, f: FloatArray, key: records.FaceKey) -> BoolArray:
     """(B, cones of ``key``): ``weak_forces`` of each row's forces."""
     surface, linear = key
     lam_a = lam[:, [*surface, *linear]]
@@ -50,16 +50,16 @@ def weak_rows(ws: Workspace, lam: FloatArray, f: FloatArray, key: faces.FaceKey)
 
 
 def kkt_point(
-    ws: Workspace,
+    ws: WorkspaceData,
     g_hat: FloatArray,
     sigma: FloatArray,
-    key: faces.FaceKey,
+    key: records.FaceKey,
     x0: FloatArray,
     lam0: FloatArray,
     iterations: int,
     method: str,
     pinned: bool = True,
-) -> faces.Point | None:
+) -> records.Point | None:
     """The solution of the KKT equations of the active set ``key``, if
     Newton converges and (``pinned``) the face pins the position down
     (forces unchecked). Unpinned, Newton's least-squares steps stop at an
@@ -102,22 +102,22 @@ def kkt_point(
 
 
 def assemble_point(
-    ws: Workspace,
+    ws: WorkspaceData,
     x: FloatArray,
-    face: faces.Face,
+    face: records.Face,
     lam_surface: FloatArray,
     nu_linear: FloatArray,
     method: str,
     iterations: int,
-) -> faces.Point:
+) -> records.Point:
     """The point of a face's multipliers: ``lam`` and ``f`` of every cone."""
     lam, f = face_forces(ws, face, x[None], lam_surface[None], nu_linear[None])
-    return faces.Point(x, lam[0], f[0], method, iterations, active=face.key)
+    return records.Point(x, lam[0], f[0], method, iterations, active=face.key)
 
 
 def face_forces(
-    ws: Workspace,
-    face: faces.Face,
+    ws: WorkspaceData,
+    face: records.Face,
     x: FloatArray,
     lam_surface: FloatArray,
     nu_linear: FloatArray,

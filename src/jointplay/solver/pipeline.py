@@ -38,11 +38,11 @@ from jointplay.errors import SolverError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Load
 from jointplay.result import Result, build_result
-from jointplay.solver import certificate, conic, faces, forces, held, newton, ties
-from jointplay.solver.workspace import Workspace
+from jointplay.solver import certificate, conic, faces, forces, held, newton, records, ties
+from jointplay.solver.workspace import WorkspaceData
 
 
-def solve_loads(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
+def solve_loads(ws: WorkspaceData, loads: Sequence[Load] | None = None) -> Result:
     """The certified small-displacement equilibrium of ``ws``'s model under
     its loads, or under ``loads`` instead."""
     start = time.perf_counter()
@@ -55,7 +55,7 @@ def solve_loads(ws: Workspace, loads: Sequence[Load] | None = None) -> Result:
 
 
 def loads_and_work(
-    ws: Workspace, loads: Sequence[Load] | None
+    ws: WorkspaceData, loads: Sequence[Load] | None
 ) -> tuple[tuple[Load, ...], FloatArray]:
     """The loads (the model's own if None) and their work on the unknowns."""
     if loads is None:
@@ -65,8 +65,8 @@ def loads_and_work(
 
 
 def result_of(
-    ws: Workspace,
-    point: faces.Point,
+    ws: WorkspaceData,
+    point: records.Point,
     scale: float,
     loads: Sequence[Load],
     g: FloatArray,
@@ -116,7 +116,7 @@ TIE_HINT = (
 )
 
 
-def load_scale(ws: Workspace, g_norm: float) -> float:
+def load_scale(ws: WorkspaceData, g_norm: float) -> float:
     """What the scaled problem divides the loads' work by: its size ``|g|``,
     or the preload of compliant contacts that deviations press past their
     play, if larger. Such a spring pushes at no load at all; scaled by ``|g|``
@@ -128,7 +128,7 @@ def load_scale(ws: Workspace, g_norm: float) -> float:
     return max(g_norm, ws.preload)
 
 
-def _preload(ws: Workspace) -> float:
+def _preload(ws: WorkspaceData) -> float:
     soft = ws.stack.spring > 0
     zero = np.zeros(ws.m)
     if not np.any(soft) or np.all(ws.stack.levels(zero)[2] <= ws.stack.r):
@@ -146,7 +146,9 @@ def _preload(ws: Workspace) -> float:
     return float(np.max(rest.lam))
 
 
-def split(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point) -> faces.Point:
+def split(
+    ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray, point: records.Point
+) -> records.Point:
     """The optimum with the least-squares split of its forces
     (``forces.least_squares_split``: forces from the positions, by the
     documented rule) and its rigid multipliers, if that split certifies;
@@ -167,7 +169,7 @@ def split(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Poin
     return replace(point, nu=nu)
 
 
-def rigid_multipliers(ws: Workspace, g_hat: FloatArray, point: faces.Point) -> FloatArray:
+def rigid_multipliers(ws: WorkspaceData, g_hat: FloatArray, point: records.Point) -> FloatArray:
     """Forces in the rigid rows (scaled): what the contacts leave of the loads.
 
     Statically indeterminate rigid joints share the load in the least-squares way.
@@ -176,7 +178,7 @@ def rigid_multipliers(ws: Workspace, g_hat: FloatArray, point: faces.Point) -> F
     return np.asarray(ws.balance.rigid_multipliers(rest[None])[0])
 
 
-def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -> faces.Point:
+def optimum(ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray | None = None) -> records.Point:
     """The certified optimum for loads ``g_hat`` (unit, smaller beside a
     preload, or 0 for no load: ``load_scale``), with contact softness
     ``sigma`` (default: every contact hard)."""
@@ -211,7 +213,7 @@ def optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray | None = None) -
     return point
 
 
-def retry_of(ws: Workspace) -> Workspace | None:
+def retry_of(ws: WorkspaceData) -> WorkspaceData | None:
     """The one retry's workspace (``SolverSettings.retry``), or None if
     ``ws`` is the retry's."""
     if ws.settings.ipm_tolerance <= ws.settings.fine_ipm_tolerance:
@@ -219,7 +221,7 @@ def retry_of(ws: Workspace) -> Workspace | None:
     return ws.with_settings(ws.settings.retry())
 
 
-def answer(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, loaded: bool) -> faces.Point:
+def answer(ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray, loaded: bool) -> records.Point:
     """The route's answer, with its certificate (which may refuse it)."""
     if not loaded:
         return certified(ws, g_hat, sigma, rest_position(ws))
@@ -227,8 +229,8 @@ def answer(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, loaded: bool) ->
 
 
 def certified(
-    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point
-) -> faces.Point:
+    ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray, point: records.Point
+) -> records.Point:
     """``point`` with its certificate (which may refuse it). A cone with no
     play and no offset holds only at its apex: whatever the route, its force
     is |f| (the interior point's lam may be any above it)."""
@@ -243,10 +245,10 @@ def certified(
     return point
 
 
-def contacts_optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:
+def contacts_optimum(ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray) -> records.Point:
     """The optimal positions, with the route's forces (relative to ``g_hat``,
     uncertified), found under the contacts' share of the loads
-    (``Workspace.contacts_share``): the same program, since the rigid rows
+    (``WorkspaceData.contacts_share``): the same program, since the rigid rows
     hold every position at ``E x = 0``, but its forces are the contacts' own,
     not round-off against what a rigid joint carries. With no share the
     contacts carry nothing, and the rest position is the answer. Not with
@@ -265,7 +267,7 @@ def contacts_optimum(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> fac
     return replace(point, lam=point.lam * share, f=point.f * share, nu=None, certificate=None)
 
 
-def rest_position(ws: Workspace, method: str = "no load") -> faces.Point:
+def rest_position(ws: WorkspaceData, method: str = "no load") -> records.Point:
     """The answer with no load (or none the contacts carry, ``method``):
     every feasible position is optimal, so the least-norm one (the tie
     rule): 0, unless deviations move the clearances off it; then one cone
@@ -273,7 +275,7 @@ def rest_position(ws: Workspace, method: str = "no load") -> faces.Point:
     lam, f = np.zeros(len(ws.balls)), np.zeros(ws.stack.A.shape[0])
     zero = np.zeros(ws.m)
     if np.all(ws.stack.levels(zero)[2] <= ws.stack.r):  # 0 fits: no deviation, or small ones
-        return faces.Point(zero, lam, f, method=method)
+        return records.Point(zero, lam, f, method=method)
     e = np.zeros(ws.Eq.shape[0])
     prog = conic.cone_program(ws, ws.asm.metric_matrix, ws.Eq, e, ws.stack)
     sol = conic.run(ws, prog, np.zeros(ws.m))  # no position at all: UnassembledError
@@ -281,34 +283,38 @@ def rest_position(ws: Workspace, method: str = "no load") -> faces.Point:
     x = ties.polish_least_norm(
         ws, np.asarray(sol.x), z[prog.soc_first], z[prog.f_rows], ws.stack, ws.Eq, e
     )
-    return faces.Point(x, lam, f, method=f"{method}: the least-norm position")
+    return records.Point(x, lam, f, method=f"{method}: the least-norm position")
 
 
-def interior_point(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:
+def interior_point(ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray) -> records.Point:
     if np.any(sigma > 0):
         return interior_point_compliant(ws, g_hat, sigma)
-    prog = ws.interior_program
+    prog = conic.interior_program(ws)
     sol = conic.run(ws, prog, -g_hat)
     z = np.asarray(sol.z)
-    return faces.Point(
+    return records.Point(
         np.asarray(sol.x), z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations
     )
 
 
-def interior_point_compliant(ws: Workspace, g_hat: FloatArray, sigma: FloatArray) -> faces.Point:
+def interior_point_compliant(
+    ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray
+) -> records.Point:
     """The cone program with a penetration ``p_i >= 0`` per compliant contact:
     ``|A_i x| <= r_i + p_i`` and energy ``-g_hat x + sum p_i^2 / (2 sigma_i)``."""
     soft = np.flatnonzero(ws.stack.spring > 0)
     if ws.compliant_program is None:  # built on first use, then kept
-        ws.compliant_program = conic.with_penetrations(ws.interior_program, soft)
+        ws.compliant_program = conic.with_penetrations(conic.interior_program(ws), soft)
     prog = conic.softened(ws.compliant_program, soft, sigma)
     sol = conic.run(ws, prog, np.concatenate([-g_hat, np.zeros(len(soft))]))
     z = np.asarray(sol.z)
     x = np.asarray(sol.x)[: ws.m]
-    return faces.Point(x, z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations)
+    return records.Point(x, z[prog.soc_first], z[prog.f_rows], iterations=sol.iterations)
 
 
-def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point) -> faces.Point:
+def polish(
+    ws: WorkspaceData, g_hat: FloatArray, sigma: FloatArray, point: records.Point
+) -> records.Point:
     key = faces.active_set(ws, point.x, point.lam, point.f, ws.stack)
     optimum = refine_active(ws, g_hat, sigma, point, key)
     if optimum is None:  # the interior point as it is, if it certifies
@@ -324,8 +330,12 @@ def polish(ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Poi
 
 
 def refine_active(
-    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
-) -> faces.Point | None:
+    ws: WorkspaceData,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    point: records.Point,
+    key: records.FaceKey,
+) -> records.Point | None:
     """A certified optimum from the KKT equations of the active set ``key``
     the interior point shows, with at most ``newton_runs`` corrections of
     that set (``active_set_steps``): an interior-point answer to 1e-10
@@ -352,13 +362,13 @@ def refine_active(
 
 
 def active_set_steps(
-    ws: Workspace,
+    ws: WorkspaceData,
     g_hat: FloatArray,
     sigma: FloatArray,
-    point: faces.Point,
+    point: records.Point,
     active: set[int],
     at_apex: NDArray[np.bool_],
-) -> faces.Point | None:
+) -> records.Point | None:
     """The active-set corrections of ``refine_active`` from ``active``, each
     a Newton run, at most ``newton_runs`` (a set met before ends them)."""
     stack = ws.stack
@@ -371,7 +381,7 @@ def active_set_steps(
         if frozenset(active) in seen:
             return None
         seen.add(frozenset(active))
-        trial_key: faces.FaceKey = (
+        trial_key: records.FaceKey = (
             tuple(sorted(i for i in active if not at_apex[i])),
             tuple(sorted(i for i in active if at_apex[i])),
         )
@@ -426,8 +436,12 @@ def active_set_steps(
 
 
 def split_optimum(
-    ws: Workspace, g_hat: FloatArray, sigma: FloatArray, trial: faces.Point, key: faces.FaceKey
-) -> faces.Point | None:
+    ws: WorkspaceData,
+    g_hat: FloatArray,
+    sigma: FloatArray,
+    trial: records.Point,
+    key: records.FaceKey,
+) -> records.Point | None:
     """``trial`` (a round's positions, every contact of ``key`` touching,
     none past) with the split's forces on its touching contacts
     (``forces.least_squares_split``), if they certify: then its positions

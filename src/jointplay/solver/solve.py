@@ -1,9 +1,10 @@
-"""The public functions of the numeric core, on top of its layers.
+"""The public entry points of the numeric core, on top of its layers.
 
-``solve`` and ``solve_cases`` build a workspace and solve on it;
-``solve_loads`` is what ``Workspace.solve`` calls: the small-displacement
-solve (``pipeline``) or, with ``exact``, exact rotations (``exact``). Nothing
-below imports this module but ``Workspace``'s own delegating methods.
+``Workspace`` is the plain ``WorkspaceData`` with the solves on it:
+``solve`` (the small-displacement solve, ``pipeline``, or with ``exact``
+exact rotations, ``exact``) and ``solve_batch`` (``batch``). ``solve`` and
+``solve_cases`` build a workspace and solve on it. Nothing in the solver
+imports this module.
 """
 
 from __future__ import annotations
@@ -11,13 +12,59 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from jointplay.assembly import assemble
+from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Load, Model
 from jointplay.numerics import linalg
 from jointplay.result import Result
 from jointplay.settings import SolverSettings
+from jointplay.solver import batch, pipeline
 from jointplay.solver import exact as exact_rotations
-from jointplay.solver import pipeline
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.batch import BatchSolution, Start
+from jointplay.solver.workspace import WorkspaceData
+
+
+class Workspace(WorkspaceData):
+    """The solver's side of one model, with its solves.
+
+    Built once from an ``Assembly``; the model is never modified. ``solve``
+    may be called again with other loads (``loads=``), each solved on its own.
+    """
+
+    def solve(self, loads: Sequence[Load] | None = None, *, exact: bool = False) -> Result:
+        """The equilibrium under the model's loads, or under ``loads`` instead
+        (``exact``: with exact rotations, see ``solver/exact.py``)."""
+        with linalg.one_blas_thread():
+            if exact:
+                return exact_rotations.solve_exact(self, loads)
+            return pipeline.solve_loads(self, loads)
+
+    def solve_batch(
+        self,
+        work: FloatArray,
+        radii: FloatArray | None = None,
+        centres: FloatArray | None = None,
+        *,
+        forces: bool = True,
+        starts: Sequence[Start] = (),
+        own_starts: Sequence[Start | None] | None = None,
+    ) -> BatchSolution:
+        """Equilibria under many loads at once: ``work`` is (B, m), one row of
+        the loads' work per sample (build rows with ``Assembly.wrench_work``).
+        ``radii`` (B, n): each sample's own plays, as scaled cone radii in the
+        order of ``Assembly.balls`` (``variation.PlayMap.radii`` builds them).
+        ``centres`` (B, rows): each sample's cone centres, stacked like the
+        rows of ``stack.A`` (``deviations.DeviationMap`` builds them).
+        ``forces``: split each sample's contact forces by the documented rule
+        (``BatchSolution.forces``); a study that reads positions only says
+        False and skips that split where Newton's own forces certify them.
+        ``starts``: samples solved before (``batch.solved_start``) that start
+        Newton like the batch's own solved samples (a study's chunks share one).
+        ``own_starts``: one per row, the same sample solved in a nearby batch
+        (``BatchSolution.own_starts`` of the previous pose of a motion), tried
+        first; given, the solution carries its rows' own starts in turn."""
+        return batch.solve_batch(
+            self, work, radii, centres, forces=forces, starts=starts, own_starts=own_starts
+        )
 
 
 def solve(
@@ -40,14 +87,3 @@ def solve_cases(
     """Every load case of ``model`` on one assembly: ``{case: Result}``."""
     ws = Workspace(assemble(model), settings)
     return {case: ws.solve(loads=model.loads_of(case), exact=exact) for case in model.case_names}
-
-
-def solve_loads(
-    ws: Workspace, loads: Sequence[Load] | None = None, *, exact: bool = False
-) -> Result:
-    """The certified equilibrium of ``ws``'s model under its loads, or under
-    ``loads`` instead (``exact``: with exact rotations, see ``exact.py``)."""
-    with linalg.one_blas_thread():
-        if exact:
-            return exact_rotations.solve_exact(ws, loads)
-        return pipeline.solve_loads(ws, loads)

@@ -17,14 +17,14 @@ from jointplay.geometry import FloatArray
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
 from jointplay.settings import TINY
-from jointplay.solver import conic, faces, held, newton
+from jointplay.solver import conic, faces, held, newton, records
 
 if TYPE_CHECKING:
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.workspace import WorkspaceData
 
 
 def face_equalities(
-    ws: Workspace, stack: BallStack, which: faces.FaceKey, x: FloatArray, reach: FloatArray
+    ws: WorkspaceData, stack: BallStack, which: records.FaceKey, x: FloatArray, reach: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Linear rows that keep the cones ``which`` where they are at ``x``:
     a surface cone keeps its direction ``u`` (``A_i x - c_i`` along ``u`` and
@@ -67,8 +67,8 @@ def face_equalities(
 
 
 def least_norm(
-    ws: Workspace, sigma: FloatArray, point: faces.Point, key: faces.FaceKey
-) -> faces.Point:
+    ws: WorkspaceData, sigma: FloatArray, point: records.Point, key: records.FaceKey
+) -> records.Point:
     """Least-norm point of the optimal face (a tie between positions)."""
     surface, linear = key
     both = [*surface, *linear]
@@ -121,11 +121,13 @@ def least_norm(
         x = polish_least_norm(ws, np.asarray(sol.x), lam_rest, f_rest, rest, Eq, e, face=True)
     # any optimal forces are complementary to every optimal position:
     # those of ``point`` hold at x, which keeps its active cones as they were
-    return faces.Point(x, point.lam, point.f, method="least-norm face", iterations=point.iterations)
+    return records.Point(
+        x, point.lam, point.f, method="least-norm face", iterations=point.iterations
+    )
 
 
 def polish_least_norm(
-    ws: Workspace,
+    ws: WorkspaceData,
     x: FloatArray,
     lam: FloatArray,
     f: FloatArray,
@@ -176,7 +178,7 @@ def polish_least_norm(
     return x
 
 
-def independent_rows(ws: Workspace, C: Matrix, c: FloatArray) -> tuple[Matrix, FloatArray]:
+def independent_rows(ws: WorkspaceData, C: Matrix, c: FloatArray) -> tuple[Matrix, FloatArray]:
     """Equalities ``C x = c`` as orthonormal, independent rows (least
     squares): the face's rows often repeat each other (a joint's cones
     share them), and nearly dependent rows make the solvers' multipliers

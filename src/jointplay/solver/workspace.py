@@ -5,41 +5,37 @@ free motions ``N`` and the rows that pin them (``K``), the equalities, and
 data derived from them on first use (the interior-point program, each active
 set's face), the rows that limit motion (``limit_rows``) and what the
 balance check needs (``Balance``). A solve reads it and changes nothing but
-those caches; the algorithms are functions in the layers above, which import
-this module and never the reverse: ``solve``, ``solve_batch`` and
-``interior_program`` reach up by a late import (``solve.py``, ``batch.py``,
-``conic.py``), so that the public methods stay on the workspace.
+those caches. The algorithms are functions in the layers above, which take
+it and import this module, never the reverse; the public ``Workspace``, with
+``solve`` and ``solve_batch``, is this data with the top layer's entry
+points on it (``solve.py``).
 """
 
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import Self
 
 import numpy as np
 import scipy.sparse as sp
 
 from jointplay.assembly import Assembly, IntArray, assemble
 from jointplay.geometry import FloatArray
-from jointplay.model.mechanism import Load, Model
+from jointplay.model.mechanism import Model
 from jointplay.numerics import free_motions, linalg
 from jointplay.numerics.linalg import Matrix
-from jointplay.result import Result, describe_free_motions
+from jointplay.result import describe_free_motions
 from jointplay.settings import SolverSettings
-
-if TYPE_CHECKING:
-    from jointplay.solver.batch import BatchSolution, Start
-    from jointplay.solver.conic import ConeProgram
-    from jointplay.solver.faces import Face, FaceKey
+from jointplay.solver.records import ConeProgram, Face, FaceKey
 
 
-class Workspace:
+class WorkspaceData:
     """The solver's side of one model: assembled matrices and free motions.
 
-    Built once from an ``Assembly``; the model is never modified. ``solve``
-    may be called again with other loads (``loads=``), each solved on its own.
+    Built once from an ``Assembly``; the model is never modified. Every
+    algorithm of the solver takes it; the public ``Workspace`` (``solve.py``)
+    adds the solves.
     """
 
     def __init__(self, assembly: Assembly, settings: SolverSettings | None = None):
@@ -69,6 +65,9 @@ class Workspace:
         self.balance = Balance(self)
         #: each active set's face, built when first met (``faces.face_of``)
         self.faces: dict[FaceKey, Face] = {}
+        #: the cone program of the hard problem, built when first needed
+        #: (``conic.interior_program``)
+        self.interior_program: ConeProgram | None = None
         #: the cone program with penetrations, built when first needed
         self.compliant_program: ConeProgram | None = None
         #: the largest force of springs that deviations press at no load
@@ -76,10 +75,10 @@ class Workspace:
         self.preload: float | None = None
 
     @classmethod
-    def of(cls, model: Model, settings: SolverSettings | None = None) -> Workspace:
+    def of(cls, model: Model, settings: SolverSettings | None = None) -> Self:
         return cls(assemble(model), settings)
 
-    def with_settings(self, settings: SolverSettings) -> Workspace:
+    def with_settings(self, settings: SolverSettings) -> Self:
         """The same mechanism under other solver settings (the finer retry):
         what depends on the assembly and the free motions' threshold alone
         is shared: the free motions (a 10,000-shaft chain's cost 2 s), the
@@ -89,8 +88,8 @@ class Workspace:
             return type(self)(self.asm, settings)
         other = copy.copy(self)
         other.settings = settings
+        other.interior_program = None  # its Clarabel settings are the old ones
         other.compliant_program = None
-        other.__dict__.pop("interior_program", None)  # its Clarabel settings are the old ones
         return other
 
     @cached_property
@@ -99,16 +98,6 @@ class Workspace:
         scale of the free motions' rank threshold (a large mechanism's face
         tests count against it, ``faces.pins_position``)."""
         return free_motions.largest_singular_value(limit_rows(self))
-
-    @cached_property
-    def interior_program(self) -> ConeProgram:
-        """The cone program of the hard problem (its loads are set per solve),
-        built on first use by the layer above (``conic``)."""
-        from jointplay.solver import conic
-
-        e = np.zeros(self.Eq.shape[0])
-        refine = conic.refined(self.settings, self.asm.sparse)
-        return conic.cone_program(self, None, self.Eq, e, self.stack, refine=refine)
 
     def contacts_share(self, g_hat: FloatArray) -> tuple[FloatArray, float]:
         """The unit loads' work ``g_hat`` less what the rigid rows hold alone
@@ -131,44 +120,7 @@ class Workspace:
         """The free motions in words (computed once)."""
         return self._free_motion_words
 
-    def solve(self, loads: Sequence[Load] | None = None, *, exact: bool = False) -> Result:
-        """The equilibrium under the model's loads, or under ``loads`` instead
-        (``exact``: with exact rotations, see ``solver/exact.py``)."""
-        from jointplay.solver.solve import solve_loads  # the public functions, on top
-
-        return solve_loads(self, loads, exact=exact)
-
-    def solve_batch(
-        self,
-        work: FloatArray,
-        radii: FloatArray | None = None,
-        centres: FloatArray | None = None,
-        *,
-        forces: bool = True,
-        starts: Sequence[Start] = (),
-        own_starts: Sequence[Start | None] | None = None,
-    ) -> BatchSolution:
-        """Equilibria under many loads at once: ``work`` is (B, m), one row of
-        the loads' work per sample (build rows with ``Assembly.wrench_work``).
-        ``radii`` (B, n): each sample's own plays, as scaled cone radii in the
-        order of ``Assembly.balls`` (``variation.PlayMap.radii`` builds them).
-        ``centres`` (B, rows): each sample's cone centres, stacked like the
-        rows of ``stack.A`` (``deviations.DeviationMap`` builds them).
-        ``forces``: split each sample's contact forces by the documented rule
-        (``BatchSolution.forces``); a study that reads positions only says
-        False and skips that split where Newton's own forces certify them.
-        ``starts``: samples solved before (``batch.solved_start``) that start
-        Newton like the batch's own solved samples (a study's chunks share one).
-        ``own_starts``: one per row, the same sample solved in a nearby batch
-        (``BatchSolution.own_starts`` of the previous pose of a motion), tried
-        first; given, the solution carries its rows' own starts in turn."""
-        from jointplay.solver.batch import solve_batch
-
-        return solve_batch(
-            self, work, radii, centres, forces=forces, starts=starts, own_starts=own_starts
-        )
-
-    def with_radii(self, radii: FloatArray, centre: FloatArray | None = None) -> Workspace:
+    def with_radii(self, radii: FloatArray, centre: FloatArray | None = None) -> Self:
         """A workspace of the same mechanism with other plays: ``radii`` are
         the scaled cone radii (``Assembly.balls`` order) and ``centre`` the
         cones' centres (stacked like the rows of ``stack.A``); scales, free
@@ -187,7 +139,7 @@ class Workspace:
         return out
 
 
-def limit_rows(ws: Workspace) -> Matrix:
+def limit_rows(ws: WorkspaceData) -> Matrix:
     """Every row that limits a motion: the contacts' rows, the offsets of the
     faces that tilt, the rigid rows. What they leave free is ``ws.N``."""
     stack = ws.stack
@@ -197,7 +149,7 @@ def limit_rows(ws: Workspace) -> Matrix:
 class Balance:
     """What the balance check needs of a mechanism, built once per workspace."""
 
-    def __init__(self, ws: Workspace):
+    def __init__(self, ws: WorkspaceData):
         asm = ws.asm
         self.asm = asm
         self.stack = ws.stack  # the workspace's cones: exact rotations' are linearized

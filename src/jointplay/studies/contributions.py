@@ -42,11 +42,14 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from jointplay.assembly import assemble
-from jointplay.errors import StudyError, UnassembledError
+from jointplay.errors import UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
 from jointplay.proven import Resolution, proven
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.solve import Workspace
+from jointplay.studies.linearity import Linearity, check_linearity
+from jointplay.studies.parts import Inputs, measures_of
+from jointplay.studies.sobol import Sobol, SobolResult, check_samples
 from jointplay.studies.variation import (
     DeviationMap,
     LoadVariable,
@@ -60,33 +63,9 @@ from jointplay.studies.variation import (
 if TYPE_CHECKING:
     import pandas as pd
 
-    from jointplay.studies.linearity import Linearity
-    from jointplay.studies.sobol import SobolResult
-
 #: One-sided slopes differing by more than this (relative), and not converging
 #: as the step halves, mark a kink.
 KINK = 1e-6
-
-
-@dataclass(frozen=True)
-class Measure:
-    """A functional measure: point ``point``'s displacement size, or its
-    component along ``along`` (a unit vector)."""
-
-    point: str
-    along: tuple[float, float, float] | None = None
-
-    @property
-    def label(self) -> str:
-        if self.along is None:
-            return f"|d {self.point}|"
-        return f"d {self.point} along [{', '.join(f'{c:.4g}' for c in self.along)}]"
-
-    def of(self, d: FloatArray) -> FloatArray:
-        """(B,) the measure of (B, 3) displacements."""
-        if self.along is None:
-            return np.asarray(np.linalg.norm(d, axis=1))
-        return np.asarray(d @ np.asarray(self.along))
 
 
 @dataclass(frozen=True)
@@ -113,8 +92,6 @@ class Contributions:
             raise ValueError("step: a fraction of the tolerance, above 0 and at most 0.1")
         if self.variance not in ("auto", "always", "never"):
             raise ValueError("variance: 'auto', 'always' or 'never'")
-        from jointplay.studies.sobol import check_samples
-
         check_samples(self.samples)
 
     def run(
@@ -130,7 +107,7 @@ class Contributions:
         variables: list[PlayVariable | LoadVariable] = [*pmap.variables, *lmap.variables]
         if not variables and not dmap.variables:
             raise nothing_varies("nothing contributes to a spread", source)
-        measures = _measures(model, source)
+        measures = measures_of(model, source)
         nv = len(variables) + len(dmap.variables)
         width = np.array(
             [v.value.high - v.value.low for v in variables]
@@ -208,9 +185,6 @@ class Contributions:
         # positions prove is their round-off: 0 (jointplay.proven)
         step = Resolution.of(asm.s, asm.ell).length / np.where(width > 0, width, 1.0)
         sensitivity, up, down = (proven(v, step) for v in (sensitivity, up, down))
-        from jointplay.studies.linearity import check_linearity
-        from jointplay.studies.parts import Inputs
-
         half_width = np.sum(np.abs(sensitivity) * width, axis=1) / 2
         linearity = check_linearity(
             model,
@@ -226,8 +200,6 @@ class Contributions:
         if self.variance == "always" or (
             self.variance == "auto" and not all(c.linear for c in linearity)
         ):
-            from jointplay.studies.sobol import Sobol
-
             sobol = Sobol(self.samples, self.seed, case=self.case).run(
                 model, workers=workers, source=source
             )
@@ -280,25 +252,6 @@ def _grouped(
         out.append(np.column_stack(cols) if cols else slope[:, :0])
     kinks = [np.any(kink[:, g], axis=1) for g in groups]
     return out[0], out[1], out[2], np.column_stack(kinks) if kinks else kink[:, :0]
-
-
-def _measures(model: Model, source: str) -> list[Measure]:
-    if not model.points:
-        raise StudyError(
-            "contributions are to the deviation of functional points, and the model has "
-            "none; add 'points: [{name: tip, body: ..., at: [x, y, z]}]'",
-            source=source,
-            entry="points",
-        )
-    out = [Measure(p.name) for p in model.points]
-    for req in model.requirements:
-        if req.along is not None:
-            u = np.asarray(req.along, dtype=float)
-            u = u / np.linalg.norm(u)
-            m = Measure(req.point, (float(u[0]), float(u[1]), float(u[2])))
-            if m not in out:
-                out.append(m)
-    return out
 
 
 @dataclass(frozen=True)

@@ -65,7 +65,7 @@ from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model
 from jointplay.model.tolerance import Toleranced
 from jointplay.proven import Resolution, direction, proven
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.solve import Workspace
 from jointplay.studies.variation import deviation_map, load_map, play_map
 from jointplay.units import LIMITS
 

@@ -29,8 +29,7 @@ import numpy as np
 
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
-from jointplay.studies.contributions import Measure
-from jointplay.studies.parts import Inputs, measured, solve_sets
+from jointplay.studies.parts import Inputs, Measure, measured, solve_sets
 
 #: Largest error of the slopes' prediction, as a share of the linear stack's
 #: half-width, for RSS to hold. A distance |d| bends over a fit's range or a

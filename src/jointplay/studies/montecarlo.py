@@ -33,7 +33,7 @@ from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.proven import Resolution, proven
 from jointplay.solver.batch import Start, solved_start
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import (
     DeviationMap,

@@ -402,7 +402,7 @@ class Motion:
     def run(self, model: Model, source: str = "<model>") -> MotionResult:
         from jointplay.assembly import assemble
         from jointplay.solver.batch import Start, extrapolated, follow
-        from jointplay.solver.workspace import Workspace
+        from jointplay.solver.solve import Workspace
 
         model = self.resolve(model, source)
         assert model.motion is not None

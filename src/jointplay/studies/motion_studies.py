@@ -34,7 +34,7 @@ from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.proven import Resolution, proven
 from jointplay.solver.batch import Start, extrapolated, solved_start
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.solve import Workspace
 from jointplay.studies.kinematics import Poses, nominal_poses
 from jointplay.studies.montecarlo import PERCENTILES
 from jointplay.studies.motion import Motion, MotionResult, posed_model, shown_drive

@@ -7,6 +7,10 @@ An *input* of the contribution studies is one play, one load component, or
 one whole zone (a disc or ball of 2 or 3 components, drawn together); a
 zone of limits per direction is one input per direction.
 
+A *measure* is what the contribution studies follow of the answer: a
+functional point's displacement size, or its component along a
+requirement's ``along`` (``Measure``, ``measures_of``, ``measured``).
+
 ``solve_sets`` solves such rows the way the Monte Carlo study solves its
 samples (``montecarlo._solve_chunk``): the batch solver, started from the
 nominal answer, in chunks that may go to worker processes. Every answer is
@@ -23,10 +27,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from jointplay.assembly import assemble
+from jointplay.errors import StudyError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
 from jointplay.model.tolerance import Toleranced
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import (
     DeviationMap,
@@ -39,8 +44,6 @@ from jointplay.studies.variation import (
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
-
-    from jointplay.studies.contributions import Measure
 
 #: Sets of parts per batch solve (the Monte Carlo study's chunk).
 CHUNK = 10_000
@@ -166,6 +169,46 @@ def _solve_rows(
         d[:, p] = motion[:, :3] + np.cross(motion[:, 3:], np.asarray(point.at))
     d[~batch.assembled] = np.nan
     return first, d
+
+
+@dataclass(frozen=True)
+class Measure:
+    """A functional measure: point ``point``'s displacement size, or its
+    component along ``along`` (a unit vector)."""
+
+    point: str
+    along: tuple[float, float, float] | None = None
+
+    @property
+    def label(self) -> str:
+        if self.along is None:
+            return f"|d {self.point}|"
+        return f"d {self.point} along [{', '.join(f'{c:.4g}' for c in self.along)}]"
+
+    def of(self, d: FloatArray) -> FloatArray:
+        """(B,) the measure of (B, 3) displacements."""
+        if self.along is None:
+            return np.asarray(np.linalg.norm(d, axis=1))
+        return np.asarray(d @ np.asarray(self.along))
+
+
+def measures_of(model: Model, source: str) -> list[Measure]:
+    if not model.points:
+        raise StudyError(
+            "contributions are to the deviation of functional points, and the model has "
+            "none; add 'points: [{name: tip, body: ..., at: [x, y, z]}]'",
+            source=source,
+            entry="points",
+        )
+    out = [Measure(p.name) for p in model.points]
+    for req in model.requirements:
+        if req.along is not None:
+            u = np.asarray(req.along, dtype=float)
+            u = u / np.linalg.norm(u)
+            m = Measure(req.point, (float(u[0]), float(u[1]), float(u[2])))
+            if m not in out:
+                out.append(m)
+    return out
 
 
 def measured(model: Model, measures: Sequence[Measure], d: FloatArray) -> FloatArray:

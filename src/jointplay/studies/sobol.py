@@ -34,8 +34,7 @@ import numpy as np
 
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
-from jointplay.studies.contributions import _measures
-from jointplay.studies.parts import inputs_of, measured, solve_sets
+from jointplay.studies.parts import inputs_of, measured, measures_of, solve_sets
 from jointplay.studies.variation import nothing_varies
 
 if TYPE_CHECKING:
@@ -76,7 +75,7 @@ class Sobol:
         inputs = inputs_of(model, self.case, source)
         if not inputs.groups:
             raise nothing_varies("nothing has a share of the variance", source)
-        measures = _measures(model, source)
+        measures = measures_of(model, source)
         n, d = self.samples, len(inputs.groups)
         units = inputs.unit_groups
         width = units[-1][-1] + 1

@@ -31,7 +31,7 @@ from jointplay.errors import JointplayError, ModelError, OptionError, UnboundedM
 from jointplay.geometry import FloatArray
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model, check_case
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
 
 if TYPE_CHECKING:

@@ -38,9 +38,10 @@ import numpy as np
 
 from jointplay.errors import StudyError
 from jointplay.model.mechanism import Model, Requirement
-from jointplay.studies.contributions import Contributions, ContributionsResult, Measure
+from jointplay.studies.contributions import Contributions, ContributionsResult
 from jointplay.studies.linearity import LINEAR_ERROR_SHARE, ROUND_OFF_MM
 from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
+from jointplay.studies.parts import Measure
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -38,9 +38,9 @@ from jointplay.assembly import assemble
 from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
-from jointplay.studies.contributions import Measure, unit_of
+from jointplay.studies.contributions import unit_of
 from jointplay.studies.envelope import MOST_LOAD_SETS
-from jointplay.studies.parts import Inputs, inputs_of, measured, solve_sets
+from jointplay.studies.parts import Inputs, Measure, inputs_of, measured, solve_sets
 
 
 @dataclass(frozen=True)
@@ -114,7 +114,7 @@ def _over_load_sets(
 
 
 def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, source: str) -> Reach:
-    from jointplay.solver.workspace import Workspace
+    from jointplay.solver.solve import Workspace
     from jointplay.studies.envelope import Envelope, _point_map, _ZoneProgram
 
     over = (

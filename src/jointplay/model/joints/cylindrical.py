@@ -18,7 +18,7 @@ within +-b/2 (``drive.py``): contact ``drive``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, ClassVar, Literal, Self
+from typing import ClassVar, Literal, Protocol, Self
 
 import numpy as np
 from pydantic import model_validator
@@ -34,9 +34,6 @@ from jointplay.model.joints.base import (
     point_rows_of,
 )
 from jointplay.model.joints.drive import Driven
-
-if TYPE_CHECKING:
-    from jointplay.model.joints.revolute import Revolute
 
 #: An engaged length below this fraction of the clearance holds no tilt: its
 #: two end discs are one circle, to round-off (and the cone program's rows
@@ -103,7 +100,20 @@ def axial_contacts_of(axial_clearance: Sequence[float | None]) -> list[tuple[Con
     return [() if play is None else next(made) for play in axial_clearance]
 
 
-def bore_contacts_of(joints: Sequence[Cylindrical | Revolute]) -> list[tuple[Contact, ...]]:
+class Bore(Protocol):
+    """What ``bore_contacts_of`` reads of a joint: a cylindrical's or a
+    revolute's fields (``revolute.py`` imports this module, not the reverse)."""
+
+    @property
+    def length(self) -> float: ...
+    @property
+    def clearance(self) -> float: ...
+    @property
+    def axial_clearance(self) -> float | None: ...
+    def drive_contacts(self) -> tuple[Contact, ...]: ...
+
+
+def bore_contacts_of(joints: Sequence[Bore]) -> list[tuple[Contact, ...]]:
     """``contacts()`` of many cylindrical or revolute joints at once (the
     same contacts: end discs, axial play if any, drive)."""
     ends = end_contacts_of([j.length for j in joints], [j.clearance for j in joints])
