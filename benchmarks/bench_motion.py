@@ -31,7 +31,7 @@ import numpy as np
 
 import jointplay
 from jointplay.assembly import assemble
-from jointplay.solver.workspace import Workspace
+from jointplay.solver.solve import Workspace
 from jointplay.studies.kinematics import nominal_poses
 from jointplay.studies.motion import posed_model
 
