@@ -523,6 +523,8 @@ def test_gravity_survives_its_own_round_trip(tmp_path: Path) -> None:
             str(Path(__file__).parents[1] / "examples" / "studies" / "shaft_cases.yaml"),
             "--vary",
             "joints[l2].clearance=0.1:0.3:3",
+            "--case",
+            "cutting",
             "--json",
         ],
         capture_output=True,

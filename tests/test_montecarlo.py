@@ -9,10 +9,11 @@ from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 from typer.testing import CliRunner
 
 import jointplay
-from conftest import MM, spherical_shaft
+from conftest import MM, ROOT, spherical_shaft
 from jointplay.cli import app
 from jointplay.studies.montecarlo import MonteCarlo
 
@@ -263,3 +264,72 @@ def test_requirement_must_name_a_point(tmp_path: Path) -> None:
     assert out.exit_code == 2
     assert "requirements[0]: point: unknown point 'Bee'" in out.output
     assert "Did you mean 'B'?" in out.output
+
+
+# -- a model with load cases: every study is under one of them ----------------------
+def _fits_with_cases_data() -> dict[str, Any]:
+    data: dict[str, Any] = yaml.safe_load(
+        (ROOT / "examples" / "studies" / "shaft_fits.yaml").read_text()
+    )
+    data["loads"] = [{"body": "S1", "at": [300, 0, 0], "force": [1, 0, 0]}]
+    data["load_cases"] = {
+        "cutting": [{"body": "S1", "at": [300, 0, 0], "force": [0, 40, 0]}],
+        "lifting": [{"body": "S1", "at": [300, 0, 0], "force": [0, 0, 40]}],
+    }
+    return data
+
+
+def _fits_with_cases() -> jointplay.Model:
+    return jointplay.model_from_dict(_fits_with_cases_data())
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["montecarlo", "--samples", "20"],
+        ["contributions"],
+        ["tolerances", "--samples", "20"],
+        ["sweep", "--vary", "loads[0].force[0]=0:2:2"],
+    ],
+)
+def test_a_study_of_a_model_with_load_cases_needs_its_case(
+    tmp_path: Path, command: list[str]
+) -> None:
+    """The top-level loads alone are none of the model's cases: a study
+    without --case would report parts under a load the model never takes.
+    Refused (exit 2, one line naming the cases); with --case, the study is
+    that case's: its nominal sample is the solve under the case."""
+    path = tmp_path / "cases.yaml"
+    path.write_text(yaml.safe_dump(_fits_with_cases_data()))
+    out = CliRunner().invoke(app, [command[0], str(path), *command[1:]])
+    assert out.exit_code == 2, out.output
+    assert "--case: the model has load cases (cutting, lifting): give --case NAME" in out.output
+    assert len(out.output.strip().splitlines()) == 1
+    out = CliRunner().invoke(app, [command[0], str(path), *command[1:], "--case", "lifting"])
+    assert out.exit_code in (0, 4), out.output  # 4: a requirement fails under this case
+
+
+def test_the_monte_carlo_of_a_case_is_under_that_case() -> None:
+    """In Python as on the command line; a case's study equals the study of
+    the model whose loads are that case's (the same parts, seed for seed)."""
+    model = _fits_with_cases()
+    with pytest.raises(jointplay.OptionError, match="the load case the Monte Carlo study is under"):
+        MonteCarlo(samples=10).run(model)
+    lifting = MonteCarlo(samples=50, seed=3, case="lifting").run(model)
+    merged = model.replace(
+        loads=[*model.loads, *(model.load_cases or {})["lifting"]], load_cases=None
+    )
+    alone = MonteCarlo(samples=50, seed=3).run(merged)
+    assert np.array_equal(lifting.plays, alone.plays)
+    assert np.allclose(lifting.displacement, alone.displacement, rtol=0, atol=1e-9)
+
+
+def test_a_report_s_studies_are_under_its_first_case_and_say_so() -> None:
+    """A report solves every case; its studies are under one (the first,
+    unless --case), said on the page, and its Monte Carlo is that case's."""
+    from jointplay.present.report import Report
+
+    page = Report(samples=32).render(_fits_with_cases(), "cases.yaml")
+    assert "are under load case &#x27;cutting&#x27; (the first;" in page
+    page = Report(case="lifting", samples=32).render(_fits_with_cases(), "cases.yaml")
+    assert "(the first;" not in page

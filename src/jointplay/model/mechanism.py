@@ -690,9 +690,20 @@ def _article(dimension: str) -> str:
     return f"{'an' if dimension[0] in 'aeiou' else 'a'} {dimension}"
 
 
-def check_case(model: Model, case: str | None, source: str) -> None:
-    """An ``OptionError`` naming the cases unless ``case`` is None or one of them."""
+def check_case(model: Model, case: str | None, source: str, study: str | None = None) -> None:
+    """An ``OptionError`` naming the cases unless ``case`` is None or one of
+    them. ``study`` (a study's name, "the Monte Carlo study"): that study is
+    under one load case, so a model with load cases needs ``case`` (the
+    top-level loads alone are none of its cases)."""
     if case is None:
+        if study is not None and model.case_names:
+            from jointplay.errors import OptionError
+
+            raise OptionError(
+                f"--case: the model has load cases ({listing(model.case_names)}): give "
+                f"--case NAME, the load case {study} is under",
+                source=source,
+            )
         return
     if not model.case_names:
         from jointplay.errors import OptionError

@@ -19,7 +19,7 @@ import html
 import io
 import json
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -114,15 +114,29 @@ class Report:
             page.motion(model, motion, others=len(cases) > 1)
         if self.studies or self.sweep is not None:
             page.section("Studies")
+            if len(cases) > 1:
+                page.paragraph(
+                    "The envelopes take every load case; the Monte Carlo study, the "
+                    f"contributions and a sweep are under load case '{cases[0]}' (the first; "
+                    "jointplay report MODEL --case NAME for another)."
+                )
         if self.studies:
-            self._studies(model, source, page, say)
+            self._studies(model, source, page, say, cases[0])
         if self.sweep is not None:
             say("sweeping")
-            sweep = self.sweep.run(model, source=source)
+            sweep = replace(self.sweep, case=cases[0]).run(model, source=source)
             page.sweep(model, sweep, source)
         return page.html()
 
-    def _studies(self, model: Model, source: str, page: _Page, say: Callable[[str], None]) -> None:
+    def _studies(
+        self,
+        model: Model,
+        source: str,
+        page: _Page,
+        say: Callable[[str], None],
+        case: str | None,
+    ) -> None:
+        """The studies under load case ``case`` (each is under one)."""
         from jointplay.studies.contributions import Contributions
         from jointplay.studies.envelope import point_envelopes
         from jointplay.studies.montecarlo import MonteCarlo
@@ -143,7 +157,7 @@ class Report:
                 page.paragraph(
                     f"Point '{point.name}': no worst-case envelope: {missing[point.name]}"
                 )
-        if not _varies(model, self.case, source):
+        if not _varies(model, case, source):
             page.paragraph(
                 "No play, load or deviation varies from part to part, so there is no Monte "
                 "Carlo study and no contributions: give clearances as limits or ISO fits, or "
@@ -151,19 +165,15 @@ class Report:
             )
             return
         say(f"Monte Carlo, {self.samples} sets of parts")
-        mc = MonteCarlo(samples=self.samples, seed=self.seed, case=self.case).run(
-            model, source=source
-        )
+        mc = MonteCarlo(samples=self.samples, seed=self.seed, case=case).run(model, source=source)
         page.montecarlo(mc)
         say("contributions")
         # the shares of the variance where a measure is not linear: a Sobol' design
         # of at most as many sets of parts as the Monte Carlo study's, N (D + 2)
         # with N a power of 2 from 8 to 1024
-        per_base = self.samples // (_inputs(model, self.case, source) + 2)
+        per_base = self.samples // (_inputs(model, case, source) + 2)
         base = 1 << max(3, min(10, per_base.bit_length() - 1))
-        linear = Contributions(case=self.case, samples=base, seed=self.seed).run(
-            model, source=source
-        )
+        linear = Contributions(case=case, samples=base, seed=self.seed).run(model, source=source)
         page.contributions(linear)
         if model.requirements:
             rows = side_by_side(model, linear, mc, source=source)

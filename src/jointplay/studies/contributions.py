@@ -73,7 +73,7 @@ class Contributions:
     """Settings of a contribution study; ``run`` returns a ``ContributionsResult``.
 
     ``step``: the difference step as a fraction of each play's tolerance
-    width. ``case``: the load case (default: the model's loads).
+    width. ``case``: the load case (needed when the model has load cases).
     ``variance``: when to take the shares of the variance (Sobol' indices,
     ``sobol.py``) besides the linear shares: ``"auto"`` where a measure is
     not linear over the ranges (``linearity.py``), ``"always"``, or
@@ -101,7 +101,7 @@ class Contributions:
         source = source or model.name or "<model>"
         asm = assemble(model)
         pmap = play_map(asm, source)
-        check_case(model, self.case, source)
+        check_case(model, self.case, source, "the contributions study")
         lmap = load_map(asm, self.case)
         dmap = deviation_map(asm)
         variables: list[PlayVariable | LoadVariable] = [*pmap.variables, *lmap.variables]

@@ -61,7 +61,7 @@ class MonteCarlo:
     error at ``confidence`` is below it: the fraction of parts missing each
     requirement, or, without requirements, each point's mean displacement.
     ``chunk``: samples per chunk (fixes the random streams; keep it to get the
-    same numbers). ``case``: the load case to solve (default: the model's loads).
+    same numbers). ``case``: the load case to solve (needed when the model has load cases).
     """
 
     samples: int = 10_000
@@ -148,7 +148,7 @@ def _waves(
 
 
 def _study_inputs(model: Model, case: str | None, source: str) -> None:
-    check_case(model, case, source)
+    check_case(model, case, source, "the Monte Carlo study")
     asm = assemble(model)
     if (
         not play_map(asm, source).variables

@@ -343,15 +343,9 @@ class Motion:
     def _check_case(self, model: Model, source: str) -> None:
         """The load case the motion is under: one of the model's, and given
         when the model has some (the top-level loads alone are no case of it)."""
-        from jointplay.model.mechanism import check_case, listing
+        from jointplay.model.mechanism import check_case
 
-        check_case(model, self.case, source)
-        if self.case is None and model.case_names:
-            raise OptionError(
-                f"--case: the model has load cases ({listing(model.case_names)}): give --case "
-                "NAME, the load case the motion is under",
-                source=source,
-            )
+        check_case(model, self.case, source, "the motion")
 
     def _check_given(self, model: Model, section: dict[str, Any]) -> None:
         """``OptionError`` naming ``--drive`` or ``--range`` when the value given

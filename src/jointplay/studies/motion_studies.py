@@ -218,7 +218,7 @@ def _no_points(source: str) -> StudyError:
 
 
 def _check_inputs(model: Model, case: str | None, source: str) -> None:
-    check_case(model, case, source)
+    check_case(model, case, source, "the study over the motion")
     asm = assemble(model)
     if (
         not play_map(asm, source).variables

@@ -71,7 +71,7 @@ class Sobol:
         from SALib.sample import sobol as design
 
         source = source or model.name or "<model>"
-        check_case(model, self.case, source)
+        check_case(model, self.case, source, "the Sobol' study")
         inputs = inputs_of(model, self.case, source)
         if not inputs.groups:
             raise nothing_varies("nothing has a share of the variance", source)

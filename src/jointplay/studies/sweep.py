@@ -157,7 +157,7 @@ class Sweep:
     ``vary``: entries of the model and their values; ``rotate``: a load that
     turns. With several, every combination is a step (a grid, the last
     parameter fastest; a rotation comes last). ``case``: the load case solved
-    (default: the model's loads). ``chunk``: steps per task when run in
+    (needed when the model has load cases). ``chunk``: steps per task when run in
     parallel."""
 
     vary: tuple[Vary, ...] = ()
@@ -233,7 +233,7 @@ class Sweep:
                 + (f"; give 0 to {n - 1}" if n > 1 else "; give 0" if n else "; add one to turn"),
                 source=source,
             )
-        check_case(model, self.case, source)
+        check_case(model, self.case, source, "the sweep")
 
 
 def parse_path(path: str) -> list[str | int]:

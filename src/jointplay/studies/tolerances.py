@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.errors import StudyError
-from jointplay.model.mechanism import Model, Requirement
+from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.studies.contributions import Contributions, ContributionsResult
 from jointplay.studies.linearity import LINEAR_ERROR_SHARE, ROUND_OFF_MM
 from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
@@ -231,6 +231,7 @@ class Tolerances:
                 source=source,
                 entry="requirements",
             )
+        check_case(model, self.case, source, "the tolerance study")
         linear = Contributions(case=self.case, variance="never", seed=self.seed).run(
             model, source=source
         )
