@@ -14,11 +14,14 @@ SLSQP on the checked subset.
 Target: 100,000 samples/s on a 2-core machine, every sample exact
 to 1e-7 mm.
 
-Then the studies of examples/studies (targets: 300,000 samples/s
-on shaft_fits.yaml, 100,000 on carriage.yaml, with 2 workers): each run with
-1 and ``--workers`` processes, at two sample counts and two chunk sizes
-(time should be linear in the samples and not depend on the chunk), against
-the obvious alternative, one full ``jointplay.solve`` per sample.
+Then the studies of examples/studies/shaft_fits.yaml and carriage.yaml and
+of the gallery's four-bar, each run with 1 and ``--workers`` processes, at two
+sample counts and two chunk sizes (time should be linear in the samples and
+not depend on the chunk), against the obvious alternative, one full
+``jointplay.solve`` per sample. Their targets are in samples per second
+times one raw Clarabel solve of 6.1.6.1 measured in the same run (the
+machines differ twofold): at least 30 on shaft_fits, 10 on the carriage and
+0.5 on the four-bar, with 2 workers.
 
 Last, deviations (target: a study with deviations runs at least
 at 80 % of the same study without them): examples/studies/shaft_deviations.yaml
@@ -50,6 +53,7 @@ import bench_paper
 import jointplay
 from jointplay.studies.montecarlo import MonteCarlo
 
+ROOT = Path(__file__).resolve().parents[1]
 LOW, HIGH = 0.15, 0.25
 
 
@@ -111,6 +115,9 @@ def main(argv: list[str] | None = None) -> int:
         "--study-samples", type=int, default=1_000_000, help="samples of each example study"
     )
     parser.add_argument(
+        "--four-bar-samples", type=int, default=20_000, help="samples of the four-bar's study"
+    )
+    parser.add_argument(
         "--deviation-samples", type=int, default=400_000, help="samples of the deviation study"
     )
     args = parser.parse_args(argv)
@@ -156,9 +163,17 @@ def main(argv: list[str] | None = None) -> int:
         f"({'within' if vs_full <= 1e-7 else 'OUTSIDE'} 1e-7 mm); vs SLSQP "
         f"({args.slsqp} samples): {vs_slsqp:.1e} mm"
     )
-    for name, target in (("shaft_fits", 300_000), ("carriage", 100_000)):
+    raw = bench_paper.RawClarabel()
+    raw_s = float(np.median(bench_paper.per_solve_times(raw.solve, 2000, 100)))
+    print()
+    print(f"one raw Clarabel solve of 6.1.6.1: {raw_s * 1e6:.1f} us (the studies' yardstick)")
+    for path, target, n in (
+        (ROOT / "examples" / "studies" / "shaft_fits.yaml", 30.0, args.study_samples),
+        (ROOT / "examples" / "studies" / "carriage.yaml", 10.0, args.study_samples),
+        (ROOT / "examples" / "gallery" / "four_bar.yaml", 0.5, args.four_bar_samples),
+    ):
         print()
-        studies(name, target, args.study_samples, args.workers, args.check)
+        studies(path, target, raw_s, n, args.workers, args.check)
     print()
     deviations(args.deviation_samples, args.workers)
     return 0
@@ -287,16 +302,19 @@ def _with_and_without(
     return worst
 
 
-def studies(name: str, target: int, samples: int, workers: int, check: int) -> None:
-    """Monte Carlo on examples/studies/NAME.yaml: samples/s by processes,
-    sample count and chunk size, against a full solve per sample."""
+def studies(
+    path: Path, target: float, raw_s: float, samples: int, workers: int, check: int
+) -> None:
+    """Monte Carlo on the model at ``path``: samples/s by processes, sample
+    count and chunk size, against a full solve per sample; the best rate
+    times ``raw_s`` (one raw Clarabel solve) against ``target``."""
     from jointplay.solver.solve import Workspace
     from jointplay.studies.montecarlo import solve_chunk
 
-    path = Path(__file__).resolve().parents[1] / "examples" / "studies" / f"{name}.yaml"
+    name = path.stem
     model = jointplay.load(path)
     MonteCarlo(samples=2000, seed=1).run(model)  # warm-up
-    print(f"Monte Carlo on examples/studies/{name}.yaml, seed 0")
+    print(f"Monte Carlo on {path.relative_to(ROOT)}, seed 0")
     print(f"{'run':46s} {'samples':>10s} {'time (s)':>10s} {'samples/s':>12s} {'ratio':>8s}")
     # the alternative: one full solve per sample, with that sample's plays
     chunk = solve_chunk(model, MonteCarlo(samples=check, seed=0), 0, check)
@@ -327,9 +345,10 @@ def studies(name: str, target: int, samples: int, workers: int, check: int) -> N
         best = max(best, rate)
         label = f"MonteCarlo, {procs} process(es), chunk {size:,}"
         print(f"{label:46s} {n:10,d} {spent:10.3f} {rate:12,.0f} {rate / full_rate:8.0f}")
-    verdict = "meets" if best >= target else "misses"
+    verdict = "meets" if best * raw_s >= target else "misses"
     print(
-        f"best: {best:,.0f} samples/s, {verdict} the {target:,} samples/s target; last run: "
+        f"best: {best:,.0f} samples/s, times one raw Clarabel solve {best * raw_s:.2f}: "
+        f"{verdict} the target of {target:g}; last run: "
         f"{result.batched:,} by batched Newton, {result.full_solves} full solves, worst "
         f"feasibility {result.feasibility_mm:.1e} mm, imbalance {result.equilibrium_residual:.1e}"
     )

@@ -72,8 +72,10 @@ C = np.zeros(3)  # torque (none in 6.1.6.1)
 A1 = np.zeros(3)
 A2 = np.array([A1A2, 0.0, 0.0])
 
-#: Target of the benchmark (README): jointplay this many times faster than SLSQP ...
-SPEED_TARGET = 20.0
+#: Targets of the benchmark (README): jointplay this many times faster than SLSQP
+#: by mode, against SLSQP with analytic gradients: a cold solve, a re-solve
+#: with new loads on one workspace, a batch of turning loads per load.
+COLD_TARGET, RESOLVE_TARGET, BATCH_TARGET = 3.0, 6.0, 300.0
 #: ... with the same answer to this many mm.
 AGREEMENT_MM = 1e-7
 
@@ -401,7 +403,7 @@ def stream_benchmark(
 
     This is what studies do (a rotating unbalance, a sweep, Monte Carlo). Each
     method solves the same problems; the slow ones a spread-out subset of them.
-    Returns whether some jointplay mode is SPEED_TARGET times faster per solve
+    Returns whether some jointplay mode is RESOLVE_TARGET times faster per solve
     than SLSQP with analytic gradients, with the same answers, and each
     method's ratio to that SLSQP (``"SLSQP us"``: its time per solve).
     """
@@ -476,9 +478,9 @@ def stream_benchmark(
     )
     best = max(slsqp / per for name, per, _, _ in rows if not name.startswith("SLSQP"))
     agree = max(diff for name, _, _, diff in rows if name.startswith("SLSQP (paper"))
-    ok = best >= SPEED_TARGET and agree <= AGREEMENT_MM
+    ok = best >= RESOLVE_TARGET and agree <= AGREEMENT_MM
     print(
-        f"The target on this stream: a jointplay mode {SPEED_TARGET:g}x faster per solve "
+        f"The target on this stream: a jointplay mode {RESOLVE_TARGET:g}x faster per solve "
         f"than SLSQP with the same answers to {AGREEMENT_MM:g} mm: best {best:.1f}x, "
         f"max|Δ| {agree:.1e} mm -> {'MET' if ok else 'NOT MET'}"
     )
@@ -641,15 +643,15 @@ def main(argv: list[str] | None = None) -> int:
 
     speedup = statistics.median(t_sl) / jp_med
     diff_mm = differences(x_slsqp, ref)[0]
-    speed_ok = speedup >= SPEED_TARGET
+    speed_ok = speedup >= COLD_TARGET
     same_ok = diff_mm <= AGREEMENT_MM
     print(
-        f"The speed target: jointplay at least {SPEED_TARGET:g}x faster than SLSQP (median), "
+        f"The speed target: jointplay at least {COLD_TARGET:g}x faster than SLSQP (median), "
         f"same answer to {AGREEMENT_MM:g} mm."
     )
     print(f"  speed:     {speedup:.2f}x  -> {'MET' if speed_ok else 'NOT MET'}")
     print(f"  agreement: {diff_mm:.1e} mm -> {'MET' if same_ok else 'NOT MET'}")
-    needed_ms = statistics.median(t_sl) / SPEED_TARGET * 1e3
+    needed_ms = statistics.median(t_sl) / COLD_TARGET * 1e3
     print(
         f"  (the speed target needs jointplay.solve <= {needed_ms:.3f} ms; "
         f"one raw Clarabel call takes {statistics.median(t_raw) * 1e3:.3f} ms)"
@@ -661,12 +663,17 @@ def main(argv: list[str] | None = None) -> int:
     print("The targets by mode (against SLSQP with analytic gradients, same answers):")
     warm, batch = "Workspace.solve (warm stream)", "Workspace.solve_batch"
     targets = (
-        ("one cold jointplay.solve", speedup, 5.0, diff_mm),
-        ("a re-solve with new loads (warm stream)", stream[warm], 12.0, stream[f"{warm} agrees"]),
+        ("one cold jointplay.solve", speedup, COLD_TARGET, diff_mm),
+        (
+            "a re-solve with new loads (warm stream)",
+            stream[warm],
+            RESOLVE_TARGET,
+            stream[f"{warm} agrees"],
+        ),
         (
             f"a batch of {args.steps} turning loads, per load",
             stream[batch],
-            50.0,
+            BATCH_TARGET,
             stream[f"{batch} agrees"],
         ),
     )
@@ -676,9 +683,10 @@ def main(argv: list[str] | None = None) -> int:
             f"  {what:<44}{ratio:>8.2f}x  (>= {target:g}x, answers {apart:.1e} mm apart) "
             f"-> {verdict}"
         )
-    budget = stream["SLSQP us"] / 12.0
+    budget = stream["SLSQP us"] / RESOLVE_TARGET
     print(
-        f"  (12x leaves a re-solve {budget:.0f} us; of it, checking the answer's certificate "
+        f"  ({RESOLVE_TARGET:g}x leaves a re-solve {budget:.0f} us; of it, checking the "
+        "answer's certificate "
         f"alone takes {statistics.median(stages[CERTIFICATE]) * 1e6:.0f} us and making its "
         f"Result {statistics.median(stages[RESULT]) * 1e6:.0f} us)"
     )
