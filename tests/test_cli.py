@@ -410,3 +410,76 @@ def test_envelope_without_a_point_lists_the_points() -> None:
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.startswith("jointplay: invalid option: --point: ")
     assert "'tip'" in proc.stderr
+
+
+# -- load cases a mechanism does not hold, sweeps of another case, usage errors in --json ---
+def _table_with_cases(path: Path) -> Path:
+    """A plate on four feet: pressed down in case 'pressed', lifted off them
+    in case 'lifted' (not held: nothing stops it going up)."""
+    from conftest import table_on_feet
+
+    data = table_on_feet([10.0, 20.0, 0.0])
+    data["loads"] = []
+    data["load_cases"] = {
+        "pressed": [{"body": "plate", "at": [10, 20, 0], "force": [0, 0, -100]}],
+        "lifted": [{"body": "plate", "at": [0, 0, 0], "force": [0, 0, 50]}],
+    }
+    path.write_text(json.dumps(data), encoding="utf-8")
+    return path
+
+
+def test_a_load_case_not_held_is_named_and_the_held_ones_are_printed(tmp_path: Path) -> None:
+    """Exit 3 names the case whose loads the joints do not hold; the cases
+    they hold are printed still (text and --json, whose document parses)."""
+    path = _table_with_cases(tmp_path / "table.json")
+    proc = run("solve", str(path))
+    assert proc.returncode == 3, proc.stderr
+    assert "jointplay: not held: under load case 'lifted': body 'plate'" in proc.stderr
+    assert "load case 'pressed'" in proc.stdout and "load case 'lifted'" not in proc.stdout
+    proc = run("solve", str(path), "--json")
+    assert proc.returncode == 3
+    doc = json.loads(proc.stdout)
+    assert doc["status"] == "unbounded"
+    assert doc["cases"]["pressed"]["status"] == "optimal"
+    lifted = doc["cases"]["lifted"]
+    assert lifted["status"] == "unbounded" and lifted["body"] == "plate"
+    assert lifted["message"].startswith("under load case 'lifted': ")
+    proc = run("solve", str(path), "--case", "pressed")
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_a_sweep_of_another_case_s_load_is_refused(tmp_path: Path) -> None:
+    """Varying a load of case 'lifted' while solving 'pressed' would print
+    the same step again and again: refused, naming the case to give."""
+    path = _table_with_cases(tmp_path / "table.json")
+    vary = "load_cases.lifted[0].force[2]=10:30:3"
+    proc = run("sweep", str(path), "--case", "pressed", "--vary", vary)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert "acts in load case 'lifted' only, and the sweep is under 'pressed'" in proc.stderr
+    assert "give --case lifted" in proc.stderr
+    vary = "load_cases.pressed[0].force[2]=-50:-150:3"
+    proc = run("sweep", str(path), "--case", "pressed", "--vary", vary, "--json")
+    assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize(
+    "args", [["solve", "--bogus"], ["montecarlo", "-n", "abc"], ["sweep", "--steps", "x"]]
+)
+def test_json_output_parses_even_on_a_usage_error(args: list[str]) -> None:
+    proc = run(args[0], str(PAPER / "6.1.6.1.yaml"), *args[1:], "--json")
+    assert proc.returncode == 2
+    doc = json.loads(proc.stdout)
+    assert doc["status"] == "invalid" and doc["kind"] == "invalid option"
+    assert proc.stderr.startswith("jointplay: invalid option: ")
+
+
+def test_a_report_names_the_load_case_not_held(tmp_path: Path) -> None:
+    path = _table_with_cases(tmp_path / "table.json")
+    proc = run("report", str(path), "-o", str(tmp_path / "r.html"), "--no-studies")
+    assert proc.returncode == 3
+    assert proc.stderr.startswith("jointplay: not held: under load case 'lifted': body 'plate'")
+    proc = run("report", str(path), "-o", str(tmp_path / "r.html"), "--case", "pressed")
+    assert proc.returncode == 0, proc.stderr
+    # progress shows on a terminal only: a pipe gets the one line of what was written
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith(f"jointplay: wrote {tmp_path / 'r.html'} (")

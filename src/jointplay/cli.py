@@ -214,6 +214,7 @@ def solve(
     from jointplay.solver.solve import Workspace
 
     failed = False
+    not_held: list[UnboundedMechanismError] = []
 
     def run() -> None:
         nonlocal failed
@@ -231,23 +232,43 @@ def solve(
             names: list[str | None] = [case] if case is not None else list(model.case_names)
         else:
             names = [None]
-        try:
-            results = {
-                name: ws.solve(loads=None if name is None else model.loads_of(name), exact=exact)
-                for name in names
-            }
-        except UnassembledError as exc:  # the model's own parts: name its file
-            raise UnassembledError(exc.problem, joints=exc.joints, source=str(model_path)) from None
-        failed = any(not r.passed for result in results.values() for r in result.requirements)
-        docs = {name: result.to_dict() for name, result in results.items()}
+        results: dict[str | None, Any] = {}
+        for name in names:
+            try:
+                loads = None if name is None else model.loads_of(name)
+                results[name] = ws.solve(loads=loads, exact=exact)
+            except UnassembledError as exc:  # the model's own parts: name its file
+                raise UnassembledError(
+                    exc.problem, joints=exc.joints, source=str(model_path)
+                ) from None
+            except UnboundedMechanismError as exc:
+                if name is None:
+                    raise
+                # the cases it holds are printed still; the verdict names its case
+                results[name] = exc.in_case(name)
+        not_held.extend(r for r in results.values() if isinstance(r, UnboundedMechanismError))
+        solved = {
+            name: r for name, r in results.items() if not isinstance(r, UnboundedMechanismError)
+        }
+        failed = any(not r.passed for result in solved.values() for r in result.requirements)
         if as_json:
-            doc = docs.get(None, {"status": "optimal", "cases": docs})
+            docs = {
+                name: _error_doc(r) if isinstance(r, UnboundedMechanismError) else r.to_dict()
+                for name, r in results.items()
+            }
+            status = "unbounded" if not_held else "optimal"
+            doc = docs.get(None, {"status": status, "cases": docs})
             typer.echo(json.dumps(doc, indent=2))
         else:
-            for name, result in results.items():
+            for name, result in solved.items():
                 render(model, result, str(model_path), _console(), case=name)
 
     _guarded(run, as_json)
+    if not_held:
+        err = Console(stderr=True, highlight=False, soft_wrap=True)
+        for exc in not_held:
+            err.print(f"jointplay: {exc.label}: {exc}", markup=False)
+        raise typer.Exit(not_held[0].exit_code)
     if failed and fail_on_requirements:
         raise typer.Exit(REQUIREMENT_FAILED)
 
@@ -870,7 +891,9 @@ def report(
             )
         model = load(model_path)
         settings = Report(case, magnify, studies, samples, seed, sweep, exact)
-        page = settings.render(model, source, note=lambda text: _note(text))
+        # progress on a terminal only (a pipe, a file or a CI log gets none)
+        shown = Console(stderr=True).is_terminal
+        page = settings.render(model, source, note=_note if shown else None)
         try:
             output.write_text(page, encoding="utf-8")
         except OSError as exc:
@@ -1035,6 +1058,16 @@ def _console() -> Console:
     return console
 
 
+def _error_doc(exc: JointplayError) -> dict[str, Any]:
+    """``--json``'s document for an error: its status, kind and message (and
+    for a mechanism not held, the body and the motion)."""
+    status = {2: "invalid", 3: "unbounded"}.get(exc.exit_code, "error")
+    doc: dict[str, Any] = {"status": status, "kind": exc.label, "message": str(exc)}
+    if isinstance(exc, UnboundedMechanismError):
+        doc.update(body=exc.body, motion=exc.motion)
+    return doc
+
+
 def _guarded(run: Any, as_json: bool) -> None:
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     try:
@@ -1046,11 +1079,7 @@ def _guarded(run: Any, as_json: bool) -> None:
             run()
     except JointplayError as exc:
         if as_json:
-            status = {2: "invalid", 3: "unbounded"}.get(exc.exit_code, "error")
-            doc: dict[str, Any] = {"status": status, "kind": exc.label, "message": str(exc)}
-            if isinstance(exc, UnboundedMechanismError):
-                doc.update(body=exc.body, motion=exc.motion)
-            typer.echo(json.dumps(doc, indent=2))
+            typer.echo(json.dumps(_error_doc(exc), indent=2))
         err.print(f"jointplay: {exc.label}: {exc}", markup=False)
         raise typer.Exit(exc.exit_code) from None
     except (typer.Exit, typer.Abort, KeyboardInterrupt):
@@ -1082,9 +1111,12 @@ def main() -> None:
         if "UsageError" in kinds:
             ctx = getattr(exc, "ctx", None)
             hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+            message = f"{exc.format_message()}{hint}"  # type: ignore[attr-defined]
+            if "--json" in sys.argv[1:]:  # --json's output parses, whatever went wrong
+                doc = {"status": "invalid", "kind": "invalid option", "message": message}
+                typer.echo(json.dumps(doc, indent=2))
             Console(stderr=True, highlight=False, soft_wrap=True).print(
-                f"jointplay: invalid option: {exc.format_message()}{hint}",  # type: ignore[attr-defined]
-                markup=False,
+                f"jointplay: invalid option: {message}", markup=False
             )
             sys.exit(2)
         if "Abort" in kinds:  # Ctrl-C at a prompt

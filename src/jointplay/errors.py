@@ -85,6 +85,15 @@ class UnboundedMechanismError(JointplayError):
         self.direction = direction
         super().__init__(message)
 
+    def in_case(self, case: str) -> UnboundedMechanismError:
+        """The same verdict, its message naming the load case it is under."""
+        return UnboundedMechanismError(
+            f"under load case '{case}': {self}",
+            body=self.body,
+            motion=self.motion,
+            direction=self.direction,
+        )
+
 
 class SolverError(JointplayError):
     """The cone solver failed, or its answer could not be certified."""

@@ -18,12 +18,14 @@ import datetime as _dt
 import html
 import io
 import json
+import shlex
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from jointplay.errors import UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.model.tolerance import Toleranced, play_unit
 from jointplay.present.scene import Scene, mechanism_scene
@@ -35,6 +37,7 @@ if TYPE_CHECKING:
 
     from jointplay.model.mechanism import Model
     from jointplay.result import Result
+    from jointplay.solver.solve import Workspace
     from jointplay.studies.contributions import ContributionsResult
     from jointplay.studies.envelope import EnvelopeResult
     from jointplay.studies.montecarlo import MonteCarloResult
@@ -94,10 +97,7 @@ class Report:
             [self.case] if self.case is not None else list(model.case_names) or [None]
         )
         say("solving")
-        results = {
-            case: ws.solve(loads=None if case is None else model.loads_of(case), exact=self.exact)
-            for case in cases
-        }
+        results = {case: _solved(ws, model, case, self.exact) for case in cases}
         page = _Page(model.name or source)
         page.header(model, source)
         page.summary(model, results)
@@ -115,10 +115,14 @@ class Report:
         if self.studies or self.sweep is not None:
             page.section("Studies")
             if len(cases) > 1:
+                under = [
+                    *(["the Monte Carlo study and the contributions"] if self.studies else []),
+                    *(["the sweep"] if self.sweep is not None else []),
+                ]
                 page.paragraph(
-                    "The envelopes take every load case; the Monte Carlo study, the "
-                    f"contributions and a sweep are under load case '{cases[0]}' (the first; "
-                    "jointplay report MODEL --case NAME for another)."
+                    ("The envelopes take every load case; " if self.studies else "")
+                    + f"{' and '.join(under)} {'are' if self.studies else 'is'} under load case "
+                    f"'{cases[0]}' (the first; jointplay report MODEL --case NAME for another)."
                 )
         if self.studies:
             self._studies(model, source, page, say, cases[0])
@@ -178,6 +182,15 @@ class Report:
         if model.requirements:
             rows = side_by_side(model, linear, mc, source=source)
             page.tolerances(rows, mc.settings.confidence, mc.samples)
+
+
+def _solved(ws: Workspace, model: Model, case: str | None, exact: bool) -> Result:
+    """The solution under load case ``case`` (None: the model's loads); a
+    mechanism not held under it says which case."""
+    try:
+        return ws.solve(loads=None if case is None else model.loads_of(case), exact=exact)
+    except UnboundedMechanismError as exc:
+        raise exc if case is None else exc.in_case(case) from None
 
 
 def _inputs(model: Model, case: str | None, source: str) -> int:
@@ -1045,7 +1058,7 @@ class _Page:
         from jointplay.present.motion_plots import motion_figure, poses_figure
 
         self.section("Motion")
-        under = ""
+        under, case = "", "" if mr.case is None else f" --case {shlex.quote(mr.case)}"
         if mr.case is not None:
             under = f" under load case '{mr.case}'" + (
                 " (the first; jointplay motion MODEL --case NAME for another)" if others else ""
@@ -1054,7 +1067,7 @@ class _Page:
             f"The mechanism driven by '{mr.drive}' from {mr.shown_value(0):g} to "
             f"{mr.shown_value(mr.steps - 1):g} {mr.unit} in {mr.steps} poses{under}, the "
             "clearance equilibrium solved at each. The table of every step: jointplay motion "
-            "MODEL --csv FILE; these figures: jointplay motion MODEL --plot FILE."
+            f"MODEL{case} --csv FILE; these figures: jointplay motion MODEL{case} --plot FILE."
         )
         if mr.requirement_names:
             rows = []

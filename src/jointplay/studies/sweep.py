@@ -33,6 +33,7 @@ from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model, check_case
 from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
+from jointplay.units import shown
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -234,6 +235,15 @@ class Sweep:
                 source=source,
             )
         check_case(model, self.case, source, "the sweep")
+        for v in self.vary:
+            # an entry of another case than the one solved would change nothing
+            path = parse_path(v.path)
+            if path[0] == "load_cases" and len(path) > 1 and path[1] != self.case:
+                raise OptionError(
+                    f"--vary {v.path}: that load acts in load case {shown(path[1])} only, and "
+                    f"the sweep is under {shown(self.case)}; give --case {path[1]}",
+                    source=source,
+                )
 
 
 def parse_path(path: str) -> list[str | int]:
