@@ -69,10 +69,11 @@ class Indeterminacy:
     joints whose contacts share the redundant load (model order);
     ``contacts``: those contacts, as ``joint.contact`` (model order). Both
     empty when the degree is 0. ``by_rule``: the printed split is shown to
-    be the split rule's (``solver/forces.py``); False where its program was
-    not solved to the certificate's tolerance (long degenerate chains,
-    where a change of the loads below that tolerance moves the rule's split
-    by per cents): the printed forces balance the loads, as others would."""
+    be the split rule's (``solver/forces.py``); False where its program gave
+    no split that certifies (Clarabel stopped short of its tolerance or found
+    none: long degenerate bearing chains, where a change of the loads below
+    the certificate's tolerance moves the rule's split by per cents): the
+    printed forces are the route's, which balance the loads as others would."""
 
     degree: int = 0
     joints: tuple[str, ...] = ()

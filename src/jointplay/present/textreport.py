@@ -149,8 +149,8 @@ def indeterminacy_words(result: Result) -> str | None:
     if not found.by_rule:
         return (
             f"Forces: the load shared by {shared} is split as the solver left it (statically "
-            f"indeterminate, degree {found.degree}): the equal-springs rule was not reached to "
-            "the certificate's tolerance here, and other splits balance the loads as well; "
+            f"indeterminate, degree {found.degree}): the equal-springs rule's program gave no "
+            "split that certifies here, and other splits balance the loads as well; "
             "the rigid parts do not decide it; give `stiffness` for the real split."
         )
     return (
