@@ -53,7 +53,7 @@ def test_solve_json_has_exactly_the_documented_schema() -> None:
         "requirements",
         "indeterminate",
     }
-    assert doc["indeterminate"] == {"degree": 0, "joints": [], "contacts": []}
+    assert doc["indeterminate"] == {"degree": 0, "joints": [], "contacts": [], "by_rule": True}
     assert 0.0 <= doc["linearization_error"] < 1e-4 and doc["warnings"] == []
     assert doc["accuracy"]["certified"]
     assert doc["accuracy"]["feasibility_mm"] <= 1e-9

@@ -230,6 +230,7 @@ def test_solve_says_so_in_text_json_and_report(tmp_path: Path) -> None:
         "degree": 1,
         "joints": ["hinge1", "hinge2"],
         "contacts": ["hinge1.axial", "hinge2.axial"],
+        "by_rule": True,
     }
     html = Report(studies=False).render(model_from_dict(door()), "door")
     assert f"<p>{DOOR_SENTENCE}</p>" in html
@@ -240,3 +241,41 @@ def test_the_count_travels_with_a_pickled_result() -> None:
     copy = pickle.loads(pickle.dumps(result))
     assert copy.indeterminate == result.indeterminate
     assert copy.find_indeterminate is None
+
+
+def test_a_split_not_shown_to_be_the_rule_s_is_not_called_so() -> None:
+    """The carriage's split needs the rule's program (its faces' forces reach
+    their rims). Starved of the program's iterations, the split falls back
+    to the route's own forces: they still balance and certify, but the
+    answer no longer claims the equal-springs rule (``by_rule`` False, in
+    words and in JSON); with the program's iterations it does."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from jointplay.present.textreport import indeterminacy_words
+    from jointplay.solver import pipeline
+    from jointplay.solver.solve import Workspace
+
+    ws = Workspace.of(jointplay.load(STUDIES / "carriage.yaml"))
+    loads, g = pipeline.loads_and_work(ws, None)
+    scale = pipeline.load_scale(ws, float(np.linalg.norm(g)))
+    g_hat, sigma = g / scale, ws.softness(scale)
+    found = pipeline.optimum(ws, g_hat, sigma)
+    assert found.split_rule
+    rule = pipeline.result_of(ws, found, scale, loads, g, 0.0)
+    assert rule.indeterminate.degree > 0 and rule.indeterminate.by_rule
+    starved = ws.with_settings(replace(ws.settings, max_iterations=1))
+    own = replace(found, lam=found.lam.copy(), f=found.f.copy(), certificate=None, nu=None)
+    left = pipeline.certified(starved, g_hat, sigma, pipeline.split(starved, g_hat, sigma, own))
+    assert left.certificate is not None and left.certificate.certified
+    assert not left.split_rule
+    result = pipeline.result_of(ws, left, scale, loads, g, 0.0)
+    result.check()
+    assert not result.indeterminate.by_rule
+    assert result.indeterminate.degree == rule.indeterminate.degree
+    assert result.to_dict()["indeterminate"]["by_rule"] is False
+    words = indeterminacy_words(result)
+    assert words is not None and "split as the solver left it" in words
+    assert "is split by the equal-springs rule" not in words
+    assert "is split by the equal-springs rule" in (indeterminacy_words(rule) or "")

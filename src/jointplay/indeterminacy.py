@@ -68,27 +68,41 @@ class Indeterminacy:
     contacts (0: their forces are decided by the balance). ``joints``: the
     joints whose contacts share the redundant load (model order);
     ``contacts``: those contacts, as ``joint.contact`` (model order). Both
-    empty when the degree is 0."""
+    empty when the degree is 0. ``by_rule``: the printed split is shown to
+    be the split rule's (``solver/forces.py``); False where its program gave
+    no split that certifies (Clarabel stopped short of its tolerance or found
+    none: long degenerate bearing chains, where a change of the loads below
+    the certificate's tolerance moves the rule's split by per cents): the
+    printed forces are the route's, which balance the loads as others would."""
 
     degree: int = 0
     joints: tuple[str, ...] = ()
     contacts: tuple[str, ...] = ()
+    by_rule: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         """JSON ``indeterminate``."""
-        return {"degree": self.degree, "joints": list(self.joints), "contacts": list(self.contacts)}
+        return {
+            "degree": self.degree,
+            "joints": list(self.joints),
+            "contacts": list(self.contacts),
+            "by_rule": self.by_rule,
+        }
 
 
 #: The answer of a determinate mechanism (and of a route that does not count).
 DETERMINATE = Indeterminacy()
 
 
-def indeterminacy_of(asm: Assembly, x: FloatArray, settings: SolverSettings) -> Indeterminacy:
+def indeterminacy_of(
+    asm: Assembly, x: FloatArray, settings: SolverSettings, by_rule: bool = True
+) -> Indeterminacy:
     """The indeterminacy (module docstring) of the answer ``x`` (scaled
     unknowns of ``asm``): its hard touching contacts as ``solver/forces.py``
     classes them (touching at ``settings.touching`` of their play; flat at
     their apex within the positions' round-off, ``feasibility_tolerance`` of
-    the largest play), rank at ``settings.free_motion_rcond``."""
+    the largest play), rank at ``settings.free_motion_rcond``; ``by_rule``:
+    whether its forces are shown to be the split rule's."""
     work, owner = _unknowns(asm, x, settings)
     if not len(owner):
         return DETERMINATE
@@ -115,6 +129,7 @@ def indeterminacy_of(asm: Assembly, x: FloatArray, settings: SolverSettings) -> 
         degree,
         tuple(T.joint_name[j] for j in joints.tolist()),
         tuple(f"{T.joint_name[T.joint_of[c]]}.{T.contact_name[c]}" for c in contacts.tolist()),
+        by_rule,
     )
 
 

@@ -414,9 +414,12 @@ def build_result(
     loads: tuple[Load, ...],
     g: FloatArray,
     settings: SolverSettings = DEFAULT,
+    split_rule: bool = True,
 ) -> Result:
     """Turn the solver's numbers into a ``Result``, each to what the
-    certificate proves (``proven``).
+    certificate proves (``proven``). ``split_rule``: the forces are shown to
+    be the split rule's, where the touching contacts are redundant
+    (``Indeterminacy.by_rule``).
 
     ``ball_forces``: the force (N) of each clearance contact (``asm.balls``
     order), ``ball_vectors`` their force vectors (N, stacked like the rows
@@ -525,7 +528,7 @@ def build_result(
         asm.model_warnings,
         res,
         settings.equilibrium_tolerance,
-        functools.partial(indeterminacy_of, asm, x.copy(), settings),
+        functools.partial(indeterminacy_of, asm, x.copy(), settings, split_rule),
     )
 
 

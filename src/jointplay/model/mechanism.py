@@ -701,7 +701,7 @@ def check_case(model: Model, case: str | None, source: str, study: str | None = 
 
             raise OptionError(
                 f"--case: the model has load cases ({listing(model.case_names)}): give "
-                f"--case NAME, the load case {study} is under",
+                f"--case NAME (case=NAME in Python), the load case {study} is under",
                 source=source,
             )
         return

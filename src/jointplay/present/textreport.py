@@ -146,6 +146,13 @@ def indeterminacy_words(result: Result) -> str | None:
         shared = ", ".join(names[:-1]) + f" and {names[-1]}"
     else:
         shared = ", ".join(names[:NAMED_JOINTS]) + f" and {len(names) - NAMED_JOINTS} other joints"
+    if not found.by_rule:
+        return (
+            f"Forces: the load shared by {shared} is split as the solver left it (statically "
+            f"indeterminate, degree {found.degree}): the equal-springs rule's program gave no "
+            "split that certifies here, and other splits balance the loads as well; "
+            "the rigid parts do not decide it; give `stiffness` for the real split."
+        )
     return (
         f"Forces: the load shared by {shared} is split by the equal-springs rule "
         f"(statically indeterminate, degree {found.degree}); the rigid parts do not decide it; "

@@ -50,11 +50,17 @@ if TYPE_CHECKING:
 @dataclass(frozen=True)
 class Split:
     """Multipliers (scaled) of one answer: per cone ``lam``, force vectors
-    ``f`` (stacked like ``BallStack.A``), and the rigid rows' ``nu``."""
+    ``f`` (stacked like ``BallStack.A``), and the rigid rows' ``nu``.
+    ``rule``: shown to be the rule's split (its least squares meets the
+    program's optimality conditions, or Clarabel solved the program to its
+    tolerance); else the program's best, or (``found`` False: the program
+    gave none) the route's own forces."""
 
     lam: FloatArray
     f: FloatArray
     nu: FloatArray
+    rule: bool = True
+    found: bool = True
 
 
 def least_squares_split(
@@ -73,9 +79,10 @@ def least_squares_split(
     model's program starts from it); its compliant contacts keep theirs (a
     face pressed flat, its force but not its force vector: ``_pressing``).
     ``apex_level``: a cone with ``|A_i x|`` at or below it rests at its
-    apex, its force vector free inside the cone. None when the program
-    finds no split, or when only one balances the loads (the caller keeps
-    its own). ``unique_on``: a face (surface cones, those
+    apex, its force vector free inside the cone. None when only one split
+    balances the loads (the caller keeps its own, the rule's by itself);
+    the route's own (``Split.found`` False) when the program finds none.
+    ``unique_on``: a face (surface cones, those
     at their apex) of a hard model whose Newton system was regular: if its
     cones are the touching ones, in the same classes, their forces are the
     only ones (None is returned at once)."""
@@ -99,10 +106,11 @@ def least_squares_split(
     if asm.sparse:  # the route's split, in the unknowns (Z's columns are apart)
         given = Z.T @ np.concatenate([f - keep_f, lam - keep_lam, nu])
         given = given / np.asarray(Z.multiply(Z).sum(axis=0)).ravel()
-    y = _rule(_wrenches(asm, Z), G, b, owner, cones, settings, given)
-    return (
-        None if y is None else _split_of(stack, Z @ y, keep_lam, keep_f, apex & ~stack.has_offset)
-    )
+    y, rule = _rule(_wrenches(asm, Z), G, b, owner, cones, settings, given)
+    if y is None:  # no split found: the route's own stands
+        return Split(lam, f, nu, rule=False, found=False)
+    out = _split_of(stack, Z @ y, keep_lam, keep_f, apex & ~stack.has_offset)
+    return Split(out.lam, out.f, out.nu, rule)
 
 
 def least_squares_rows(
@@ -159,7 +167,7 @@ def least_squares_rows(
         y, optimal = _least_squares(P, G, b_rows, keep, cones, settings)
         todo = np.flatnonzero(~optimal & ~determinate)
         rules = _rules(P[todo], G[todo], b_rows[todo], owner, cones, settings)
-        for j, y_j in zip(todo, rules, strict=True):
+        for j, (y_j, _) in zip(todo, rules, strict=True):
             if y_j is not None:
                 y[j], optimal[j] = y_j, True
         z = (Z @ y[:, :, None])[:, :, 0]
@@ -184,14 +192,15 @@ def _rule(
     cones: Cones,
     settings: SolverSettings,
     given: FloatArray | None = None,
-) -> FloatArray | None:
-    """The split's ``y`` of one answer: a dense model's by ``_rules``; a
-    sparse model's by the program from ``given``, the route's split."""
+) -> tuple[FloatArray | None, bool]:
+    """The split's ``y`` of one answer, and whether it is shown to be the
+    rule's (``Split.rule``): a dense model's by ``_rules``; a sparse
+    model's by the program from ``given``, the route's split."""
     if given is None:
         return _rules(P[None], G[None], b[None], owner, cones, settings)[0]
     parts = _parts(G, P, owner)
     found = _program(P, G, b, given, parts, cones, settings, True)
-    return None if found is None else found[0]
+    return (None, False) if found is None else (found[0], found[2])
 
 
 def _rules(
@@ -201,17 +210,20 @@ def _rules(
     owner: IntArray,
     cones: Cones,
     settings: SolverSettings,
-) -> list[FloatArray | None]:
+) -> list[tuple[FloatArray | None, bool]]:
     """The split's ``y`` of each row of a dense stack (rows alike in their
-    unknowns). The least squares (``_least_squares``) first: where it lies
-    in every cone it is the rule's. The others' programs (``_program``) are
-    then finished by the least squares on the forces each leaves pushing,
-    kept where that is the program's optimum: the program stops at its
-    tolerance, and a contact whose force and multiplier both vanish at the
-    optimum (a lathe slide's corner) ends 5e-5 of the largest force off it."""
+    unknowns), and whether it is shown to be the rule's. The least squares
+    (``_least_squares``) first: where it lies in every cone it is the
+    rule's. The others' programs (``_program``) are then finished by the
+    least squares on the forces each leaves pushing, kept where that is the
+    program's optimum: the program stops at its tolerance, and a contact
+    whose force and multiplier both vanish at the optimum (a lathe slide's
+    corner) ends 5e-5 of the largest force off it."""
     n_y = G.shape[2]
     y, optimal = _least_squares(P, G, b, np.arange(n_y), cones, settings)
-    out: list[FloatArray | None] = [y[j] if optimal[j] else None for j in range(len(y))]
+    out: list[tuple[FloatArray | None, bool]] = [
+        (y[j], True) if optimal[j] else (None, False) for j in range(len(y))
+    ]
     rest = np.flatnonzero(~optimal)
     if not rest.size:
         return out
@@ -221,12 +233,12 @@ def _rules(
         found = _program(P[j], G[j], b[j], np.zeros(n_y), parts, cones, settings, False)
         if found is None:
             continue
-        y_j, held = found
+        y_j, held, solved = found
         keep = np.setdiff1d(np.arange(n_y), held)
         exact, fine = _least_squares(
             P[j : j + 1], G[j : j + 1], b[j : j + 1], keep, cones, settings
         )
-        out[j] = exact[0] if fine[0] else y_j
+        out[j] = (exact[0], True) if fine[0] else (y_j, solved)
     return out
 
 
@@ -290,7 +302,7 @@ def _program(
     cones: Cones,
     settings: SolverSettings,
     sparse: bool,
-) -> tuple[FloatArray, IntArray] | None:
+) -> tuple[FloatArray, IntArray, bool] | None:
     """The ``y`` of least ``|P y|`` in its ``cones`` with ``G y = b``: one
     Clarabel call, refined as the model's interior point is
     (``conic.refined``). A sparse model's is written on ``z = y - given``,
@@ -299,7 +311,8 @@ def _program(
     ``G y = b``, its program ran out of steps). Each of its ``parts``
     (``_parts``: each row's of G, then each unknown's) is posed at its own
     size, so that the tolerance applies to each part's forces. Also the
-    one-sign unknowns the program holds at 0 (its dual above its value)."""
+    one-sign unknowns the program holds at 0 (its dual above its value),
+    and whether Clarabel solved it to its tolerance (not "almost")."""
     m, n_y = G.shape
     size = np.zeros(int(parts.max(initial=-1)) + 1)
     np.maximum.at(size, parts[:m], np.abs(b))
@@ -338,7 +351,8 @@ def _program(
     s, z = np.asarray(sol.s)[m:], np.asarray(sol.z)[m:]
     one_sign = np.r_[np.arange(n_s), n_s + (np.cumsum(k_faces + 1) - k_faces - 1)[k_faces == 0]]
     held = one_sign[s[one_sign] <= z[one_sign]].astype(np.intp)
-    return (given_hat + np.asarray(sol.x)) * size, held
+    solved = conic.outcome(sol) == "optimal"  # to its tolerance, not "almost"
+    return (given_hat + np.asarray(sol.x)) * size, held, solved
 
 
 def _parts(G: Any, P: Any, owner: IntArray) -> IntArray:

@@ -92,6 +92,7 @@ def result_of(
         tuple(loads),
         g,
         ws.settings,
+        point.split_rule,
     )
     # The certificate balances the forces in the solver's scaled unknowns;
     # per body and in newtons (Result.check) a badly scaled mechanism can
@@ -160,13 +161,15 @@ def split(
     shared = forces.least_squares_split(
         ws.asm, point.x, point.lam, point.f, nu, g_hat, apex, st, unique_on
     )
-    if shared is not None:
+    if shared is None:  # the only split that balances the loads
+        return replace(point, nu=nu)
+    if shared.found:
         trial = replace(point, lam=shared.lam, f=shared.f, nu=shared.nu, certificate=None)
         cert = certificate.certify(ws, g_hat, sigma, trial, shared.nu)
         if cert.certified:
-            trial.certificate = cert
+            trial.certificate, trial.split_rule = cert, shared.rule
             return trial
-    return replace(point, nu=nu)
+    return replace(point, nu=nu, split_rule=False)
 
 
 def rigid_multipliers(ws: WorkspaceData, g_hat: FloatArray, point: records.Point) -> FloatArray:
@@ -453,7 +456,7 @@ def split_optimum(
     shared = forces.least_squares_split(
         ws.asm, trial.x, trial.lam, trial.f, nu, g_hat, apex, ws.settings, None
     )
-    if shared is None:
+    if shared is None or not shared.found:
         return None
     point = replace(trial, lam=shared.lam, f=shared.f, nu=shared.nu, certificate=None)
     point.certificate = certificate.certify(ws, g_hat, sigma, point, shared.nu)

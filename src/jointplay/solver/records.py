@@ -43,6 +43,9 @@ class Point:
     #: at ``free_motion_rcond``): while ``active`` is that set, its face pins x
     #: and its rows are independent (``pins_by_newton``).
     regular_on: FaceKey | None = None
+    #: Whether its forces, where the touching contacts are redundant, are
+    #: shown to be the split rule's (``forces.Split.rule``).
+    split_rule: bool = True
 
 
 @dataclass(frozen=True)
