@@ -283,6 +283,14 @@ def _fits_with_cases() -> jointplay.Model:
     return jointplay.model_from_dict(_fits_with_cases_data())
 
 
+def _cases_file() -> Path:
+    import tempfile
+
+    path = Path(tempfile.mkdtemp()) / "cases.yaml"
+    path.write_text(yaml.safe_dump(_fits_with_cases_data()))
+    return path
+
+
 @pytest.mark.parametrize(
     "command",
     [
@@ -333,3 +341,29 @@ def test_a_report_s_studies_are_under_its_first_case_and_say_so() -> None:
     assert "are under load case &#x27;cutting&#x27; (the first;" in page
     page = Report(case="lifting", samples=32).render(_fits_with_cases(), "cases.yaml")
     assert "(the first;" not in page
+
+
+def test_an_envelope_takes_every_case_or_the_one_given() -> None:
+    """The envelope of case 'lifting' is the envelope of the model whose
+    loads are that case's; without a case it takes both, so it holds both
+    cases' envelopes (its support is their largest in every direction)."""
+    from jointplay.studies.envelope import Envelope
+
+    model = _fits_with_cases()
+    both = Envelope("B", directions=40).run(model)
+    alone = {}
+    for case in ("cutting", "lifting"):
+        alone[case] = Envelope("B", directions=40, case=case).run(model)
+        merged = model.replace(
+            loads=[*model.loads, *(model.load_cases or {})[case]], load_cases=None
+        )
+        plain = Envelope("B", directions=40, loads="model").run(merged)
+        np.testing.assert_allclose(alone[case].h, plain.h, rtol=0, atol=1e-9)
+        assert f"of load case '{case}'" in alone[case].over
+    np.testing.assert_allclose(
+        both.h, np.maximum(alone["cutting"].h, alone["lifting"].h), rtol=0, atol=1e-9
+    )
+    out = CliRunner().invoke(
+        app, ["envelope", "--point", "B", "--case", "nope", str(_cases_file())]
+    )
+    assert out.exit_code == 2 and "--case: no load case 'nope'" in out.output

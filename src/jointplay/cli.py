@@ -413,6 +413,10 @@ def envelope(
             "--probe", help="Probe force (N) against the weights and standing loads; > 0."
         ),
     ] = 1.0,
+    case: Annotated[
+        str | None,
+        typer.Option("--case", metavar="NAME", help="Only this load case (default: every case)."),
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the envelope as JSON.")] = False,
     plot: PlotOption = None,
 ) -> None:
@@ -445,6 +449,7 @@ def envelope(
             "auto" if loads == "auto" else "model" if loads == "model" else "probes",
             levels,
             probe,
+            case,
         )
         result = settings.run(model, source=str(model_path))
         _finish_study(

@@ -153,7 +153,7 @@ class Report:
             )
             return
         say("envelopes")
-        envelopes, missing = point_envelopes(model, source=source)
+        envelopes, missing = point_envelopes(model, source=source, case=self.case)
         for point in model.points:
             if point.name in envelopes:
                 page.envelope(envelopes[point.name])

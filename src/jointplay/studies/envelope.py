@@ -62,7 +62,7 @@ from jointplay.errors import (
     UnboundedMechanismError,
 )
 from jointplay.geometry import FloatArray, skew
-from jointplay.model.mechanism import Model
+from jointplay.model.mechanism import Model, check_case
 from jointplay.model.tolerance import Toleranced
 from jointplay.proven import Resolution, direction, proven
 from jointplay.solver.solve import Workspace
@@ -99,7 +99,8 @@ class Envelope:
     ``loads``: ``"probes"``, ``"model"`` or ``"auto"`` (module docstring).
     ``levels``: values per varying load component (``model``). ``probe``: the
     probe force (N) against the standing loads (``probes``; without weights
-    only its direction matters)."""
+    only its direction matters). ``case``: only this load case of the model
+    (None: every case)."""
 
     point: str
     directions: int = 200
@@ -107,6 +108,7 @@ class Envelope:
     loads: Literal["auto", "model", "probes"] = "auto"
     levels: int | None = None
     probe: float = 1.0
+    case: str | None = None
 
     def __post_init__(self) -> None:
         if self.directions < 6:
@@ -123,6 +125,12 @@ class Envelope:
         """``source``: the model file's name, for messages."""
         return self._run(model, source=source or model.name or "<model>")
 
+    def _cases(self, model: Model) -> tuple[str | None, ...]:
+        """The load cases the envelope takes (None: the model's loads)."""
+        if self.case is not None:
+            return (self.case,)
+        return tuple(model.case_names) or (None,)
+
     def _run(self, model: Model, *, source: str) -> EnvelopeResult:
         names = [p.name for p in model.points]
         if self.point not in names:
@@ -131,6 +139,7 @@ class Envelope:
                 f"--point: unknown point '{self.point}'; the points are: {known}", source=source
             )
         point = model.points[names.index(self.point)]
+        check_case(model, self.case, source)
         rigid = model.model_copy(
             update={
                 "joints": tuple(
@@ -147,12 +156,12 @@ class Envelope:
             ws = ws.with_radii(pmap.radii(highs)[0])
         varying = any(
             isinstance(c, Toleranced)
-            for case in (model.case_names or (None,))
+            for case in self._cases(model)
             for load in model.loads_of(case)
             for vector in (load.force, load.torque)
             for c in vector or ()
         )
-        loaded = any(model.loads_of(case) for case in (model.case_names or (None,)))
+        loaded = any(model.loads_of(case) for case in self._cases(model))
         mode = self.loads
         if mode == "auto":
             mode = "model" if (model.case_names or varying) and loaded else "probes"
@@ -209,7 +218,7 @@ class Envelope:
         why: UnboundedMechanismError | None = None
         varied = False
         used: set[int] = set()
-        for case in model.case_names or (None,):
+        for case in self._cases(model):
             lmap = load_map(asm, case)
             nl = len(lmap.variables)
             varied = varied or nl > 0
@@ -242,7 +251,7 @@ class Envelope:
                 )
             parts.append(d[ok])
             counts.append(int(np.sum(ok)))
-        if not any(model.loads_of(case) for case in (model.case_names or (None,))):
+        if not any(model.loads_of(case) for case in self._cases(model)):
             raise OptionError(
                 "--loads model: the model has no loads (no 'loads', no weight, no case with "
                 "loads): nothing pushes the point; use --loads probes",
@@ -256,7 +265,7 @@ class Envelope:
                 motion=why.motion,
                 direction=why.direction,
             )
-        cases = model.case_names
+        cases = model.case_names if self.case is None else ()
         each = (
             "both limits of each varying load component"
             if used == {2}
@@ -267,6 +276,7 @@ class Envelope:
         over = (
             f"the model's loads: {total:,} load set{'s' if total > 1 else ''}"
             + (f" over {len(cases)} load cases" if cases else "")
+            + (f" of load case '{self.case}'" if self.case is not None else "")
             + (f", {each}" if varied else "")
         )
         return np.vstack(parts), over, tuple(not_held)
@@ -553,15 +563,22 @@ class EnvelopeResult:
 
 
 def point_envelopes(
-    model: Model, plays: Literal["max", "mean"] = "max", *, source: str | None = None
+    model: Model,
+    plays: Literal["max", "mean"] = "max",
+    *,
+    source: str | None = None,
+    case: str | None = None,
 ) -> tuple[dict[str, EnvelopeResult], dict[str, str]]:
-    """Every functional point's envelope, and why a point has none: its joints
-    leave it free along some direction (the message names the motion)."""
+    """Every functional point's envelope (over load case ``case``, or every
+    case), and why a point has none: its joints leave it free along some
+    direction (the message names the motion)."""
     found: dict[str, EnvelopeResult] = {}
     missing: dict[str, str] = {}
     for point in model.points:
         try:
-            found[point.name] = Envelope(point.name, plays=plays).run(model, source=source)
+            found[point.name] = Envelope(point.name, plays=plays, case=case).run(
+                model, source=source
+            )
         except UnboundedMechanismError as exc:
             missing[point.name] = str(exc)
     return found, missing

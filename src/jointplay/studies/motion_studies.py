@@ -543,9 +543,9 @@ class MotionEnvelope:
             posed = cycle.posed(s)
             found.append(
                 tuple(
-                    Envelope(name, self.directions, self.plays, self.loads).run(
-                        posed, source=cycle.source
-                    )
+                    Envelope(
+                        name, self.directions, self.plays, self.loads, case=self.motion.case
+                    ).run(posed, source=cycle.source)
                     for name in names
                 )
             )
