@@ -439,7 +439,7 @@ def test_a_load_case_not_held_is_named_and_the_held_ones_are_printed(tmp_path: P
     proc = run("solve", str(path), "--json")
     assert proc.returncode == 3
     doc = json.loads(proc.stdout)
-    assert doc["status"] == "unbounded"
+    assert doc["status"] == "unbounded" and doc["case"] == "lifted" and doc["body"] == "plate"
     assert doc["cases"]["pressed"]["status"] == "optimal"
     lifted = doc["cases"]["lifted"]
     assert lifted["status"] == "unbounded" and lifted["body"] == "plate"

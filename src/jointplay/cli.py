@@ -256,8 +256,11 @@ def solve(
                 name: _error_doc(r) if isinstance(r, UnboundedMechanismError) else r.to_dict()
                 for name, r in results.items()
             }
-            status = "unbounded" if not_held else "optimal"
-            doc = docs.get(None, {"status": status, "cases": docs})
+            whole: dict[str, Any] = {"status": "optimal"}
+            if not_held:  # the verdict's own keys, as without cases, and the case it is under
+                first = next(n for n, r in results.items() if r is not_held[0])
+                whole = {**_error_doc(not_held[0]), "case": first}
+            doc = docs.get(None, {**whole, "cases": docs})
             typer.echo(json.dumps(doc, indent=2))
         else:
             for name, result in solved.items():
