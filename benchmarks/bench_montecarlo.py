@@ -336,7 +336,8 @@ def studies(
         (samples // 4, 50_000, 1),
         (samples, 50_000, 1),
         (samples, 10_000, 1),
-        (samples, 50_000, workers),
+        # chunks enough for every process (a small study's one chunk runs on one)
+        (samples, min(50_000, max(1_000, samples // (2 * workers))), workers),
     ):
         start = time.perf_counter()
         result = MonteCarlo(samples=n, seed=0, chunk=size).run(model, workers=procs)
