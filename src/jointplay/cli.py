@@ -214,7 +214,7 @@ def solve(
     from jointplay.solver.solve import Workspace
 
     failed = False
-    not_held: list[UnboundedMechanismError] = []
+    not_held: dict[str, UnboundedMechanismError] = {}  # load case -> its verdict
 
     def run() -> None:
         nonlocal failed
@@ -232,7 +232,7 @@ def solve(
             names: list[str | None] = [case] if case is not None else list(model.case_names)
         else:
             names = [None]
-        results: dict[str | None, Any] = {}
+        results = {}
         for name in names:
             try:
                 loads = None if name is None else model.loads_of(name)
@@ -245,33 +245,28 @@ def solve(
                 if name is None:
                     raise
                 # the cases it holds are printed still; the verdict names its case
-                results[name] = exc.in_case(name)
-        not_held.extend(r for r in results.values() if isinstance(r, UnboundedMechanismError))
-        solved = {
-            name: r for name, r in results.items() if not isinstance(r, UnboundedMechanismError)
-        }
-        failed = any(not r.passed for result in solved.values() for r in result.requirements)
+                not_held[name] = exc.in_case(name)
+        failed = any(not r.passed for result in results.values() for r in result.requirements)
         if as_json:
             docs = {
-                name: _error_doc(r) if isinstance(r, UnboundedMechanismError) else r.to_dict()
-                for name, r in results.items()
+                name: _error_doc(not_held[name]) if name in not_held else results[name].to_dict()
+                for name in names
             }
             whole: dict[str, Any] = {"status": "optimal"}
             if not_held:  # the verdict's own keys, as without cases, and the case it is under
-                first = next(n for n, r in results.items() if r is not_held[0])
-                whole = {**_error_doc(not_held[0]), "case": first}
+                first = next(iter(not_held))
+                whole = {**_error_doc(not_held[first]), "case": first}
             doc = docs.get(None, {**whole, "cases": docs})
             typer.echo(json.dumps(doc, indent=2))
         else:
-            for name, result in solved.items():
+            for name, result in results.items():
                 render(model, result, str(model_path), _console(), case=name)
 
     _guarded(run, as_json)
     if not_held:
-        err = Console(stderr=True, highlight=False, soft_wrap=True)
-        for exc in not_held:
-            err.print(f"jointplay: {exc.label}: {exc}", markup=False)
-        raise typer.Exit(not_held[0].exit_code)
+        for exc in not_held.values():
+            _say(exc)
+        raise typer.Exit(UnboundedMechanismError.exit_code)
     if failed and fail_on_requirements:
         raise typer.Exit(REQUIREMENT_FAILED)
 
@@ -1076,6 +1071,13 @@ def _error_doc(exc: JointplayError) -> dict[str, Any]:
     return doc
 
 
+def _say(exc: JointplayError) -> None:
+    """An error's one line on stderr, in jointplay's words."""
+    Console(stderr=True, highlight=False, soft_wrap=True).print(
+        f"jointplay: {exc.label}: {exc}", markup=False
+    )
+
+
 def _guarded(run: Any, as_json: bool) -> None:
     err = Console(stderr=True, highlight=False, soft_wrap=True)
     try:
@@ -1088,7 +1090,7 @@ def _guarded(run: Any, as_json: bool) -> None:
     except JointplayError as exc:
         if as_json:
             typer.echo(json.dumps(_error_doc(exc), indent=2))
-        err.print(f"jointplay: {exc.label}: {exc}", markup=False)
+        _say(exc)
         raise typer.Exit(exc.exit_code) from None
     except (typer.Exit, typer.Abort, KeyboardInterrupt):
         raise
