@@ -262,14 +262,14 @@ def test_a_split_not_shown_to_be_the_rule_s_is_not_called_so() -> None:
     scale = pipeline.load_scale(ws, float(np.linalg.norm(g)))
     g_hat, sigma = g / scale, ws.softness(scale)
     found = pipeline.optimum(ws, g_hat, sigma)
-    assert found.split_rule
+    assert found.by_rule
     rule = pipeline.result_of(ws, found, scale, loads, g, 0.0)
     assert rule.indeterminate.degree > 0 and rule.indeterminate.by_rule
     starved = ws.with_settings(replace(ws.settings, max_iterations=1))
     own = replace(found, lam=found.lam.copy(), f=found.f.copy(), certificate=None, nu=None)
     left = pipeline.certified(starved, g_hat, sigma, pipeline.split(starved, g_hat, sigma, own))
     assert left.certificate is not None and left.certificate.certified
-    assert not left.split_rule
+    assert not left.by_rule
     result = pipeline.result_of(ws, left, scale, loads, g, 0.0)
     result.check()
     assert not result.indeterminate.by_rule

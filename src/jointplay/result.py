@@ -414,10 +414,10 @@ def build_result(
     loads: tuple[Load, ...],
     g: FloatArray,
     settings: SolverSettings = DEFAULT,
-    split_rule: bool = True,
+    by_rule: bool = True,
 ) -> Result:
     """Turn the solver's numbers into a ``Result``, each to what the
-    certificate proves (``proven``). ``split_rule``: the forces are shown to
+    certificate proves (``proven``). ``by_rule``: the forces are shown to
     be the split rule's, where the touching contacts are redundant
     (``Indeterminacy.by_rule``).
 
@@ -528,7 +528,7 @@ def build_result(
         asm.model_warnings,
         res,
         settings.equilibrium_tolerance,
-        functools.partial(indeterminacy_of, asm, x.copy(), settings, split_rule),
+        functools.partial(indeterminacy_of, asm, x.copy(), settings, by_rule),
     )
 
 

@@ -92,7 +92,7 @@ def result_of(
         tuple(loads),
         g,
         ws.settings,
-        point.split_rule,
+        point.by_rule,
     )
     # The certificate balances the forces in the solver's scaled unknowns;
     # per body and in newtons (Result.check) a badly scaled mechanism can
@@ -167,9 +167,9 @@ def split(
         trial = replace(point, lam=shared.lam, f=shared.f, nu=shared.nu, certificate=None)
         cert = certificate.certify(ws, g_hat, sigma, trial, shared.nu)
         if cert.certified:
-            trial.certificate, trial.split_rule = cert, shared.rule
+            trial.certificate, trial.by_rule = cert, shared.rule
             return trial
-    return replace(point, nu=nu, split_rule=False)
+    return replace(point, nu=nu, by_rule=False)
 
 
 def rigid_multipliers(ws: WorkspaceData, g_hat: FloatArray, point: records.Point) -> FloatArray:

@@ -45,7 +45,7 @@ class Point:
     regular_on: FaceKey | None = None
     #: Whether its forces, where the touching contacts are redundant, are
     #: shown to be the split rule's (``forces.Split.rule``).
-    split_rule: bool = True
+    by_rule: bool = True
 
 
 @dataclass(frozen=True)
