@@ -10,6 +10,7 @@ import pickle
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import yaml
 
@@ -279,3 +280,104 @@ def test_a_split_not_shown_to_be_the_rule_s_is_not_called_so() -> None:
     assert words is not None and "split as the solver left it" in words
     assert "is split by the equal-springs rule" not in words
     assert "is split by the equal-springs rule" in (indeterminacy_words(rule) or "")
+
+
+def test_a_study_s_steps_together_keep_the_model_s_order() -> None:
+    """``over_steps``: the largest degree, each joint and contact once, in
+    the model's order of joints (each joint's contacts as found), and the
+    rule's split only where every step's is."""
+    from jointplay.indeterminacy import Indeterminacy, over_steps
+
+    a = Indeterminacy(1, ("hinge2",), ("hinge2.axial",))
+    b = Indeterminacy(2, ("hinge1", "hinge2"), ("hinge1.end-", "hinge1.axial", "hinge2.axial"))
+    both = over_steps([a, DETERMINATE, b], ["hinge1", "hinge2"])
+    assert both == Indeterminacy(
+        2, ("hinge1", "hinge2"), ("hinge1.end-", "hinge1.axial", "hinge2.axial"), True
+    )
+    left = Indeterminacy(1, ("hinge2",), ("hinge2.axial",), by_rule=False)
+    assert not over_steps([a, left], ["hinge1", "hinge2"]).by_rule
+    assert over_steps([DETERMINATE, DETERMINATE], ["hinge1"]) == DETERMINATE
+
+
+def test_a_sweep_says_at_which_steps_its_forces_are_the_rule_s(tmp_path: Path) -> None:
+    """The door's weight turned about Y. At 0 and 180 deg it is axial and the
+    two hinges share it (degree 1, the door's count); at 90 and 270 deg it
+    pushes across the hinges, and both ends of both hinges touch: four
+    forces along X against two equations (the force along X, the moment
+    about Y), degree 2. Each step's count is that of the door solved alone
+    under that step's load (text, JSON, CSV)."""
+    from jointplay.studies.sweep import RotateLoad, Sweep
+
+    model = model_from_dict(door())
+    swept = Sweep(rotate=RotateLoad(0, (0.0, 1.0, 0.0), steps=4)).run(model)
+    alone = []
+    for angle in (0.0, 90.0, 180.0, 270.0):
+        data = door()
+        t = np.radians(angle)
+        data["loads"][0]["force"] = [-300.0 * np.sin(t), 0.0, -300.0 * np.cos(t)]
+        alone.append(jointplay.solve(model_from_dict(data)).indeterminate)
+    assert swept.indeterminate == tuple(alone)
+    assert [f.degree for f in alone] == [1, 2, 1, 2]
+    assert alone[1].contacts == ("hinge1.end-", "hinge1.end+", "hinge2.end-", "hinge2.end+")
+    path = tmp_path / "door.yaml"
+    path.write_text(yaml.safe_dump(door()), encoding="utf-8")
+    sweep = ("sweep", str(path), "--rotate-load", "0", "--about", "y", "--steps", "4")
+    proc = run(*sweep)
+    assert proc.returncode == 0, proc.stderr
+    assert (
+        "Forces: at every step, the load shared by hinge1 and hinge2 is split by the "
+        "equal-springs rule (statically indeterminate, degree 1 to 2)"
+    ) in " ".join(proc.stdout.split())
+    proc = run(*sweep, "--json")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["indeterminate"] == {
+        "degree": 2,
+        "joints": ["hinge1", "hinge2"],
+        "contacts": [
+            "hinge1.axial",
+            "hinge1.end-",
+            "hinge1.end+",
+            "hinge2.axial",
+            "hinge2.end-",
+            "hinge2.end+",
+        ],
+        "by_rule": True,
+        "steps": [0, 1, 2, 3],
+    }
+    assert [s["indeterminate"] for s in doc["steps"]] == [f.to_dict() for f in alone]
+    assert list(swept.to_dataframe()["indeterminate_degree"]) == [1, 2, 1, 2]
+    # where some steps' forces are decided, the sentence counts the others
+    from jointplay.present.textreport import steps_split_words
+
+    words = steps_split_words([alone[0], DETERMINATE, alone[1], DETERMINATE], ["hinge1", "hinge2"])
+    assert words is not None and words.startswith(
+        "Forces: at 2 of 4 steps, the load shared by hinge1 and hinge2 is split by the "
+        "equal-springs rule (statically indeterminate, degree 1 to 2)"
+    )
+
+
+def test_a_motion_says_whose_forces_are_the_rule_s() -> None:
+    """The slider-crank's piston rests on the four corners of its guide at
+    every pose, one more than the guide's rows need (the door's count for a
+    guide: degree 1, the guide named); the four-bar's pins decide every
+    force (degree 0: nothing said). Each step's count is that pose's answer's."""
+    from jointplay.present.textreport import steps_split_words
+
+    gallery = ROOT / "examples" / "gallery"
+    crank = jointplay.Motion(steps=5).run(jointplay.load(gallery / "slider_crank.yaml"))
+    assert [f.degree for f in crank.indeterminate] == [1] * 5
+    assert crank.indeterminate == tuple(r.indeterminate for r in crank.results)
+    doc = crank.to_dict()
+    assert doc["indeterminate"]["joints"] == ["guide"]
+    assert doc["indeterminate"]["steps"] == [0, 1, 2, 3, 4]
+    assert doc["steps"][2]["indeterminate"] == crank.results[2].indeterminate.to_dict()
+    assert steps_split_words(crank.indeterminate, crank.joint_names) == (
+        "Forces: at every step, the load shared by the contacts of guide is split by the "
+        "equal-springs rule (statically indeterminate, degree 1); the rigid parts do not "
+        "decide it; give `stiffness` for the real split."
+    )
+    assert list(crank.to_dataframe()["indeterminate degree"]) == [1] * 5
+    bar = jointplay.Motion(steps=5).run(jointplay.load(gallery / "four_bar.yaml"))
+    assert steps_split_words(bar.indeterminate, bar.joint_names) is None
+    assert bar.to_dict()["indeterminate"]["degree"] == 0

@@ -45,6 +45,7 @@ acts is split by the rule.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -92,6 +93,36 @@ class Indeterminacy:
 
 #: The answer of a determinate mechanism (and of a route that does not count).
 DETERMINATE = Indeterminacy()
+
+
+def over_steps(found: Sequence[Indeterminacy], joints: Sequence[str]) -> Indeterminacy:
+    """What a study's answers (a sweep's or a motion's steps) say together:
+    the largest degree, every joint and contact that shares a redundant load
+    at some step (in the order of ``joints``, the model's), and ``by_rule``
+    where every step's split is the rule's."""
+    order = {name: k for k, name in enumerate(joints)}
+    shared = {name for f in found for name in f.joints}
+    contacts = list(dict.fromkeys(name for f in found for name in f.contacts))
+
+    def joint_of(contact: str) -> int:  # "joint.contact": the longest joint name that fits
+        fits = [j for j in shared if contact.startswith(j + ".")]
+        return order.get(max(fits, key=len), len(order)) if fits else len(order)
+
+    return Indeterminacy(
+        max((f.degree for f in found), default=0),
+        tuple(sorted(shared, key=lambda j: order.get(j, len(order)))),
+        tuple(sorted(contacts, key=joint_of)),  # stable: each joint's contacts as found
+        all(f.by_rule for f in found),
+    )
+
+
+def steps_dict(found: Sequence[Indeterminacy], joints: Sequence[str]) -> dict[str, Any]:
+    """JSON ``indeterminate`` of a study's steps: ``over_steps``, and the
+    steps (from 0) whose forces are a convention."""
+    return {
+        **over_steps(found, joints).to_dict(),
+        "steps": [s for s, f in enumerate(found) if f.degree > 0],
+    }
 
 
 def indeterminacy_of(

@@ -35,6 +35,7 @@ from matplotlib.transforms import Bbox
 
 from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
+from jointplay.indeterminacy import over_steps
 from jointplay.present.outputs import check_figure_path
 from jointplay.present.scene import JointView, Marker, Scene, joint_view, mechanism_scene
 
@@ -836,6 +837,10 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
     ax.set_xlabel(xlabel)
     ax.set_ylabel("contact force (N)")
     some = f" (the {len(most)} largest of {len(carried)})" if len(most) < len(carried) else ""
+    shared = over_steps(result.indeterminate, result.joint_names).joints
+    if shared:  # their split is a convention (the sweep's text says so in full)
+        names = ", ".join(shared[:3]) + (" ..." if len(shared) > 3 else "")
+        some += f"\nsplit by rule: {names}"
     ax.set_title(f"contact forces{some}", fontsize=10)
     ax.grid(True, linewidth=0.3)
     if most:

@@ -1056,6 +1056,7 @@ class _Page:
         """The motion's section; ``others``: the model's other load cases are
         solved above but not driven through the motion."""
         from jointplay.present.motion_plots import motion_figure, poses_figure
+        from jointplay.present.textreport import steps_split_words
 
         self.section("Motion")
         under, case = "", "" if mr.case is None else f" --case {shlex.quote(mr.case)}"
@@ -1098,6 +1099,9 @@ class _Page:
                 + ". See the Motion section."
             )
             self.parts.insert(self.summary_end, "<p>" + html.escape(words) + "</p>")
+        split = steps_split_words(mr.indeterminate, mr.joint_names)
+        if split is not None:
+            self.paragraph(split)
         self.parts.append(_svg(motion_figure(mr)))
         self.parts.append(_svg(poses_figure(model, mr)))
         self.paragraph("Move the slider to step through the poses.")
@@ -1105,6 +1109,7 @@ class _Page:
 
     def sweep(self, model: Model, sw: SweepResult, source: str) -> None:
         from jointplay.present.plot import sweep_figure
+        from jointplay.present.textreport import steps_split_words
         from jointplay.studies.envelope import point_envelopes
 
         self.subsection(f"Sweep of {', '.join(sw.labels)}: {sw.steps} steps")
@@ -1119,6 +1124,9 @@ class _Page:
                 "Steps (the first 400); the whole table: jointplay sweep ... --csv FILE",
             )
         )
+        split = steps_split_words(sw.indeterminate, sw.joint_names)
+        if split is not None:
+            self.paragraph(split)
         self.parts.append(_svg(sweep_figure(sw, envelopes)))
 
     def html(self) -> str:

@@ -13,6 +13,7 @@ from rich.table import Table
 from rich.text import Text
 
 from jointplay.geometry import FloatArray, fmt_point
+from jointplay.indeterminacy import Indeterminacy, over_steps
 from jointplay.model.mechanism import Model
 from jointplay.result import Result
 from jointplay.settings import DEFAULT
@@ -134,7 +135,28 @@ def indeterminacy_words(result: Result) -> str | None:
     indeterminate (``Result.indeterminate``), naming the joints that share
     the redundant load; None where the balance decides every force (the
     text and the report alike)."""
-    found = result.indeterminate
+    return split_words(result.indeterminate)
+
+
+def steps_split_words(found: Sequence[Indeterminacy], joints: Sequence[str]) -> str | None:
+    """The forces' sentence of a study's steps (a sweep's, a motion's): at
+    which of them the printed contact forces are a convention, and whose."""
+    redundant = [f for f in found if f.degree > 0]
+    if not redundant:
+        return None
+    degrees = sorted({f.degree for f in redundant})
+    where = (
+        "at every step"
+        if len(redundant) == len(found)
+        else f"at {len(redundant)} of {len(found)} steps"
+    )
+    degree = f"{degrees[0]}" if len(degrees) == 1 else f"{degrees[0]} to {degrees[-1]}"
+    return split_words(over_steps(found, joints), where, degree)
+
+
+def split_words(found: Indeterminacy, where: str = "", degree: str | None = None) -> str | None:
+    """The forces' sentence of ``found`` (None where its degree is 0);
+    ``where``: the steps it holds at, ``degree`` as said there."""
     if found.degree <= 0:
         return None
     names = list(found.joints)
@@ -146,16 +168,18 @@ def indeterminacy_words(result: Result) -> str | None:
         shared = ", ".join(names[:-1]) + f" and {names[-1]}"
     else:
         shared = ", ".join(names[:NAMED_JOINTS]) + f" and {len(names) - NAMED_JOINTS} other joints"
+    at = f"{where}, " if where else ""
+    degree = str(found.degree) if degree is None else degree
     if not found.by_rule:
         return (
-            f"Forces: the load shared by {shared} is split as the solver left it (statically "
-            f"indeterminate, degree {found.degree}): the equal-springs rule's program gave no "
+            f"Forces: {at}the load shared by {shared} is split as the solver left it (statically "
+            f"indeterminate, degree {degree}): the equal-springs rule's program gave no "
             "split that certifies here, and other splits balance the loads as well; "
             "the rigid parts do not decide it; give `stiffness` for the real split."
         )
     return (
-        f"Forces: the load shared by {shared} is split by the equal-springs rule "
-        f"(statically indeterminate, degree {found.degree}); the rigid parts do not decide it; "
+        f"Forces: {at}the load shared by {shared} is split by the equal-springs rule "
+        f"(statically indeterminate, degree {degree}); the rigid parts do not decide it; "
         "give `stiffness` for the real split."
     )
 
@@ -449,6 +473,9 @@ def render_sweep(
             f"point {name}: largest displacement {sizes[s, p]:.6g} mm at step {s} ({at}), "
             f"along {_vec(result.points[s, p] / max(sizes[s, p], 1e-300))}\n"
         )
+    split = steps_split_words(result.indeterminate, result.joint_names)
+    if split is not None:
+        tail.append(split + "\n")
     if tail:
         parts.append(tail)
     console.print(_fit(console, *parts))
@@ -512,6 +539,9 @@ def render_motion(
             f"; worst at step {s} (drive {result.shown_value(s):.6g} {result.unit}): "
             f"{result.measured[s, q]:.6g} mm of {result.limits[q]:g} mm\n"
         )
+    split = steps_split_words(result.indeterminate, result.joint_names)
+    if split is not None:
+        tail.append(split + "\n")
     for sentence in findings:
         tail.append(sentence + "\n")
     console.print(_fit(console, head, table, tail))

@@ -22,6 +22,7 @@ import numpy as np
 
 from jointplay.errors import ModelError, OptionError
 from jointplay.geometry import FloatArray
+from jointplay.indeterminacy import Indeterminacy, steps_dict
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model
 from jointplay.model.tables import DriveTable
@@ -182,6 +183,16 @@ class MotionResult:
     def worst_step(self, q: int) -> int:
         return int(np.argmax(self.measured[:, q]))
 
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(self.results[0].joints) if self.results else ()
+
+    @property
+    def indeterminate(self) -> tuple[Indeterminacy, ...]:
+        """(S,) each step's static indeterminacy: where its contact forces
+        are split by the rule, not decided by the balance."""
+        return tuple(r.indeterminate for r in self.results)
+
     def to_dict(self) -> dict[str, Any]:
         steps = []
         for s, result in enumerate(self.results):
@@ -214,6 +225,7 @@ class MotionResult:
                         for name in names
                     ],
                     "requirements": [r.to_dict() for r in result.requirements],
+                    "indeterminate": result.indeterminate.to_dict(),
                 }
             )
         return {
@@ -237,6 +249,7 @@ class MotionResult:
                 }
                 for q, name in enumerate(self.requirement_names)
             ],
+            "indeterminate": steps_dict(self.indeterminate, self.joint_names),
         }
 
     def to_dataframe(self) -> pd.DataFrame:
@@ -256,6 +269,8 @@ class MotionResult:
             row["switched"] = CELL_SEPARATOR.join(
                 f"{joint}.{name}" for joint, names in self.switched[s].items() for name in names
             )
+            # 0: the balance decides every force; above, the forces are the rule's split
+            row["indeterminate degree"] = self.results[s].indeterminate.degree
             rows.append(row)
         return pd.DataFrame(rows)
 

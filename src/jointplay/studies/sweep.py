@@ -29,6 +29,7 @@ import numpy as np
 
 from jointplay.errors import JointplayError, ModelError, OptionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
+from jointplay.indeterminacy import Indeterminacy, steps_dict
 from jointplay.io.modelfile import model_from_dict
 from jointplay.model.mechanism import Model, check_case
 from jointplay.solver.solve import Workspace
@@ -381,6 +382,7 @@ class _Chunk:
     feasibility_mm: float
     equilibrium_residual: float
     reused: int  # steps solved on the previous step's workspace
+    indeterminate: tuple[Indeterminacy, ...]  # (n,) whose forces are a convention
 
 
 def _step_data(base: dict[str, Any], sweep: Sweep, index: tuple[int, ...]) -> dict[str, Any]:
@@ -483,6 +485,7 @@ def solve_steps(
         max(r.certificate.feasibility_mm for r in rows),
         max(r.equilibrium_residual for r in rows),
         reused,
+        tuple(r.indeterminate for r in rows),
     )
 
 
@@ -530,6 +533,9 @@ class SweepResult:
     potential_energy: FloatArray  # (S,)
     feasibility_mm: float  # worst over the steps
     equilibrium_residual: float  # worst over the steps
+    #: (S,) each step's static indeterminacy: where its contact forces are
+    #: split by the rule, not decided by the balance (``Result.indeterminate``)
+    indeterminate: tuple[Indeterminacy, ...] = ()
 
     @property
     def steps(self) -> int:
@@ -560,6 +566,8 @@ class SweepResult:
             cols[f"{joint}.{contact}.in_contact"] = self.in_contact[:, c]
             cols[f"{joint}.{contact}.force"] = self.force[:, c]
         cols["potential_energy"] = self.potential_energy
+        # 0: the balance decides every force; above, the forces are the rule's split
+        cols["indeterminate_degree"] = [f.degree for f in self.indeterminate]
         return pd.DataFrame(cols)
 
     def to_dict(self) -> dict[str, Any]:
@@ -592,6 +600,7 @@ class SweepResult:
                     },
                     "joints": joints,
                     "potential_energy": float(self.potential_energy[s]),
+                    "indeterminate": self.indeterminate[s].to_dict(),
                 }
             )
         return {
@@ -604,6 +613,7 @@ class SweepResult:
                 "feasibility_mm": self.feasibility_mm,
                 "equilibrium_residual": self.equilibrium_residual,
             },
+            "indeterminate": steps_dict(self.indeterminate, self.joint_names),
         }
 
 
@@ -640,4 +650,5 @@ def _result(
         np.concatenate([c.energy for c in parts]),
         max(c.feasibility_mm for c in parts),
         max(c.equilibrium_residual for c in parts),
+        tuple(f for c in parts for f in c.indeterminate),
     )
