@@ -131,7 +131,12 @@ class Envelope:
             return (self.case,)
         return tuple(model.case_names) or (None,)
 
-    def _run(self, model: Model, *, source: str) -> EnvelopeResult:
+    def _run(
+        self, model: Model, *, source: str, carry: dict[int, Any] | None = None
+    ) -> EnvelopeResult:
+        """``carry``: the answers of a nearby model's envelope (the pose
+        before, in a motion), read and replaced here: each batch's rows start
+        Newton from the same rows' answers there (``own_starts``)."""
         names = [p.name for p in model.points]
         if self.point not in names:
             known = ", ".join(names) if names else "none; add a 'points' section"
@@ -187,7 +192,16 @@ class Envelope:
         resolution = Resolution.of(asm.s, asm.ell, settings=ws.settings)
 
         def motion_of(work: FloatArray) -> FloatArray:
-            motion = ws.solve_batch(work, forces=False).body_displacement(point.body)
+            # a batch's rows (not a climb's single steps) start from the same
+            # rows' answers on the model before, where there is one
+            kept = carry is not None and len(work) > 1
+            before = (
+                carry.get(len(work), (None,) * len(work)) if kept and carry is not None else None
+            )
+            batch = ws.solve_batch(work, forces=False, own_starts=before)
+            if kept and carry is not None and batch.own_starts is not None:
+                carry[len(work)] = batch.own_starts
+            motion = batch.body_displacement(point.body)
             return proven(motion[:, :3] + np.cross(motion[:, 3:], at), resolution.length)
 
         if mode == "model":

@@ -539,13 +539,15 @@ class MotionEnvelope:
                 entry="points",
             )
         found: list[tuple[EnvelopeResult, ...]] = []
+        # each point's probes at a pose start from their answers at the pose before
+        carried: dict[str, dict[int, Any]] = {name: {} for name in names}
         for s in range(cycle.steps):
             posed = cycle.posed(s)
             found.append(
                 tuple(
                     Envelope(
                         name, self.directions, self.plays, self.loads, case=self.motion.case
-                    ).run(posed, source=cycle.source)
+                    )._run(posed, source=cycle.source, carry=carried[name])
                     for name in names
                 )
             )
