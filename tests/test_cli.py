@@ -52,8 +52,12 @@ def test_solve_json_has_exactly_the_documented_schema() -> None:
         "accuracy",
         "requirements",
         "indeterminate",
+        "free_motions",
     }
     assert doc["indeterminate"] == {"degree": 0, "joints": [], "contacts": [], "by_rule": True}
+    # the shaft's spin: no joint holds it and no load drives it (the text's line, reported as 0)
+    assert doc["free_motions"] == ["body 'S1': rotation about the global X axis"]
+    assert doc["bodies"]["S1"]["rotation"][0] == 0.0
     assert 0.0 <= doc["linearization_error"] < 1e-4 and doc["warnings"] == []
     assert doc["accuracy"]["certified"]
     assert doc["accuracy"]["feasibility_mm"] <= 1e-9

@@ -225,3 +225,26 @@ def test_processes_and_a_local_dask_cluster_give_the_same_table() -> None:
         np.testing.assert_allclose(local.translation, other.translation, rtol=0, atol=MM)
         assert np.array_equal(local.in_contact, other.in_contact)
     assert local.to_dataframe().shape == (36, len(local.to_dataframe().columns))
+
+
+def test_a_long_sweep_s_table_shows_each_point_s_largest_step() -> None:
+    """Past SWEEP_ROWS steps the table shows one step in k, and always each
+    point's largest, which the line under it names."""
+    import re
+
+    from test_cli import run
+
+    proc = run(
+        "sweep",
+        str(ROOT / "examples" / "studies" / "rotating_unbalance.yaml"),
+        "--vary",
+        "joints[l2].clearance=0.1:0.3:5",
+        "--vary",
+        "loads[0].force[0]=-5:5 N:11",
+    )
+    assert proc.returncode == 0, proc.stderr
+    said = re.search(r"largest displacement \S+ mm at step (\d+)", proc.stdout)
+    assert said is not None
+    rows = {int(line.split()[0]) for line in proc.stdout.splitlines() if re.match(r"\s+\d+ ", line)}
+    assert int(said.group(1)) in rows and len(rows) < 55
+    assert "(one step in 2 of 55 shown, and each point's largest" in proc.stdout

@@ -370,6 +370,8 @@ class Result:
             "accuracy": self.accuracy(),
             "requirements": [r.to_dict() for r in self.requirements],
             "indeterminate": self.indeterminate.to_dict(),
+            # the motions no joint holds and no load drives, reported as 0 (as the text says)
+            "free_motions": list(self.free_motions),
         }
 
     def accuracy(self) -> dict[str, Any]:

@@ -429,6 +429,12 @@ def render_envelope(
 SWEEP_ROWS = 40
 
 
+def _largest_step(sizes: FloatArray) -> int:
+    """The step of the largest size (ties: the first)."""
+    top = float(np.max(sizes))
+    return int(np.flatnonzero(sizes >= top * (1 - 1e-12))[0])
+
+
 def render_sweep(
     result: SweepResult, source: str, console: Console, csv: Path | None = None
 ) -> None:
@@ -445,9 +451,10 @@ def render_sweep(
         table.add_column(f"|d {name}| (mm)", justify="right")
     table.add_column("touching")
     sizes = np.linalg.norm(result.points, axis=2)  # (S, P)
-    shown_rows = range(result.steps)
-    if result.steps > SWEEP_ROWS:
-        shown_rows = range(0, result.steps, -(-result.steps // SWEEP_ROWS))
+    every = -(-result.steps // SWEEP_ROWS) if result.steps > SWEEP_ROWS else 1
+    # each point's largest step too, which the summary below names
+    worst = [_largest_step(sizes[:, p]) for p in range(sizes.shape[1])]
+    shown_rows = sorted({*range(0, result.steps, every), *worst})
     for s in shown_rows:
         touching = [
             f"{j}.{c}" for k, (j, c) in enumerate(result.contact_names) if result.in_contact[s, k]
@@ -462,10 +469,12 @@ def render_sweep(
     tail = Text()
     if len(shown_rows) < result.steps:
         where = f"written to {csv}" if csv else "--csv FILE writes them"
-        tail.append(f"(one step in {shown_rows.step} of {result.steps} shown; all {where})\n")
+        tail.append(
+            f"(one step in {every} of {result.steps} shown, and each point's largest; "
+            f"all {where})\n"
+        )
     for p, name in enumerate(result.point_names):
-        top = float(np.max(sizes[:, p]))
-        s = int(np.flatnonzero(sizes[:, p] >= top * (1 - 1e-12))[0])  # ties: the first
+        s = worst[p]
         at = ", ".join(
             f"{label} = {v:.6g}" for label, v in zip(result.labels, result.values[s], strict=True)
         )
