@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 
 import jointplay
 from conftest import MM, PAPER, RAD, ROOT
@@ -487,3 +488,51 @@ def test_a_report_names_the_load_case_not_held(tmp_path: Path) -> None:
     # progress shows on a terminal only: a pipe gets the one line of what was written
     (line,) = proc.stderr.strip().splitlines()
     assert line.startswith(f"jointplay: wrote {tmp_path / 'r.html'} (")
+
+
+GALLERY = ROOT / "examples" / "gallery"
+
+
+@pytest.mark.parametrize("as_json", [False, True], ids=["text", "json"])
+def test_motion_fail_on_requirements_exits_4_where_a_step_fails(as_json: bool) -> None:
+    """The slider-crank's 0.05 mm limit on its piston holds at the pose
+    written (0 deg) and fails over most of the turn: exit 4 after printing
+    everything, as solve does; the four-bar's limit holds at every step: 0."""
+    extra = ["--json"] if as_json else []
+    proc = run("motion", str(GALLERY / "slider_crank.yaml"), "--fail-on-requirements", *extra)
+    assert proc.returncode == 4, proc.stderr
+    assert proc.stderr == ""  # a verdict, not an error
+    if as_json:
+        doc = json.loads(proc.stdout)
+        passed = [step["requirements"][0]["passed"] for step in doc["steps"]]
+        assert passed[0] and not all(passed)
+        assert doc["requirements"][0]["passed"] is False
+    else:
+        assert "requirement on piston top: FAILED at" in proc.stdout
+    holds = run("motion", str(GALLERY / "four_bar.yaml"), "--fail-on-requirements", *extra)
+    assert holds.returncode == 0, holds.stderr
+    if as_json:
+        assert json.loads(holds.stdout)["requirements"][0]["passed"] is True
+    # without the option a failed requirement is reported, not an exit code
+    assert run("motion", str(GALLERY / "slider_crank.yaml"), *extra).returncode == 0
+
+
+def test_motion_fail_on_requirements_is_decided_by_the_nominal_motion(tmp_path: Path) -> None:
+    """With --samples the nominal motion decides: the slider-crank's limit set
+    just above its nominal worst step passes (exit 0) though Monte Carlo parts
+    with wider plays miss it; just below, it fails (exit 4)."""
+    nominal = json.loads(run("motion", str(GALLERY / "slider_crank.yaml"), "--json").stdout)
+    worst = nominal["requirements"][0]["measured"]
+    data = yaml.safe_load((GALLERY / "slider_crank.yaml").read_text())
+    codes = {}
+    for factor in (1.005, 0.995):
+        data["requirements"][0]["max_displacement"] = worst * factor
+        path = tmp_path / f"slider_crank_{factor}.json"
+        path.write_text(json.dumps(data))
+        args = ["--samples", "40", "--workers", "1", "--json", "--fail-on-requirements"]
+        proc = run("motion", str(path), *args)
+        doc = json.loads(proc.stdout)
+        assert doc["requirements"][0]["passed"] is (factor > 1)
+        assert doc["monte_carlo"]["requirements"][0]["outside"] > 0
+        codes[factor] = proc.returncode
+    assert codes == {1.005: 0, 0.995: 4}

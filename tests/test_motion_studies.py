@@ -19,6 +19,7 @@ import pytest
 import jointplay
 from jointplay.assembly import assemble
 from jointplay.io.modelfile import model_from_dict
+from jointplay.model.fits import fit
 from jointplay.studies.contributions import Contributions
 from jointplay.studies.envelope import Envelope
 from jointplay.studies.kinematics import nominal_poses
@@ -28,6 +29,7 @@ from jointplay.studies.motion_studies import (
     MotionEnvelope,
     MotionMonteCarlo,
     MotionStudiesResult,
+    tied_largest,
 )
 from jointplay.studies.variation import load_map, play_map
 
@@ -236,6 +238,52 @@ def test_linear_contributions_at_a_pose_are_the_linear_study() -> None:
                 _close(result.shares(k)[s], direct.worst_case[k])
                 assert result.spread(k)[s] == direct.worst_case_range[k]
                 assert result.sigma(k)[s] == direct.rss_sigma[k]
+
+
+def test_plays_that_tie_for_the_lead_are_named_together() -> None:
+    """The slider-crank's crank pin (16 mm) and wrist pin (12 mm) are both
+    H7/g6 in ISO 286's 10-18 mm band: the same limits, 6 to 35 um, and in a
+    rod that carries no moment the same slope, so each holds half of the
+    piston's stack. The sentence names both, not the first; with the wrist
+    pin on H7/f7 (16 to 52 um) the crank pin no longer ties and is not named."""
+    fits = [fit("H7/g6", d) for d in (16.0, 12.0)]
+    assert fits[0].min_clearance == fits[1].min_clearance == pytest.approx(0.006)
+    assert fits[0].max_clearance == fits[1].max_clearance == pytest.approx(0.035)
+    tied = _load("slider_crank.yaml")
+    found = MotionContributions(motion=Motion(steps=3)).run(tied)
+    crank, wrist = (found.plays.index(f"{j} pin.clearance") for j in ("crank", "wrist"))
+    for k in range(len(found.measures)):
+        s = found.worst_step(k)
+        assert found.shares(k)[s, crank] == pytest.approx(50.0, abs=0.05)
+        assert found.shares(k)[s, wrist] == pytest.approx(50.0, abs=0.05)
+        assert found.leading_plays(k) == ("crank pin.clearance", "wrist pin.clearance")
+    nominal = Motion(steps=3).run(tied)
+    findings = MotionStudiesResult(nominal, contributions=found).findings()
+    both = "driven by crank pin.clearance and wrist pin.clearance (each 50 % of the worst-case"
+    assert sum(both in line for line in findings) == len(found.measures) == 2
+
+    data = tied.model_dump(by_alias=True, exclude_none=True)
+    [wrist_pin] = [j for j in data["joints"] if j["name"] == "wrist pin"]
+    wrist_pin["clearance"] = {"fit": "H7/f7", "diameter": 12}
+    apart = model_from_dict(data, source="slider_crank.yaml")
+    found = MotionContributions(motion=Motion(steps=3)).run(apart)
+    nominal = Motion(steps=3).run(apart)
+    findings = MotionStudiesResult(nominal, contributions=found).findings()
+    for k in range(len(found.measures)):
+        assert found.leading_plays(k) == ("wrist pin.clearance",) == (found.leading(k),)
+    said = [line for line in findings if line.startswith("contributions to")]
+    assert len(said) == 2
+    assert all("driven by wrist pin.clearance (" in line for line in said)
+    assert not any("crank pin" in line or "each" in line for line in said)
+
+
+def test_a_tie_is_to_the_printed_resolution() -> None:
+    """Shares tie where they print alike (3 significant digits): 49.96 is
+    '50', 49.9 is not; three thirds tie; nothing to share names one."""
+    assert tied_largest([50.0, 49.96, 0.04]) == [0, 1]
+    assert tied_largest([50.0, 49.9, 0.1]) == [0]
+    assert tied_largest([0.01, 33.33, 33.34, 33.32]) == [1, 2, 3]
+    assert tied_largest([0.0, 0.0]) == [0]
 
 
 def run_cli(*args: str) -> subprocess.CompletedProcess[str]:

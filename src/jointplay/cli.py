@@ -1,5 +1,6 @@
 """The ``jointplay`` command line. Exit codes: 0 solved, 2 invalid model,
-3 mechanism not held by its joints, 1 anything else."""
+3 mechanism not held by its joints, 4 a requirement fails (only with
+``--fail-on-requirements``), 1 anything else."""
 
 from __future__ import annotations
 
@@ -36,7 +37,8 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-#: ``solve --fail-on-requirements``: solved and certified, but a requirement fails.
+#: ``solve --fail-on-requirements``: solved and certified, but a requirement fails
+#: (``motion --fail-on-requirements``: at a step of the nominal motion).
 REQUIREMENT_FAILED = 4
 
 R = TypeVar("R")
@@ -589,6 +591,15 @@ def motion(
         bool,
         typer.Option("--contributions", help="Which play drives each measure, at every pose."),
     ] = False,
+    fail_on_requirements: Annotated[
+        bool,
+        typer.Option(
+            "--fail-on-requirements",
+            help=f"Exit with code {REQUIREMENT_FAILED} when a requirement fails at any step "
+            "of the nominal motion (after printing everything): a gate for CI. With "
+            "--samples too, the nominal motion decides, not the Monte Carlo's parts.",
+        ),
+    ] = False,
 ) -> None:
     """Drive MODEL through its motion (its 'motion' section, or --drive and
     --range): every body's pose by its ideal joints, and at every pose the
@@ -605,7 +616,10 @@ def motion(
         MotionStudiesResult,
     )
 
+    failed = False
+
     def run() -> None:
+        nonlocal failed
         source = str(model_path)
         bounds = None
         if span is not None:
@@ -620,6 +634,7 @@ def motion(
         settings = Motion(drive=drive, range=bounds, steps=steps, case=case)
         with _progress_display(not as_json) as bar:
             nominal = _staged(bar, "solving the motion", lambda: settings.run(model, source))
+            failed = any(not r.passed for result in nominal.results for r in result.requirements)
             studies = MotionStudiesResult(
                 nominal,
                 None
@@ -661,6 +676,8 @@ def motion(
         )
 
     _guarded(run, as_json)
+    if failed and fail_on_requirements:
+        raise typer.Exit(REQUIREMENT_FAILED)
 
 
 @app.command(short_help="Which toleranced play drives each functional point.")

@@ -784,9 +784,17 @@ class MotionContributionsResult:
 
     def leading(self, k: int, step: int | None = None) -> str:
         """The play with the largest share (``shares``) of measure ``k`` at
-        ``step`` (default: its worst step)."""
+        ``step`` (default: its worst step); the first in the model's order
+        where several tie (``leading_plays`` names them all)."""
         s = self.worst_step(k) if step is None else step
         return self.plays[int(np.argmax(self.shares(k)[s]))]
+
+    def leading_plays(self, k: int, step: int | None = None) -> tuple[str, ...]:
+        """Every play whose share of measure ``k`` at ``step`` (default: its
+        worst step) is the largest as the findings print it (``share_words``):
+        two pins of one fit read '50 %' both, and both are named."""
+        s = self.worst_step(k) if step is None else step
+        return tuple(self.plays[i] for i in tied_largest(self.shares(k)[s]))
 
     def why(self, k: int, step: int) -> str:
         """Why measure ``k``'s linear figures do not hold at ``step`` ('' where they do)."""
@@ -825,12 +833,37 @@ class MotionContributionsResult:
         }
 
 
+def share_words(percent: float) -> str:
+    """A share as the findings print it: '50', '33.3' (3 significant digits)."""
+    return f"{percent:.3g}"
+
+
+def tied_largest(shares: Any) -> list[int]:
+    """The indices, in order, of the shares that print (``share_words``) as
+    the largest does: the plays that tie for the lead to the resolution
+    shown. Only the largest where it is not a positive number (nothing to
+    share: all would tie at '0')."""
+    values = np.asarray(shares, dtype=float)
+    first = int(np.argmax(values))
+    top = float(values[first])
+    if not (np.isfinite(top) and top > 0):
+        return [first]
+    shown = share_words(top)
+    return [i for i, v in enumerate(values) if share_words(float(v)) == shown]
+
+
+def _and(names: tuple[str, ...]) -> str:
+    """'a', 'a and b', 'a, b and c'."""
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
 def _contribution_findings(con: MotionContributionsResult, k: int, measure: str) -> list[str]:
     """Measure ``k``'s sentences: where it varies most and which play drives
     it there, by the shares ``jointplay contributions`` gives at that pose;
     the steps where it is not linear over the ranges, and why."""
     s = con.worst_step(k)
-    share = float(np.max(con.shares(k)[s]))
+    share = share_words(float(np.max(con.shares(k)[s])))
+    leading = con.leading_plays(k, s)
     at = f"at step {s} (drive {con.shown_value(s):.6g} {_unit(con.coordinate)})"
     if con.linear(k)[s]:
         spread = f"worst-case spread {con.spread(k)[s]:.6g} mm, RSS sigma {con.sigma(k)[s]:.6g} mm"
@@ -840,7 +873,7 @@ def _contribution_findings(con: MotionContributionsResult, k: int, measure: str)
         of = "total share of the variance" if con.by_variance(k, s) else "linear share"
     out = [
         f"contributions to {measure}: it varies most {at}: {spread}; driven by "
-        f"{con.leading(k)} ({share:.3g} % {of})"
+        f"{_and(leading)} ({'each ' if len(leading) > 1 else ''}{share} % {of})"
     ]
     bent = np.flatnonzero(~con.linear(k))
     if bent.size:
