@@ -104,8 +104,18 @@ CASES: list[tuple[str, Any, str]] = [
     (
         "wrong units",
         joint(0, clearance="3 kg"),
-        r"joints\[0\] 'l1': clearance: expected a length, got '3 kg', which is a \[mass\]; write a "
+        r"joints\[0\] 'l1': clearance: expected a length, got '3 kg', which is a mass; write a "
         r"plain number in mm or a string with units",
+    ),
+    (
+        "a force as a length: the dimension named as the model names it",
+        joint(0, clearance="15 N"),
+        r"joints\[0\] 'l1': clearance: expected a length, got '15 N', which is a force; write a ",
+    ),
+    (
+        "a unit no model entry takes: pint's words",
+        joint(0, clearance="3 s"),
+        r"joints\[0\] 'l1': clearance: expected a length, got '3 s', which is a \[time\]; write a ",
     ),
     (
         "an angle as a length",
@@ -751,6 +761,14 @@ def test_a_joint_of_unknown_type_still_has_its_other_problems_listed(tmp_path: P
     first, count, *others = str(info.value).split("\n")
     assert "joints[0] 'l1': the joint needs a 'type'" in first
     assert count == "2 more problem(s) in this file:"
+    # a key that only some types need is not said to be missing: the type decides
+    data = spherical_shaft()
+    del data["joints"][1]["clearance"]
+    data["joints"][1]["type"] = "prismatc"
+    with pytest.raises(ModelError) as info:
+        jointplay.load(write(tmp_path, data))
+    assert str(info.value).count("\n") == 0, str(info.value)
+    assert "unknown joint type 'prismatc'. Did you mean 'prismatic'?" in str(info.value)
 
 
 def test_the_package_still_reaches_its_modules_and_lists_its_names() -> None:

@@ -244,7 +244,15 @@ def _factor(expression: str, dimension: str) -> float | tuple[str, str]:
                 f"dimensionless (a bare number means the base unit; a unit must be {_a(dimension)})"
             )
         else:
-            kind = f"a {quantity.dimensionality}"
+            # the name of a dimension the model takes elsewhere (a force where a
+            # length is due), else pint's own words
+            named = [
+                name.replace("_", " ")
+                for name, unit in BASE_UNITS.items()
+                if registry.Quantity(1.0, unit).dimensionality == quantity.dimensionality
+                and _radians(registry.Quantity(1.0, unit)) == turns[0]
+            ]
+            kind = _a(named[0]) if named else f"a {quantity.dimensionality}"
         return (f"expected {_a(dimension)}, got ", f", which is {kind}; {_hint(dimension)}")
     try:
         return float(quantity.to(base).magnitude)

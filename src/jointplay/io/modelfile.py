@@ -903,7 +903,12 @@ def _with_common_joint_problems(errors: list[Any], data: dict[str, Any]) -> list
         try:
             _AnyJoint.model_validate({k: v for k, v in item.items() if k != "type"})
         except ValidationError as exc:
-            out += [{**e, "loc": (*loc, *e["loc"])} for e in exc.errors(include_url=False)]
+            # a key missing is the type's to say (a prismatic joint has no 'clearance')
+            out += [
+                {**e, "loc": (*loc, *e["loc"])}
+                for e in exc.errors(include_url=False)
+                if e["type"] != "missing"
+            ]
         out += [
             {"type": "extra_forbidden", "loc": (*loc, key), "msg": "", "input": value}
             for key, value in item.items()
