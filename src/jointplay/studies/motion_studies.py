@@ -23,7 +23,7 @@ from __future__ import annotations
 import itertools
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -39,6 +39,7 @@ from jointplay.studies.kinematics import Poses, nominal_poses
 from jointplay.studies.montecarlo import PERCENTILES
 from jointplay.studies.motion import Motion, MotionResult, posed_model, shown_drive
 from jointplay.studies.parallel import run_chunks
+from jointplay.studies.parts import inputs_of, measured, measures_of
 from jointplay.studies.variation import deviation_map, load_map, nothing_varies, play_map
 
 #: ``progress(done, total)``: called after each pose a study has solved.
@@ -689,14 +690,49 @@ class MotionContributions:
         workers: int | None = 1,
     ) -> MotionContributionsResult:
         """The contributions at every pose; ``progress(done, total)`` after
-        each pose; ``workers``: local processes for a pose's Sobol' study."""
+        each pose's linear shares; ``workers``: local processes. Where the
+        shares of the variance are taken, the Sobol' design's sets of parts
+        are carried through the poses as a Monte Carlo's are (each Newton
+        from the same set's answers at the poses before), then analysed
+        pose by pose: what ``Contributions`` gives there, at a fraction of
+        the time."""
+        from jointplay.studies.sobol import Sobol
+
         cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
         study = self.study()
+        linear = replace(study, variance="never")
         found_at = []
         for s in range(cycle.steps):
-            found_at.append(study.run(cycle.posed(s), source=cycle.source, workers=workers))
+            found_at.append(linear.run(cycle.posed(s), source=cycle.source, workers=workers))
             if progress is not None:
                 progress(s + 1, cycle.steps)
+        wanted = [
+            s
+            for s, found in enumerate(found_at)
+            if self.variance == "always"
+            or (self.variance == "auto" and not all(c.linear for c in found.linearity))
+        ]
+        if wanted:
+            sobol = Sobol(self.samples, self.seed, case=self.motion.case)
+            designs = [sobol.design(cycle.posed(s), cycle.source) for s in wanted]
+            problem, values = designs[0]
+            if all(np.array_equal(v, values) for _, v in designs):
+                # one design for every pose (its inputs' laws do not move with the bodies)
+                inputs = inputs_of(cycle.posed(wanted[0]), self.motion.case, cycle.source)
+                n_p, n_l = len(inputs.pmap.variables), len(inputs.lmap.variables)
+                carried = MotionMonteCarlo(motion=self.motion)._solved(
+                    cycle, values[:, :n_p], values[:, n_p : n_p + n_l], values[:, n_p + n_l :],
+                    workers,
+                )  # fmt: skip
+                for s in wanted:
+                    posed = cycle.posed(s)
+                    y = measured(posed, measures_of(posed, cycle.source), carried.displacement[s])
+                    shares = sobol.analysed(posed, problem, y, cycle.source)
+                    found_at[s] = replace(found_at[s], settings=study, sobol=shares)
+            else:
+                for s in wanted:
+                    shares = sobol.run(cycle.posed(s), workers=workers, source=cycle.source)
+                    found_at[s] = replace(found_at[s], settings=study, sobol=shares)
         found = tuple(found_at)
         return MotionContributionsResult(
             self, cycle.model.name, cycle.drive, cycle.coordinate, cycle.values, found

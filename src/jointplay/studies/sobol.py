@@ -67,16 +67,21 @@ class Sobol:
     def run(
         self, model: Model, *, workers: int | None = 1, source: str | None = None
     ) -> SobolResult:
-        from SALib.analyze import sobol as analysis
+        source = source or model.name or "<model>"
+        problem, values = self.design(model, source)
+        measures = measures_of(model, source)
+        y = measured(model, measures, solve_sets(model, self.case, values, workers=workers))
+        return self.analysed(model, problem, y, source)
+
+    def design(self, model: Model, source: str) -> tuple[dict[str, Any], FloatArray]:
+        """SALib's problem and its design's sets of parts (rows; columns as
+        ``parts.Inputs``: plays, loads, deviations)."""
         from SALib.sample import sobol as design
 
-        source = source or model.name or "<model>"
         check_case(model, self.case, source, "the Sobol' study")
         inputs = inputs_of(model, self.case, source)
         if not inputs.groups:
             raise nothing_varies("nothing has a share of the variance", source)
-        measures = measures_of(model, source)
-        n, d = self.samples, len(inputs.groups)
         units = inputs.unit_groups
         width = units[-1][-1] + 1
         problem = {
@@ -86,10 +91,20 @@ class Sobol:
             "groups": [f"x{i}" for i, cols in enumerate(units) for _ in cols],
         }
         u = design.sample(
-            problem, n, calc_second_order=False, seed=np.random.default_rng([self.seed, 0])
-        )
-        values = inputs.from_unit(u)
-        y = measured(model, measures, solve_sets(model, self.case, values, workers=workers))
+            problem, self.samples, calc_second_order=False,
+            seed=np.random.default_rng([self.seed, 0]),
+        )  # fmt: skip
+        return problem, inputs.from_unit(u)
+
+    def analysed(
+        self, model: Model, problem: dict[str, Any], y: FloatArray, source: str
+    ) -> SobolResult:
+        """The indices of the measures ``y`` (M, rows of the design) of ``model``."""
+        from SALib.analyze import sobol as analysis
+
+        inputs = inputs_of(model, self.case, source)
+        measures = measures_of(model, source)
+        n, d = self.samples, len(inputs.groups)
         # SALib's order: each base row's A, its D rows A_B^i, then B
         f = y.reshape(len(measures), n, d + 2)
         keep = ~np.any(np.isnan(f), axis=(0, 2))  # a set of parts not assembled: row left out
@@ -128,7 +143,7 @@ class Sobol:
             total,
             total_ci,
             variance,
-            len(values),
+            y.shape[1],
         )
 
 
