@@ -18,7 +18,7 @@ import yaml
 import jointplay
 from jointplay.errors import ModelError, MotionError, OptionError, UnboundedMechanismError
 from jointplay.io.modelfile import model_from_dict
-from jointplay.studies.kinematics import nominal_poses
+from jointplay.studies.kinematics import ReachError, nominal_poses
 from jointplay.studies.motion import Motion, posed_model
 from test_cli import _missing, run
 
@@ -471,6 +471,165 @@ def test_a_grashof_rocker_turned_a_full_turn_is_out_of_reach(tmp_path: Path) -> 
     assert len(proc.stderr.strip().splitlines()) == 1
 
 
+#: The located end of a drive's reach meets its closed form to this (rad).
+REACH_TOL = 1e-6
+
+
+@pytest.mark.parametrize(
+    ("turn", "sign"), [("360 deg", -1.0), ("-360 deg", 1.0)], ids=["ccw", "cw"]
+)
+def test_a_rocker_driven_past_its_toggle_is_told_where_its_reach_ends(
+    tmp_path: Path, turn: str, sign: float
+) -> None:
+    """The crank-rocker driven by its rocker, either way: its reach ends
+    where crank and coupler are in line, |O2 B| = b - a or b + a (the cosine
+    rule, ``_toggle_turn``). A step past it is "unreachable" (the range asks
+    for values the linkage cannot reach), its message says where the reach
+    ends (6 digits, on the near side), that it is a toggle (a dead point) of
+    the crank's and coupler's joints, between which steps, and the fix."""
+    import re
+
+    model = _four_bar(1000.0, drive="pivot", turn=turn)
+    with pytest.raises(ReachError) as err:
+        Motion().run(model)
+    limit = _toggle_turn(sign)
+    assert abs(err.value.end - limit) < REACH_TOL
+    assert err.value.kind == "unreachable" and err.value.exit_code == 2
+    n = int(np.ceil(abs(limit) / np.radians(10)))  # steps of 10 deg
+    assert err.value.step == n
+    assert err.value.value == pytest.approx(np.sign(limit) * np.radians(10 * n))
+    assert {"motor", "pin A", "pin B"} <= set(err.value.joints)
+    message = str(err.value)
+    [shown] = re.findall(r"reach ends at (-?[\d.]+) deg", message)
+    assert len(shown.replace("-", "").replace(".", "").lstrip("0")) == 6, shown
+    assert abs(float(shown) - np.degrees(limit)) < 1e-4
+    assert abs(float(shown)) <= abs(np.degrees(limit))  # a value still reached
+    grid = np.degrees(np.sign(limit) * np.radians(10.0) * np.array([n - 1, n]))
+    words = [
+        f"between step {n - 1} ({grid[0]:g} deg) and step {n} ({grid[1]:g} deg)",
+        "at a toggle (a dead point) of joints 'motor', 'pin A', 'pin B'",
+        "which the drive cannot pass",
+        f"stop the range short of {shown} deg, or drive another joint",
+    ]
+    assert all(w in message for w in words), message
+    proc = run("motion", str(_four_bar_file(tmp_path, model)))
+    assert proc.returncode == 2 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert f"unreachable: at step {n}" in proc.stderr and all(w in proc.stderr for w in words)
+
+
+def test_a_non_grashof_crank_driven_past_its_limit_is_told_where_its_reach_ends() -> None:
+    """A triple rocker (l + s = 150 + 60 > p + q = 70 + 100): its "crank"
+    (a = 150 about O2) swings only as far as coupler (b = 60) and rocker
+    (c = 70 about O4, d = 100 from O2) fall in line, |A O4| = b + c, so
+    cos th2 = (a^2 + d^2 - (b + c)^2) / (2 a d). Written at th2 = 30 deg and
+    driven to 90 deg, the reach ends th2 - 30 deg on, a toggle of the
+    coupler's and the rocker's joints."""
+    import re
+
+    a, b, c, d = 150.0, 60.0, 70.0, 100.0
+    th2 = np.radians(30.0)
+    A = a * np.array([np.cos(th2), np.sin(th2)])
+    # B: |B - A| = b, |B - O4| = c, above the line A O4
+    O4 = np.array([d, 0.0])
+    e = float(np.linalg.norm(O4 - A))
+    along = (b * b - c * c + e * e) / (2 * e)
+    u = (O4 - A) / e
+    B = A + along * u + np.sqrt(b * b - along * along) * np.array([-u[1], u[0]])
+    pin = {"type": "revolute", "axis": [0, 0, 1], "length": 12, "axial_clearance": 0.05}
+    pin["clearance"] = 0.02
+    data = {
+        "bodies": [
+            {"name": "frame", "ground": True},
+            {"name": "crank"},
+            {"name": "coupler"},
+            {"name": "rocker"},
+        ],
+        "joints": [
+            {**pin, "name": "motor", "between": ["frame", "crank"], "at": [0, 0, 0], "backlash": 0},
+            {**pin, "name": "pin A", "between": ["crank", "coupler"], "at": [*A, 0]},
+            {**pin, "name": "pin B", "between": ["coupler", "rocker"], "at": [*B, 0]},
+            {**pin, "name": "pivot", "between": ["frame", "rocker"], "at": [d, 0, 0]},
+        ],
+        "loads": [{"body": "rocker", "torque": [0, 0, 1000.0]}],
+        "motion": {"drive": "motor", "range": ["0 deg", "90 deg"], "steps": 10},
+    }
+    limit = np.arccos((a * a + d * d - (b + c) ** 2) / (2 * a * d)) - th2
+    with pytest.raises(ReachError) as err:
+        Motion().run(model_from_dict(data, source="triple_rocker"))
+    assert abs(err.value.end - limit) < REACH_TOL
+    assert err.value.kind == "unreachable"
+    assert err.value.step == int(np.ceil(limit / np.radians(10)))
+    assert {"pin A", "pin B", "pivot"} <= set(err.value.joints)
+    [shown] = re.findall(r"reach ends at (-?[\d.]+) deg", str(err.value))
+    assert 0 <= np.degrees(limit) - float(shown) < 1e-4
+
+
+def _drive_free(path: Path, name: str, field: str, **motion: object) -> dict[str, Any]:
+    """The model file at ``path`` with its joint ``name`` driven and without its ``field``."""
+    data: dict[str, Any] = yaml.safe_load(path.read_text())
+    for joint in data["joints"]:
+        joint.pop("backlash", None)  # no other joint's spin held either: the drive's alone
+        if joint["name"] == name:
+            joint.pop(field, None)
+    data["motion"] = {**data["motion"], "drive": name, **motion}
+    if str(motion.get("range", ["deg"])[0]).endswith("mm"):  # type: ignore[index]
+        # a gas force's table over the crank's angle reads nothing over a slide
+        first = data["loads"][0]
+        data["loads"] = [{"body": first["body"], "at": first["at"], "force": [-500.0, 0, 0]}]
+    return data
+
+
+@pytest.mark.parametrize(
+    ("name", "joint", "field", "motion", "words"),
+    [
+        ("four_bar", "motor", "backlash", {}, ("its spin is free", 'backlash: "0.2 deg"')),
+        (
+            "slider_crank",
+            "guide",
+            "axial_clearance",
+            {"range": ["0 mm", "-60 mm"], "steps": 7},
+            ("its slide is free", 'axial_clearance: "50 um"'),
+        ),
+    ],
+    ids=["spin", "slide"],
+)
+def test_a_drive_that_holds_nothing_is_named_with_its_fix(
+    tmp_path: Path,
+    name: str,
+    joint: str,
+    field: str,
+    motion: dict[str, object],
+    words: tuple[str, str],
+) -> None:
+    """A spin drive without a backlash (a slide drive without an
+    axial_clearance) holds nothing in the clearance model: the loads drive
+    the linkage's one free motion. Exit 3 still, with the body and the
+    motion, but the message names the drive joint, what it lacks and the
+    fix; --json says it too."""
+    data = _drive_free(GALLERY / f"{name}.yaml", joint, field, **motion)
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    proc = run("motion", str(path))
+    assert proc.returncode == 3 and proc.stdout == "" and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    article = "an" if field == "axial_clearance" else "a"
+    expected = [
+        "jointplay: not held: at step 0 of the motion",
+        f"the drive holds nothing: joint '{joint}' has no {field}",
+        words[0],
+        "body 'crank': rotation about the global Z axis is not held",
+        f"give '{joint}' {article} {field} ({words[1]})",
+    ]
+    assert all(w in proc.stderr for w in expected), proc.stderr
+    doc = json.loads(run("motion", str(path), "--json").stdout)
+    assert doc["status"] == "unbounded" and doc["body"] == "crank"
+    assert doc["motion"] == "rotation about the global Z axis" and expected[1] in doc["message"]
+    with pytest.raises(UnboundedMechanismError) as err:
+        Motion().run(model_from_dict(data))
+    assert err.value.exit_code == 3 and err.value.body == "crank" and expected[1] in str(err.value)
+
+
 #: Drives that another joint's held spin locks: (model, drive, the joint
 #: whose backlash holds it, --range where the model's motion drives another kind).
 LOCKED = [
@@ -801,7 +960,11 @@ def test_an_unreachable_step_is_named_by_the_users_values(steps: int) -> None:
     assert f"at step {n} (drive 'pivot' at {grid[n]:g} deg)" in message, message
     assert f"between step {n - 1} ({grid[n - 1]:g} deg) and step {n} ({grid[n]:g} deg)" in message
     shown = {float(v) for v in re.findall(r"(-?[\d.]+) deg", message)}
-    assert shown <= {float(grid[n - 1]), float(grid[n])}, message
+    # the steps' values, and where the reach ends (ReachError.end, 6 digits): no part's
+    assert isinstance(err.value, ReachError)
+    end = float(re.findall(r"reach ends at (-?[\d.]+) deg", message)[0])
+    assert end == pytest.approx(np.degrees(err.value.end), abs=1e-4)
+    assert shown <= {float(grid[n - 1]), float(grid[n]), end}, message
     assert err.value.value == pytest.approx(np.radians(grid[n]))
 
 

@@ -269,6 +269,21 @@ class MotionSettings:
     #: are taken in parts, so that least squares start near the pose they close
     #: (from 90 deg away a slider-crank's loop closes on its other branch).
     largest_step: float = 0.1
+    #: Where a step cannot close, the end of the drive's reach is found by
+    #: bisection to this (rad for a spin; times ``ell`` in mm for a slide):
+    #: 30 closes from a part of a step (``largest_step``), each cheap; below
+    #: it a value closes or not by the ``closure`` of the pose (1e-10), not by
+    #: the linkage. The end is then shown to 6 significant digits.
+    reach_resolution: float = 1e-10
+    #: The end of the reach is a toggle (a dead point: the drive cannot pass
+    #: it) when the equations' smallest singular value there, drive included,
+    #: is below this fraction of the largest. Within ``reach_resolution`` of a
+    #: toggle it is at most ~1e-5 (it goes as the square root of the
+    #: distance; 7e-11 and 3e-10 measured at the audit's four-bars' ends, where
+    #: the closing pose sits on the toggle itself); away from one a linkage's
+    #: is 1e-2 or more (the four-bar's 0.05 at its written pose, 0.004 still
+    #: 0.1 deg short of its toggle).
+    toggle: float = 1e-3
 
 
 MOTION = MotionSettings()

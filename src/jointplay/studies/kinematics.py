@@ -17,6 +17,7 @@ held spin locks the loop) moves nothing, whatever the range.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,6 +30,16 @@ from jointplay.model.mechanism import Model
 from jointplay.settings import MOTION, MotionSettings
 
 IntArray = NDArray[np.intp]
+
+
+class ReachError(MotionError):
+    """A ``MotionError`` of kind "unreachable" where the drive's reach ends
+    at a toggle (a dead point) between two steps: ``end`` is the drive's
+    value there (rad or mm), ``joints`` those at the toggle."""
+
+    def __init__(self, message: str, *, end: float, **fields: Any):
+        self.end = end
+        super().__init__(message, **fields)
 
 
 @dataclass(frozen=True)
@@ -252,6 +263,34 @@ class _Equations:
         return tuple(names)
 
 
+def moves_only_the_drive(
+    model: Model,
+    poses: Poses,
+    step: int,
+    direction: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]],
+    settings: MotionSettings = MOTION,
+) -> bool:
+    """Whether the small motion ``direction`` at ``step``'s pose (per moving
+    body its rotation and the translation at the global origin, as
+    ``UnboundedMechanismError.direction``) is the drive's own coordinate: by
+    the mobility's rank rule (``mobility_rcond`` of the equations' largest
+    singular value) it moves no ideal joint's equation, and the drive's."""
+    eqs = _Equations(model, settings)
+    R, p = poses.R[step], poses.p[step]
+    none = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    d = np.zeros(eqs.n)
+    for i, name in enumerate(eqs.bodies):
+        omega, v_origin = (np.asarray(v, dtype=float) for v in direction.get(name, none))
+        # the unknowns shift the point at the body's p, not the global origin
+        d[6 * i : 6 * i + 6] = np.concatenate([omega, v_origin + np.cross(omega, p[i])])
+    _, J = eqs.evaluate(R, p, np.repeat(np.eye(3)[None], len(R), axis=0), poses.values[step])
+    scale = _column_scale(eqs)
+    moved = (J * scale) @ (d / scale)
+    top = float(np.linalg.norm(J * scale, 2) * np.linalg.norm(d / scale))
+    rcond = settings.mobility_rcond * top
+    return bool(top > 0.0 and abs(moved[-1]) > rcond and np.all(np.abs(moved[:-1]) <= rcond))
+
+
 def _shown(coordinate: Coordinate, value: float) -> str:
     return f"{np.degrees(value):.6g} deg" if coordinate == "spin" else f"{value:.6g} mm"
 
@@ -266,7 +305,8 @@ def nominal_poses(
     """Every moving body's pose at each drive value of ``values`` (rad or
     mm, from the pose written in the file), reached step by step from it.
     Raises ``UnboundedMechanismError`` when the drive leaves a motion free,
-    ``MotionError`` at a dead point or a value out of reach."""
+    ``MotionError`` at a dead point or a value out of reach (a ``ReachError``,
+    with the value where the reach ends, when it ends at a toggle)."""
     eqs = _Equations(model, settings)
     B = len(eqs.bodies)
     R = np.repeat(np.eye(3)[None], B, axis=0)
@@ -286,7 +326,12 @@ def nominal_poses(
         for part in np.linspace(current, float(value), parts + 1)[1:]:
             guess = np.zeros(eqs.n) if not rates else 2 * rates[-1] - rates[0]
             step = _Step(s, current, float(value), float(part))
-            R, p, z = _solve_step(eqs, R, p, step, source, guess * (part - last))
+            try:
+                R, p, z = _solve_step(eqs, R, p, step, source, guess * (part - last))
+            except MotionError as exc:
+                if exc.kind != "unreachable":
+                    raise
+                raise _reach_end(eqs, R, p, step, last, exc, source) from None
             if part != last:
                 rates = [*rates[-1:], z / (part - last)]
             last = float(part)
@@ -331,32 +376,8 @@ def _solve_step(
     """The pose at drive ``step.part`` from the pose ``(R0, p0)`` before it,
     least squares starting at the change ``z0`` (the last step's, in
     proportion: the same closure from fewer evaluations); with the change found."""
+    R, p, z, res, J = _closed(eqs, R0, p0, step.part, z0)
     settings = eqs.settings
-    value = step.part
-    tol = max(settings.solve_tolerance, float(np.finfo(float).eps))
-    seen: dict[bytes, tuple[FloatArray, FloatArray]] = {}
-
-    def evaluated(z: FloatArray) -> tuple[FloatArray, FloatArray]:
-        key = z.tobytes()  # least squares asks for the residuals and the Jacobian at each point
-        if key not in seen:
-            seen.clear()
-            seen[key] = eqs.evaluate(*eqs._pose(R0, p0, z), value)
-        return seen[key]
-
-    def fun(z: FloatArray) -> FloatArray:
-        return evaluated(z)[0]
-
-    def jac(z: FloatArray) -> FloatArray:
-        return evaluated(z)[1]
-
-    m = len(eqs.rows) + 1
-    if m >= eqs.n:  # MINPACK's Levenberg-Marquardt, called with little overhead
-        z = leastsq(fun, z0, Dfun=jac, xtol=tol, ftol=tol, gtol=tol, maxfev=settings.evaluations)[0]
-    else:
-        z = least_squares(fun, z0, jac=jac, method="trf", xtol=tol, ftol=tol, gtol=tol,
-                          max_nfev=settings.evaluations).x  # fmt: skip
-    R, p, Jl = eqs._pose(R0, p0, z)
-    res, J = eqs.evaluate(R, p, Jl, value)
     worst = float(np.max(np.abs(res)))
     if worst > settings.closure * eqs.ell:
         joints = eqs.joints_of(res)
@@ -388,6 +409,97 @@ def _solve_step(
             source=source,
         )
     return R, p, z
+
+
+def _reach_end(
+    eqs: _Equations,
+    R: FloatArray,
+    p: FloatArray,
+    step: _Step,
+    last: float,
+    failed: MotionError,
+    source: str | None,
+) -> MotionError:
+    """Where the drive's reach ends, between ``last`` (closed, the pose
+    ``(R, p)``) and ``step.part`` (not closed): bisection on the drive's
+    value, each half closed from the last pose that closed, down to
+    ``MotionSettings.reach_resolution``. A toggle there (the equations'
+    smallest singular value near 0, as at a dead point) is named with its
+    joints and the value; without one, ``failed`` as it was."""
+    settings = eqs.settings
+    lo, hi = last, step.part
+    width = settings.reach_resolution * (1.0 if eqs.drive == "spin" else eqs.ell)
+    while abs(hi - lo) > width:  # from 0.1 rad (largest_step) to 1e-10: 30 closes
+        mid = 0.5 * (lo + hi)
+        Rm, pm, _, res, _ = _closed(eqs, R, p, mid, np.zeros(eqs.n))
+        if float(np.max(np.abs(res))) <= settings.closure * eqs.ell:
+            lo, R, p = mid, Rm, pm
+        else:
+            hi = mid
+    Jl = np.repeat(np.eye(3)[None], len(R), axis=0)
+    _, J = eqs.evaluate(R, p, Jl, lo)
+    U, sigma, _ = np.linalg.svd(J * _column_scale(eqs), full_matrices=False)
+    if not sigma.size or sigma[-1] >= settings.toggle * sigma[0]:
+        return failed
+    joints = eqs.joints_of(U[:, -1])
+    end = _short_of(eqs.drive, lo, hi - lo)
+    return ReachError(
+        f"unreachable: at {step.at(eqs)} the linkage is out of reach: the drive's reach ends "
+        f"at {end}, {step.between(eqs)}, at a toggle (a dead point) of joints "
+        f"{', '.join(repr(j) for j in joints)}, which the drive cannot pass; the range asks "
+        "for values past it, which no pose of the linkage reaches from there; stop the range "
+        f"short of {end}, or drive another joint",
+        kind="unreachable",
+        step=step.index,
+        value=step.value,
+        joints=joints,
+        source=source,
+        end=lo,
+    )
+
+
+def _short_of(coordinate: Coordinate, value: float, onward: float) -> str:
+    """``value`` (rad or mm) as ``_shown`` gives it, 6 significant digits
+    cut towards the range's start (against ``onward``): a value still within
+    the reach that ends at ``value``."""
+    x = float(np.degrees(value)) if coordinate == "spin" else value
+    if x != 0.0:
+        q = 10.0 ** (np.floor(np.log10(abs(x))) - 5)
+        x = float(np.floor(x / q) if onward > 0 else np.ceil(x / q)) * q
+    return f"{x:.6g} deg" if coordinate == "spin" else f"{x:.6g} mm"
+
+
+def _closed(
+    eqs: _Equations, R0: FloatArray, p0: FloatArray, value: float, z0: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The least squares pose at drive ``value`` from ``(R0, p0)``, starting
+    at the change ``z0``: the pose, the change, and its residuals and Jacobian."""
+    settings = eqs.settings
+    tol = max(settings.solve_tolerance, float(np.finfo(float).eps))
+    seen: dict[bytes, tuple[FloatArray, FloatArray]] = {}
+
+    def evaluated(z: FloatArray) -> tuple[FloatArray, FloatArray]:
+        key = z.tobytes()  # least squares asks for the residuals and the Jacobian at each point
+        if key not in seen:
+            seen.clear()
+            seen[key] = eqs.evaluate(*eqs._pose(R0, p0, z), value)
+        return seen[key]
+
+    def fun(z: FloatArray) -> FloatArray:
+        return evaluated(z)[0]
+
+    def jac(z: FloatArray) -> FloatArray:
+        return evaluated(z)[1]
+
+    m = len(eqs.rows) + 1
+    if m >= eqs.n:  # MINPACK's Levenberg-Marquardt, called with little overhead
+        z = leastsq(fun, z0, Dfun=jac, xtol=tol, ftol=tol, gtol=tol, maxfev=settings.evaluations)[0]
+    else:
+        z = least_squares(fun, z0, jac=jac, method="trf", xtol=tol, ftol=tol, gtol=tol,
+                          max_nfev=settings.evaluations).x  # fmt: skip
+    R, p, Jl = eqs._pose(R0, p0, z)
+    res, J = eqs.evaluate(R, p, Jl, value)
+    return R, p, z, res, J
 
 
 def _column_scale(eqs: _Equations) -> FloatArray:

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from jointplay.errors import ModelError, OptionError
+from jointplay.errors import ModelError, OptionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.indeterminacy import Indeterminacy, steps_dict
 from jointplay.io.modelfile import model_from_dict
@@ -28,7 +28,7 @@ from jointplay.model.mechanism import Model
 from jointplay.model.tables import DriveTable
 from jointplay.result import Result
 from jointplay.settings import MOTION, MotionSettings
-from jointplay.studies.kinematics import Poses, nominal_poses
+from jointplay.studies.kinematics import Poses, moves_only_the_drive, nominal_poses
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -277,6 +277,45 @@ class MotionResult:
     to_frame = to_dataframe
 
 
+#: What holds a drive's coordinate in the clearance model: the field, and an example of it.
+_HOLDS = {
+    "spin": ("backlash", 'backlash: "0.2 deg"'),
+    "slide": ("axial_clearance", 'axial_clearance: "50 um"'),
+}
+
+
+def _unheld(
+    exc: UnboundedMechanismError, model: Model, poses: Poses, step: int, motion: Motion
+) -> UnboundedMechanismError:
+    """``exc``, a pose's "not held", saying so where what is free is the
+    drive's own coordinate (its spin without a ``backlash``, its slide
+    without an ``axial_clearance``: the drive holds nothing); otherwise
+    ``exc`` as it was. The body, the motion and their directions are kept."""
+    joint, coordinate, _, _ = model.motion_drive()
+    field, example = _HOLDS[coordinate]
+    if getattr(joint, field, None) is not None or not moves_only_the_drive(
+        model, poses, step, exc.direction, motion.settings
+    ):
+        return exc
+    value = shown_drive(coordinate, float(poses.values[step]))
+    unit = "deg" if coordinate == "spin" else "mm"
+    verb = "turn" if coordinate == "spin" else "move"
+    under = f" under load case '{motion.case}'" if motion.case else ""
+    others = [repr(b) for b in exc.direction if b != exc.body]
+    with_others = f" (together with {', '.join(others)})" if others else ""
+    article = "an" if field[0] in "aeiou" else "a"
+    return UnboundedMechanismError(
+        f"at step {step} of the motion (drive '{joint.name}' at {value:g} {unit}){under} the "
+        f"drive holds nothing: joint '{joint.name}' has no {field}, so its {coordinate} is "
+        f"free and the loads {verb} it: body '{exc.body}': {exc.motion} is not held"
+        f"{with_others}. A drive holds its {coordinate} up to its {field}: give "
+        f"'{joint.name}' {article} {field} ({example}), or balance the loads on it.",
+        body=exc.body,
+        motion=exc.motion,
+        direction=exc.direction,
+    )
+
+
 def _without_round_off(nominal: FloatArray, motion: Motion) -> FloatArray:
     """Nominal positions with components below what the kinematics closes to
     (``MotionSettings.closure`` of their size) as 0."""
@@ -426,7 +465,10 @@ class Motion:
             posed = posed_model(model, poses, s, source)
             loads = posed.loads_of(self.case) if self.case else None
             ws = Workspace(assemble(posed))
-            result, after = follow(ws, extrapolated(before, last), loads)
+            try:
+                result, after = follow(ws, extrapolated(before, last), loads)
+            except UnboundedMechanismError as exc:
+                raise _unheld(exc, model, poses, s, self) from None
             before, last = last, after
             results.append(result)
             nominal.append([poses.place(s, p.body, np.array(p.at)) for p in model.points])
