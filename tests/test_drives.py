@@ -325,3 +325,44 @@ def test_a_pin_whose_axial_play_no_load_takes_is_batched_as_a_tie() -> None:
         np.testing.assert_allclose(
             result.displacement[i, 0], alone.points["tip"].displacement, atol=MM
         )
+
+
+def test_a_spin_no_joint_holds_is_told_which_play_would_hold_it() -> None:
+    """The message of a free motion the loads drive names the load that works
+    most on it and, where the motion turns joints about their own axes
+    alone, the backlash that would hold it; the advice taken, the model
+    solves. A ball joint's free turn takes no backlash: no such advice."""
+    import yaml
+
+    from jointplay.io.modelfile import model_from_dict
+
+    root = Path(__file__).parent.parent / "examples"
+    bar = yaml.safe_load((root / "gallery" / "four_bar.yaml").read_text())
+    del bar["joints"][0]["backlash"]
+    with pytest.raises(UnboundedMechanismError) as info:
+        jointplay.solve(model_from_dict(bar))
+    said = str(info.value)
+    assert "most by loads[0] on 'coupler'" in said
+    assert (
+        "joints 'motor', 'pin B', 'pin C', 'pin D' each turn about their axes in it: give one "
+        'of them a backlash (the play of a drive that holds its spin, e.g. backlash: "0.2 deg")'
+    ) in said
+    bar["joints"][2]["backlash"] = "0.2 deg"  # on pin C, as the message allows
+    assert jointplay.solve(model_from_dict(bar)).certificate.certified
+
+    shaft = yaml.safe_load((root / "paper" / "6.1.6.1.yaml").read_text())
+    shaft["loads"].append({"body": "S1", "torque": [1000, 0, 0]})  # about the shaft's axis
+    with pytest.raises(UnboundedMechanismError) as info:
+        jointplay.solve(model_from_dict(shaft))
+    said = str(info.value)
+    assert "most by loads[1] on 'S1'" in said and "give joint 'l2' a backlash" in said
+    shaft["joints"][1]["backlash"] = "0.2 deg"
+    assert jointplay.solve(model_from_dict(shaft)).certificate.certified
+
+    ball = yaml.safe_load((root / "paper" / "6.1.6.1.yaml").read_text())
+    del ball["joints"][1]  # S1 on its ball joint alone, turned about Z
+    ball["loads"] = [{"body": "S1", "torque": [0, 0, 1000]}]
+    with pytest.raises(UnboundedMechanismError) as info:
+        jointplay.solve(model_from_dict(ball))
+    assert "backlash" not in str(info.value)
+    assert "add a joint or a clearance limit that holds this motion" in str(info.value)

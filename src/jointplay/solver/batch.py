@@ -216,7 +216,7 @@ def follow(
     began = time.perf_counter()
     with linalg.one_blas_thread():
         loads, g = pipeline.loads_and_work(ws, loads)
-        held.check_driven(ws, g)
+        held.check_driven(ws, g, loads)
         scale = pipeline.load_scale(ws, float(np.linalg.norm(g)))
         g_hat = g / scale if scale else g
         sigma = ws.softness(scale)

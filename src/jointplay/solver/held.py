@@ -7,7 +7,7 @@ for a solve that fails on a nearly free mechanism.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -16,6 +16,7 @@ import scipy.sparse as sp
 from jointplay.assembly import Assembly, IntArray
 from jointplay.errors import UnboundedMechanismError
 from jointplay.geometry import FloatArray, describe_motion
+from jointplay.model.mechanism import Load
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
 from jointplay.settings import TINY, SolverSettings
@@ -25,13 +26,15 @@ if TYPE_CHECKING:
     from jointplay.solver.workspace import WorkspaceData
 
 
-def check_driven(ws: WorkspaceData, g: FloatArray) -> None:
+def check_driven(ws: WorkspaceData, g: FloatArray, loads: Sequence[Load] = ()) -> None:
+    """``UnboundedMechanismError`` if the loads' work ``g`` drives a free
+    motion; ``loads``: theirs, to name the one that drives it most."""
     if ws.N.shape[1] == 0:
         return
     drive = ws.N.T @ g
     if np.linalg.norm(drive) <= ws.settings.free_motion_rcond * np.linalg.norm(g):
         return
-    raise unbounded(ws.asm, ws.N @ drive, ws.settings)
+    raise unbounded(ws.asm, ws.N @ drive, ws.settings, loads=loads)
 
 
 def driven_motion(ws: WorkspaceData, g: FloatArray, fallback: FloatArray) -> FloatArray:
@@ -198,10 +201,12 @@ def unbounded(
     settings: SolverSettings,
     one_way: bool = False,
     turn: float | None = None,
+    loads: Sequence[Load] = (),
 ) -> UnboundedMechanismError:
     """Describe a driven free motion (scaled unknowns) in words (``one_way``:
     a motion the joints stop in one sense only, such as lifting off; ``turn``:
-    the motion is held, but only after this many radians)."""
+    the motion is held, but only after this many radians; ``loads``: the
+    loads, the one that works most on it named)."""
     moves = []
     for i, name in enumerate(asm.body_names):
         omega, v_origin = asm.body_motion(direction, i)
@@ -216,9 +221,12 @@ def unbounded(
     motion = describe_motion(omega, v_origin, asm.ell, signed=one_way)
     others = [mv[1] for mv in moving[1:]]
     with_others = f" (together with {', '.join(repr(o) for o in others)})" if others else ""
+    fix = _held_by(asm, direction, settings) or (
+        "add a joint or a clearance limit that holds this motion"
+    )
     message = (
-        f"body '{body}': {motion} is not held by any joint, and the loads drive it{with_others}. "
-        "There is no equilibrium: add a joint or a clearance limit that holds this motion, "
+        f"body '{body}': {motion} is not held by any joint, and the loads drive it{with_others}"
+        f"{_driven_most_by(asm, direction, loads)}. There is no equilibrium: {fix}, "
         "or balance the loads on it."
     )
     if turn is not None:
@@ -242,4 +250,70 @@ def unbounded(
         body=body,
         motion=motion,
         direction=direction_map,  # type: ignore[arg-type]
+    )
+
+
+def _driven_most_by(asm: Assembly, direction: FloatArray, loads: Sequence[Load]) -> str:
+    """', most by loads[0] on 'shaft'': the load that works most on the
+    free motion ``direction`` (none named where no load works on it)."""
+    work = []
+    for load in loads:
+        try:
+            work.append(float(asm.work_of([load]) @ direction))
+        except ValueError:  # on a ground body: no work on any motion
+            work.append(0.0)
+    if not work or max(work) <= 0.0:
+        return ""
+    load = loads[int(np.argmax(work))]
+    model = asm.model
+    if load in model.loads:
+        return f", most by loads[{model.loads.index(load)}] on '{load.body}'"
+    for case, own in (model.load_cases or {}).items():
+        if load in own:
+            return f", most by load {own.index(load)} of load case '{case}' on '{load.body}'"
+    return f", most by the weight of '{load.body}'"
+
+
+#: What holds a joint's own free coordinate, if the joint type has it: the
+#: field, its words and an example.
+_HOLDS = {
+    "spin": ("backlash", "the play of a drive that holds its spin", 'backlash: "0.2 deg"'),
+    "slide": ("axial_clearance", "its play along its axis", 'axial_clearance: "50 um"'),
+}
+
+
+def _held_by(asm: Assembly, direction: FloatArray, settings: SolverSettings) -> str | None:
+    """The fix where the free motion turns (or slides) some joints about
+    (along) their own axes alone, and their type can hold that with a play
+    they are not given: a shaft in bearings without a drive, a linkage whose
+    pins all turn. Holding that one coordinate of any of them holds the
+    motion. None where no joint is such."""
+    moving = []
+    for joint, G in zip(asm.model.joints, asm.G, strict=True):
+        tw = G.block @ direction[G.cols]  # relative torsor at the joint centre, joint frame
+        t, w = tw[:3], tw[3:]
+        moving.append((float(np.linalg.norm(t)) + asm.ell * float(np.linalg.norm(w)), joint, t, w))
+    top = max((size for size, *_ in moving), default=0.0)
+    found: dict[str, list[str]] = {}
+    for size, joint, t, w in moving:
+        if size <= settings.interior_resolution * top:
+            continue  # still
+        own = {"spin": asm.ell * abs(w[0]), "slide": abs(t[0])}
+        kind = max(own, key=lambda k: own[k])
+        field = _HOLDS[kind][0]
+        # its own coordinate alone moves (to the resolution of a ray's motion)
+        alone = size - own[kind] <= settings.interior_resolution * size
+        if alone and field in type(joint).model_fields and getattr(joint, field) is None:
+            found.setdefault(kind, []).append(repr(joint.name))
+    if len(found) != 1:
+        return None
+    kind, names = found.popitem()
+    field, words, example = _HOLDS[kind]
+    a = "an" if field[0] in "aeiou" else "a"
+    if len(names) == 1:
+        return f"give joint {names[0]} {a} {field} ({words}, e.g. {example})"
+    verb = "turn about" if kind == "spin" else "slide along"
+    return (
+        f"joints {', '.join(names)} each {verb} their axes in it: give one of them {a} "
+        f"{field} ({words}, e.g. {example})"
     )

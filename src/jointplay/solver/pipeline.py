@@ -47,7 +47,7 @@ def solve_loads(ws: WorkspaceData, loads: Sequence[Load] | None = None) -> Resul
     its loads, or under ``loads`` instead."""
     start = time.perf_counter()
     loads, g = loads_and_work(ws, loads)
-    held.check_driven(ws, g)
+    held.check_driven(ws, g, loads)
     scale = load_scale(ws, float(np.linalg.norm(g)))
     g_hat = g / scale if scale else g
     point = optimum(ws, g_hat, ws.softness(scale))
