@@ -769,6 +769,11 @@ def test_a_joint_of_unknown_type_still_has_its_other_problems_listed(tmp_path: P
         jointplay.load(write(tmp_path, data))
     assert str(info.value).count("\n") == 0, str(info.value)
     assert "unknown joint type 'prismatc'. Did you mean 'prismatic'?" in str(info.value)
+    # ... while one that every type needs still is
+    del data["joints"][1]["between"]
+    with pytest.raises(ModelError) as info:
+        jointplay.load(write(tmp_path, data))
+    assert "'l2': between: expected the names of two bodies, [a, b]" in str(info.value)
 
 
 def test_the_package_still_reaches_its_modules_and_lists_its_names() -> None:

@@ -381,3 +381,39 @@ def test_a_motion_says_whose_forces_are_the_rule_s() -> None:
     bar = jointplay.Motion(steps=5).run(jointplay.load(gallery / "four_bar.yaml"))
     assert steps_split_words(bar.indeterminate, bar.joint_names) is None
     assert bar.to_dict()["indeterminate"]["degree"] == 0
+
+
+def test_exact_rotations_say_their_forces_are_not_the_rule_s() -> None:
+    """``--exact`` prints its last program's forces: on the lathe slide,
+    whose guide's corners are redundant (degree 3, the small-displacement
+    answer's count), it says so and does not claim the rule's split."""
+    model = jointplay.load(ROOT / "examples" / "gallery" / "lathe_slide.yaml")
+    small = jointplay.solve(model).indeterminate
+    exact = jointplay.solve(model, exact=True).indeterminate
+    assert small.degree == 3 and small.by_rule and small.joints == ("guide",)
+    assert (exact.degree, exact.joints, exact.contacts) == (
+        small.degree,
+        small.joints,
+        small.contacts,
+    )
+    assert not exact.by_rule
+
+
+def test_steps_split_by_the_rule_and_not_are_counted_apart() -> None:
+    """Nine steps split by the rule and one left as the solver left it: two
+    sentences, each with its own count (neither speaks for the other's steps)."""
+    from jointplay.indeterminacy import Indeterminacy
+    from jointplay.present.textreport import steps_split_words
+
+    rule = Indeterminacy(1, ("guide",), ("guide.a", "guide.b"))
+    left = Indeterminacy(1, ("guide",), ("guide.a", "guide.b"), by_rule=False)
+    words = steps_split_words([rule] * 9 + [left], ["guide"])
+    assert words is not None
+    assert words.startswith(
+        "Forces: at 9 of 10 steps, the load shared by the contacts of guide is split by the "
+        "equal-springs rule"
+    )
+    assert (
+        "Forces: at 1 of 10 steps, the load shared by the contacts of guide is split as the "
+        "solver left it (statically indeterminate, degree 1), not by the equal-springs rule"
+    ) in words

@@ -1054,7 +1054,7 @@ def _stage(bar: Any, label: str, total: int) -> Callable[[int, int], None] | Non
     if bar is None:
         return None
     task = bar.add_task(label, total=total)
-    return lambda done, _total: bar.update(task, completed=done)
+    return lambda done, total: bar.update(task, completed=done, total=total)
 
 
 def _staged(bar: Any, label: str, run: Callable[[], R]) -> R:

@@ -279,10 +279,11 @@ class MotionSettings:
     #: it) when the equations' smallest singular value there, drive included,
     #: is below this fraction of the largest. Within ``reach_resolution`` of a
     #: toggle it is at most ~1e-5 (it goes as the square root of the
-    #: distance; 7e-11 and 3e-10 measured at the audit's four-bars' ends, where
-    #: the closing pose sits on the toggle itself); away from one a linkage's
-    #: is 1e-2 or more (the four-bar's 0.05 at its written pose, 0.004 still
-    #: 0.1 deg short of its toggle).
+    #: distance; 7e-11 and 3e-10 measured at the ends of the rocker and the
+    #: crank of tests/test_motion.py's reach tests, where the closing pose
+    #: sits on the toggle itself); away from one a linkage's is far above
+    #: this (the four-bar's 0.05 at its written pose, 0.004 still 0.1 deg
+    #: short of its toggle).
     toggle: float = 1e-3
 
 

@@ -885,6 +885,13 @@ class _AnyJoint(Joint):
 
 #: Every key some joint type has.
 _JOINT_KEYS = {"type"}.union(*(cls.model_fields for cls in JOINT_TYPES.values()))
+#: The keys every joint type requires.
+_EVERY_JOINT_NEEDS = set.intersection(
+    *(
+        {name for name, f in cls.model_fields.items() if f.is_required()}
+        for cls in JOINT_TYPES.values()
+    )
+)
 
 
 def _with_common_joint_problems(errors: list[Any], data: dict[str, Any]) -> list[Any]:
@@ -903,11 +910,12 @@ def _with_common_joint_problems(errors: list[Any], data: dict[str, Any]) -> list
         try:
             _AnyJoint.model_validate({k: v for k, v in item.items() if k != "type"})
         except ValidationError as exc:
-            # a key missing is the type's to say (a prismatic joint has no 'clearance')
+            # a key only some types need is theirs to ask for (a prismatic joint has
+            # no 'clearance'); one that every type needs is missing whatever the type
             out += [
                 {**e, "loc": (*loc, *e["loc"])}
                 for e in exc.errors(include_url=False)
-                if e["type"] != "missing"
+                if e["type"] != "missing" or (e["loc"][:1] and e["loc"][0] in _EVERY_JOINT_NEEDS)
             ]
         out += [
             {"type": "extra_forbidden", "loc": (*loc, key), "msg": "", "input": value}

@@ -837,10 +837,11 @@ def sweep_figure(result: SweepResult, envelopes: dict[str, EnvelopeResult] | Non
     ax.set_xlabel(xlabel)
     ax.set_ylabel("contact force (N)")
     some = f" (the {len(most)} largest of {len(carried)})" if len(most) < len(carried) else ""
-    shared = over_steps(result.indeterminate, result.joint_names).joints
-    if shared:  # their split is a convention (the sweep's text says so in full)
-        names = ", ".join(shared[:3]) + (" ..." if len(shared) > 3 else "")
-        some += f"\nsplit by rule: {names}"
+    found = over_steps(result.indeterminate, result.joint_names)
+    if found.joints:  # their split is a convention (the sweep's text says so in full)
+        names = ", ".join(found.joints[:3]) + (" ..." if len(found.joints) > 3 else "")
+        how = "split by rule" if found.by_rule else "split as the solver left it"
+        some += f"\n{how}: {names}"
     ax.set_title(f"contact forces{some}", fontsize=10)
     ax.grid(True, linewidth=0.3)
     if most:

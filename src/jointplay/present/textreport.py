@@ -141,17 +141,18 @@ def indeterminacy_words(result: Result) -> str | None:
 def steps_split_words(found: Sequence[Indeterminacy], joints: Sequence[str]) -> str | None:
     """The forces' sentence of a study's steps (a sweep's, a motion's): at
     which of them the printed contact forces are a convention, and whose."""
-    redundant = [f for f in found if f.degree > 0]
-    if not redundant:
-        return None
-    degrees = sorted({f.degree for f in redundant})
-    where = (
-        "at every step"
-        if len(redundant) == len(found)
-        else f"at {len(redundant)} of {len(found)} steps"
-    )
-    degree = f"{degrees[0]}" if len(degrees) == 1 else f"{degrees[0]} to {degrees[-1]}"
-    return split_words(over_steps(found, joints), where, degree)
+    sentences = []
+    # the steps split by the rule, then those the solver left as they were
+    for by_rule in (True, False):
+        group = [f for f in found if f.degree > 0 and f.by_rule == by_rule]
+        if not group:
+            continue
+        degrees = sorted({f.degree for f in group})
+        some = f"at {len(group)} of {len(found)} steps"
+        where = "at every step" if len(group) == len(found) else some
+        degree = f"{degrees[0]}" if len(degrees) == 1 else f"{degrees[0]} to {degrees[-1]}"
+        sentences.append(split_words(over_steps(group, joints), where, degree))
+    return " ".join(s for s in sentences if s) or None
 
 
 def split_words(found: Indeterminacy, where: str = "", degree: str | None = None) -> str | None:
@@ -173,9 +174,9 @@ def split_words(found: Indeterminacy, where: str = "", degree: str | None = None
     if not found.by_rule:
         return (
             f"Forces: {at}the load shared by {shared} is split as the solver left it (statically "
-            f"indeterminate, degree {degree}): the equal-springs rule's program gave no "
-            "split that certifies here, and other splits balance the loads as well; "
-            "the rigid parts do not decide it; give `stiffness` for the real split."
+            f"indeterminate, degree {degree}), not by the equal-springs rule: other splits "
+            "balance the loads as well; the rigid parts do not decide it; give `stiffness` "
+            "for the real split."
         )
     return (
         f"Forces: {at}the load shared by {shared} is split by the equal-springs rule "

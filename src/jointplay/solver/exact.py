@@ -113,6 +113,10 @@ def solve_exact(ws: WorkspaceData, loads: Sequence[Load] | None = None) -> Resul
             f"largest force ({st.equilibrium_tolerance:g} is required); please report this model"
         )
     object.__setattr__(result, "solve_time", time.perf_counter() - start)
+    # its forces are its last program's, not the split rule's: where the
+    # small-displacement answer's touching contacts are redundant, so are these
+    found = linear.indeterminate
+    object.__setattr__(result, "_indeterminate", replace(found, by_rule=found.degree == 0))
     object.__setattr__(result, "_linearization", Linearization(cert.feasibility_mm, None, ()))
     return result
 

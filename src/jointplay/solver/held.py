@@ -16,6 +16,7 @@ import scipy.sparse as sp
 from jointplay.assembly import Assembly, IntArray
 from jointplay.errors import UnboundedMechanismError
 from jointplay.geometry import FloatArray, describe_motion
+from jointplay.model.joints.base import HOLDS, Coordinate
 from jointplay.model.mechanism import Load
 from jointplay.numerics import linalg
 from jointplay.numerics.linalg import Matrix
@@ -274,14 +275,6 @@ def _driven_most_by(asm: Assembly, direction: FloatArray, loads: Sequence[Load])
     return f", most by the weight of '{load.body}'"
 
 
-#: What holds a joint's own free coordinate, if the joint type has it: the
-#: field, its words and an example.
-_HOLDS = {
-    "spin": ("backlash", "the play of a drive that holds its spin", 'backlash: "0.2 deg"'),
-    "slide": ("axial_clearance", "its play along its axis", 'axial_clearance: "50 um"'),
-}
-
-
 def _held_by(asm: Assembly, direction: FloatArray, settings: SolverSettings) -> str | None:
     """The fix where the free motion turns (or slides) some joints about
     (along) their own axes alone, and their type can hold that with a play
@@ -294,13 +287,13 @@ def _held_by(asm: Assembly, direction: FloatArray, settings: SolverSettings) -> 
         t, w = tw[:3], tw[3:]
         moving.append((float(np.linalg.norm(t)) + asm.ell * float(np.linalg.norm(w)), joint, t, w))
     top = max((size for size, *_ in moving), default=0.0)
-    found: dict[str, list[str]] = {}
+    found: dict[Coordinate, list[str]] = {}
     for size, joint, t, w in moving:
         if size <= settings.interior_resolution * top:
             continue  # still
-        own = {"spin": asm.ell * abs(w[0]), "slide": abs(t[0])}
+        own: dict[Coordinate, float] = {"spin": asm.ell * abs(w[0]), "slide": abs(t[0])}
         kind = max(own, key=lambda k: own[k])
-        field = _HOLDS[kind][0]
+        field = HOLDS[kind].field
         # its own coordinate alone moves (to the resolution of a ray's motion)
         alone = size - own[kind] <= settings.interior_resolution * size
         if alone and field in type(joint).model_fields and getattr(joint, field) is None:
@@ -308,7 +301,7 @@ def _held_by(asm: Assembly, direction: FloatArray, settings: SolverSettings) -> 
     if len(found) != 1:
         return None
     kind, names = found.popitem()
-    field, words, example = _HOLDS[kind]
+    field, _, _, words, example = HOLDS[kind]
     a = "an" if field[0] in "aeiou" else "a"
     if len(names) == 1:
         return f"give joint {names[0]} {a} {field} ({words}, e.g. {example})"

@@ -132,7 +132,7 @@ class Envelope:
         return tuple(model.case_names) or (None,)
 
     def _run(
-        self, model: Model, *, source: str, carry: dict[int, Any] | None = None
+        self, model: Model, *, source: str, carry: dict[tuple[int, int], Any] | None = None
     ) -> EnvelopeResult:
         """``carry``: the answers of a nearby model's envelope (the pose
         before, in a motion), read and replaced here: each batch's rows start
@@ -191,16 +191,19 @@ class Envelope:
 
         resolution = Resolution.of(asm.s, asm.ell, settings=ws.settings)
 
+        batches = [0]  # this run's batches so far: the k-th meets the k-th before
+
         def motion_of(work: FloatArray) -> FloatArray:
             # a batch's rows (not a climb's single steps) start from the same
-            # rows' answers on the model before, where there is one
+            # rows' answers on the model before: its batch of the same place
+            # in the run (a load case's, the probes') and size
             kept = carry is not None and len(work) > 1
-            before = (
-                carry.get(len(work), (None,) * len(work)) if kept and carry is not None else None
-            )
+            key = (batches[0], len(work))
+            batches[0] += kept
+            before = carry.get(key, (None,) * len(work)) if kept and carry is not None else None
             batch = ws.solve_batch(work, forces=False, own_starts=before)
             if kept and carry is not None and batch.own_starts is not None:
-                carry[len(work)] = batch.own_starts
+                carry[key] = batch.own_starts
             motion = batch.body_displacement(point.body)
             return proven(motion[:, :3] + np.cross(motion[:, 3:], at), resolution.length)
 

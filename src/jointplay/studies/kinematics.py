@@ -25,7 +25,7 @@ from scipy.optimize import least_squares, leastsq
 
 from jointplay.errors import MotionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray, describe_motion
-from jointplay.model.joints.base import Coordinate, Ideal
+from jointplay.model.joints.base import HOLDS, Coordinate, Ideal
 from jointplay.model.mechanism import Model
 from jointplay.settings import MOTION, MotionSettings
 
@@ -510,10 +510,6 @@ def _column_scale(eqs: _Equations) -> FloatArray:
     return scale
 
 
-#: What in a joint holds a coordinate its type frees when driven, and what the drive does to it.
-_HELD_BY = {"spin": ("backlash", "a drive", "turn"), "slide": ("axial_clearance", "", "move")}
-
-
 def _moves(J: FloatArray, others: IntArray, rcond: float) -> bool:
     """Whether the last row of ``J`` (the drive's) is independent of the rows
     ``others``: the mobility's rank rule, both ranks against J's largest
@@ -555,7 +551,7 @@ def _check_movable(eqs: _Equations, R: FloatArray, p: FloatArray, source: str | 
     if holding:
 
         def what(name: str) -> tuple[str, str]:
-            field, role, verb = _HELD_BY[held[name][1]]
+            field, role, verb, _, _ = HOLDS[held[name][1]]
             return (
                 f"joint '{name}' holds the {held[name][1]} it would {verb} "
                 f"(its {field}{': ' + role if role else ''})",
@@ -565,7 +561,7 @@ def _check_movable(eqs: _Equations, R: FloatArray, p: FloatArray, source: str | 
         joints = tuple(holding)
         if len(holding) == 1:
             [name] = holding
-            fix = f"drive '{name}' instead, or remove its {_HELD_BY[held[name][1]][0]}"
+            fix = f"drive '{name}' instead, or remove its {HOLDS[held[name][1]].field}"
         else:
             each = ", ".join(what(n)[1] for n in holding)
             # held together, every one must go: driving one leaves the others'

@@ -24,6 +24,7 @@ from jointplay.errors import ModelError, OptionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.indeterminacy import Indeterminacy, steps_dict
 from jointplay.io.modelfile import model_from_dict
+from jointplay.model.joints.base import HOLDS
 from jointplay.model.mechanism import Model
 from jointplay.model.tables import DriveTable
 from jointplay.result import Result
@@ -278,10 +279,6 @@ class MotionResult:
 
 
 #: What holds a drive's coordinate in the clearance model: the field, and an example of it.
-_HOLDS = {
-    "spin": ("backlash", 'backlash: "0.2 deg"'),
-    "slide": ("axial_clearance", 'axial_clearance: "50 um"'),
-}
 
 
 def _unheld(
@@ -292,7 +289,7 @@ def _unheld(
     without an ``axial_clearance``: the drive holds nothing); otherwise
     ``exc`` as it was. The body, the motion and their directions are kept."""
     joint, coordinate, _, _ = model.motion_drive()
-    field, example = _HOLDS[coordinate]
+    field, example = HOLDS[coordinate].field, HOLDS[coordinate].example
     if getattr(joint, field, None) is not None or not moves_only_the_drive(
         model, poses, step, exc.direction, motion.settings
     ):

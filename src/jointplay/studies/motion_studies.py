@@ -166,20 +166,7 @@ class MotionMonteCarlo:
         deviations: FloatArray,
         workers: int | None,
     ) -> MotionMonteCarloResult:
-        shared = (cycle, plays, loads, deviations, self.motion.case)
-        # contiguous runs of poses, one per process: each part starts from its
-        # answer at the pose before
-        runs = min(cycle.steps, workers or os.cpu_count() or 1)
-        edges = np.linspace(0, cycle.steps, runs + 1).round().astype(int).tolist()
-        tasks = list(itertools.pairwise(edges))
-        solved = sorted(
-            (
-                pose
-                for run in run_chunks(_solve_poses, shared, tasks, workers, None)
-                for pose in run
-            ),
-            key=lambda p: p.step,
-        )
+        solved = _carried(cycle, (plays, loads, deviations), self.motion.case, workers)
         first = cycle.posed(0)
         asm = assemble(first)
         pmap, lmap, dmap = (
@@ -207,6 +194,33 @@ class MotionMonteCarlo:
             max(p.feasibility_mm for p in solved),
             max(p.equilibrium_residual for p in solved),
         )
+
+
+def _carried(
+    cycle: _Cycle,
+    parts: tuple[FloatArray, FloatArray, FloatArray],
+    case: str | None,
+    workers: int | None,
+    steps: tuple[int, int] | None = None,
+    on_done: Callable[[list[_Pose]], None] | None = None,
+) -> list[_Pose]:
+    """The sets of parts ``parts`` (plays, loads, deviations) at the poses
+    ``steps`` (first, stop; default: all), in contiguous runs of poses, one
+    per process: each part starts from its answer at the pose before.
+    ``on_done(run)`` after each run."""
+    first, stop = (0, cycle.steps) if steps is None else steps
+    runs = min(stop - first, workers or os.cpu_count() or 1)
+    edges = np.linspace(first, stop, runs + 1).round().astype(int).tolist()
+    tasks = list(itertools.pairwise(edges))
+    shared = (cycle, *parts, case)
+    return sorted(
+        (
+            pose
+            for run in run_chunks(_solve_poses, shared, tasks, workers, None, on_done)
+            for pose in run
+        ),
+        key=lambda p: p.step,
+    )
 
 
 def _no_points(source: str) -> StudyError:
@@ -541,7 +555,7 @@ class MotionEnvelope:
             )
         found: list[tuple[EnvelopeResult, ...]] = []
         # each point's probes at a pose start from their answers at the pose before
-        carried: dict[str, dict[int, Any]] = {name: {} for name in names}
+        carried: dict[str, dict[tuple[int, int], Any]] = {name: {} for name in names}
         for s in range(cycle.steps):
             posed = cycle.posed(s)
             found.append(
@@ -690,7 +704,8 @@ class MotionContributions:
         workers: int | None = 1,
     ) -> MotionContributionsResult:
         """The contributions at every pose; ``progress(done, total)`` after
-        each pose's linear shares; ``workers``: local processes. Where the
+        each pose's linear shares, then after each run of poses of the shares
+        of the variance (``total`` grows by them); ``workers``: local processes. Where the
         shares of the variance are taken, the Sobol' design's sets of parts
         are carried through the poses as a Monte Carlo's are (each Newton
         from the same set's answers at the poses before), then analysed
@@ -720,13 +735,22 @@ class MotionContributions:
                 # one design for every pose (its inputs' laws do not move with the bodies)
                 inputs = inputs_of(cycle.posed(wanted[0]), self.motion.case, cycle.source)
                 n_p, n_l = len(inputs.pmap.variables), len(inputs.lmap.variables)
-                carried = MotionMonteCarlo(motion=self.motion)._solved(
-                    cycle, values[:, :n_p], values[:, n_p : n_p + n_l], values[:, n_p + n_l :],
-                    workers,
-                )  # fmt: skip
+                parts = (values[:, :n_p], values[:, n_p : n_p + n_l], values[:, n_p + n_l :])
+                span = (wanted[0], wanted[-1] + 1)  # the poses from the first to the last
+                done = [cycle.steps]
+
+                def advance(run: list[_Pose]) -> None:
+                    done[0] += len(run)
+                    if progress is not None:
+                        progress(done[0], cycle.steps + span[1] - span[0])
+
+                carried = {
+                    pose.step: pose.displacement
+                    for pose in _carried(cycle, parts, self.motion.case, workers, span, advance)
+                }
                 for s in wanted:
                     posed = cycle.posed(s)
-                    y = measured(posed, measures_of(posed, cycle.source), carried.displacement[s])
+                    y = measured(posed, measures_of(posed, cycle.source), carried[s])
                     shares = sobol.analysed(posed, problem, y, cycle.source)
                     found_at[s] = replace(found_at[s], settings=study, sobol=shares)
             else:

@@ -535,7 +535,7 @@ class SweepResult:
     equilibrium_residual: float  # worst over the steps
     #: (S,) each step's static indeterminacy: where its contact forces are
     #: split by the rule, not decided by the balance (``Result.indeterminate``)
-    indeterminate: tuple[Indeterminacy, ...] = ()
+    indeterminate: tuple[Indeterminacy, ...]
 
     @property
     def steps(self) -> int:

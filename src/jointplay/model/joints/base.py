@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache, cached_property
-from typing import Any, ClassVar, Literal, Self
+from typing import Any, ClassVar, Literal, NamedTuple, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +39,30 @@ IntArray = NDArray[np.intp]
 
 #: A drive's coordinate (``model.motion``): the spin about the axis, or the slide along it.
 Coordinate = Literal["spin", "slide"]
+
+
+class Holder(NamedTuple):
+    """What holds a coordinate a joint type leaves free (where the type takes
+    it): its field, what it is, the verb of the coordinate, a phrase for
+    messages and an example value."""
+
+    field: str
+    role: str
+    verb: str
+    words: str
+    example: str
+
+
+#: The play that holds each coordinate, for every message that advises it.
+HOLDS: dict[Coordinate, Holder] = {
+    "spin": Holder(
+        "backlash", "a drive", "turn", "the play of a drive that holds its spin",
+        'backlash: "0.2 deg"',
+    ),
+    "slide": Holder(
+        "axial_clearance", "", "move", "its play along its axis", 'axial_clearance: "50 um"'
+    ),
+}  # fmt: skip
 
 
 @dataclass(frozen=True)
