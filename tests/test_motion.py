@@ -315,6 +315,13 @@ def test_slider_crank_play_closes_along_the_rod(h: float, force: object) -> None
 
 #: The four-bar: crank a from O2 = 0, coupler b, rocker c to O4 = (d, 0).
 FB_A, FB_B_AT, FB_D = 60.0, (150.0, 110.0), 200.0
+#: A four-bar's bodies: the frame, then its crank, coupler and rocker.
+FOUR_BAR_BODIES = [
+    {"name": "frame", "ground": True},
+    {"name": "crank"},
+    {"name": "coupler"},
+    {"name": "rocker"},
+]
 #: Diametral clearances (mm): O2 (the motor's bearing), A, B, O4.
 FB_PLAYS = (0.010, 0.024, 0.020, 0.030)
 
@@ -327,12 +334,7 @@ def _four_bar(torque: float, drive: str = "motor", turn: object = "360 deg") -> 
     o2, a, b, o4 = FB_PLAYS
     pin = {"type": "revolute", "axis": [0, 0, 1], "length": 12, "axial_clearance": 0.05}
     data: dict[str, Any] = {
-        "bodies": [
-            {"name": "frame", "ground": True},
-            {"name": "crank"},
-            {"name": "coupler"},
-            {"name": "rocker"},
-        ],
+        "bodies": [dict(b) for b in FOUR_BAR_BODIES],
         "joints": [
             {
                 **pin,
@@ -539,12 +541,7 @@ def test_a_non_grashof_crank_driven_past_its_limit_is_told_where_its_reach_ends(
     pin = {"type": "revolute", "axis": [0, 0, 1], "length": 12, "axial_clearance": 0.05}
     pin["clearance"] = 0.02
     data = {
-        "bodies": [
-            {"name": "frame", "ground": True},
-            {"name": "crank"},
-            {"name": "coupler"},
-            {"name": "rocker"},
-        ],
+        "bodies": [dict(b) for b in FOUR_BAR_BODIES],
         "joints": [
             {**pin, "name": "motor", "between": ["frame", "crank"], "at": [0, 0, 0], "backlash": 0},
             {**pin, "name": "pin A", "between": ["crank", "coupler"], "at": [*A, 0]},
