@@ -172,10 +172,36 @@ class _Equations:
         self.offset_rows = _Rows.of(self, "offset")
         self.axes_rows = _Rows.of(self, "axes")
         o, x = self.offset_rows, self.axes_rows
-        #: the row of each gradient block ``evaluate`` stacks, in its order
-        self.gradient_rows = np.concatenate(
-            [o.rows, o.rows, x.rows, x.rows, [len(self.rows)] * 2]
+        B = len(self.bodies)
+        a, b = (i if i >= 0 else B for i in self._drive_bodies)
+        F, c = self.frames[self.drive_index]
+        # the drive's vectors: its axis x and centre (a slide), or a's axes z
+        # and y and b's axis y (a spin)
+        self._drive_ab = (a, b)
+        drive_bodies, drive_vectors = ([a, b, a], [F[:, 0], c, c])
+        if self.drive == "spin":
+            drive_bodies, drive_vectors = [a, a, b], [F[:, 2], F[:, 1], F[:, 1]]
+        #: the written vectors ``evaluate`` turns with their bodies, all at
+        #: once: the offset rows' u_a, c carried by b and by a, the axes
+        #: rows' u_a and v_b, then the drive's (a ground body is ``B``)
+        self._turned_body = np.concatenate(
+            [o.a, o.b, o.a, x.a, x.b, np.array(drive_bodies, dtype=np.intp)]
         ).astype(np.intp)
+        self._turned_vector = np.vstack(
+            [o.axis_a, o.centre, o.centre, x.axis_a, x.axis_b, np.array(drive_vectors)]
+        )
+        #: the row and body of each gradient block ``evaluate`` stacks, in its
+        #: order; a row's blocks are on distinct bodies (a joint's two), so
+        #: each entry of the Jacobian is set once
+        rows = np.concatenate([o.rows, o.rows, x.rows, x.rows, [len(self.rows)] * 2])
+        rows = rows.astype(np.intp)
+        bodies = np.concatenate([o.a, o.b, x.a, x.b, [a], [b]]).astype(np.intp)
+        #: a ground body's blocks are left out: it has no unknowns
+        self._moving_block = bodies < B
+        self._block_body = bodies[self._moving_block]
+        self._block_entry = (
+            rows[self._moving_block, None] * self.n + 6 * self._block_body[:, None] + np.arange(6)
+        ).ravel()
 
     def _pose(
         self, R0: FloatArray, p0: FloatArray, z: FloatArray
@@ -190,61 +216,51 @@ class _Equations:
         """Residuals (mm) and their Jacobian w.r.t. ``z`` (per body: the
         rotation vector's increment, then the shift), all rows at once: a
         ground body is the last of the stacked poses, with no unknowns."""
-        ell, B = self.ell, len(p)
+        ell = self.ell
         Rx = np.concatenate([R, np.eye(3)[None]])
         px = np.concatenate([p, np.zeros((1, 3))])
-        Jx = np.concatenate([Jl, np.zeros((1, 3, 3))])  # a ground body's gradients vanish
         o, x = self.offset_rows, self.axes_rows
-        a, b = (i if i >= 0 else B for i in self.rows_drive_bodies)
-        F, c = self.frames[self.drive_index]
+        no, nx = len(o.rows), len(x.rows)
+        turned = np.einsum("rij,rj->ri", Rx[self._turned_body], self._turned_vector)
         # offset rows: u_a . (c_b - c_a); axes rows: ell u_a . v_b
-        u = np.einsum("rij,rj->ri", Rx[o.a], o.axis_a)
-        rb = np.einsum("rij,rj->ri", Rx[o.b], o.centre)
-        pa = px[o.a]
-        arm = rb + px[o.b] - pa  # c_b - p_a
-        ca = np.einsum("rij,rj->ri", Rx[o.a], o.centre)
-        ua = np.einsum("rij,rj->ri", Rx[x.a], x.axis_a)
-        vb = np.einsum("rij,rj->ri", Rx[x.b], x.axis_b)
+        u, rb, ca = turned[:no], turned[no : 2 * no], turned[2 * no : 3 * no]
+        ua, vb = turned[3 * no : 3 * no + nx], turned[3 * no + nx : 3 * no + 2 * nx]
+        d1, d2, d3 = turned[3 * no + 2 * nx :]
+        arm = rb + px[o.b] - px[o.a]  # c_b - p_a
         if self.drive == "slide":  # the drive's offset along its axis x, less the value
-            du = (Rx[a] @ F[:, 0])[None]
-            drb = (Rx[b] @ c)[None]
-            darm = drb + px[b] - px[a]
-            d_res = float(du[0] @ (darm[0] - Rx[a] @ c)) - value
-            left, right = (np.vstack([u, rb, ua, du, drb]), np.vstack([arm, u, vb, darm, du]))
+            a, b = self._drive_ab
+            darm = d2 + px[b] - px[a]
+            d_res = float(d1 @ (darm - d3)) - value
+            left = np.vstack([u, rb, ua, d1, d2])
+            right = np.vstack([arm, u, vb, darm, d1])
         else:  # ell sin(phi - value), R_rel[2, 1] = sin(phi), R_rel[1, 1] = cos(phi)
             cos, sin = np.cos(value), np.sin(value)
-            du = np.array([Rx[a] @ F[:, 2], Rx[a] @ F[:, 1]])
-            dv = np.array([Rx[b] @ F[:, 1], Rx[b] @ F[:, 1]])
             weights = ell * np.array([cos, -sin])
-            d_res = float(weights @ np.einsum("ri,ri->r", du, dv))
-            left, right = np.vstack([u, rb, ua, du]), np.vstack([arm, u, vb, dv])
+            d_res = float(weights[0] * (d1 @ d3) + weights[1] * (d2 @ d3))
+            left, right = np.vstack([u, rb, ua, d1, d2]), np.vstack([arm, u, vb, d3, d3])
         crossed = _cross(left, right)
-        no, nx = len(o.rows), len(x.rows)
-        g_a, g_b, g_axes = crossed[:no], crossed[no : 2 * no], ell * crossed[2 * no : 2 * no + nx]
+        g_axes = ell * crossed[2 * no : 2 * no + nx]
         zero = np.zeros((nx, 3))
         if self.drive == "slide":
             g_da, g_db = crossed[2 * no + nx][None], crossed[2 * no + nx + 1][None]
-            s_da, s_db = -du, du
+            s_da, s_db = -d1[None], d1[None]
         else:
             g_da = (weights @ crossed[2 * no + nx :])[None]
             g_db, s_da, s_db = -g_da, np.zeros((1, 3)), np.zeros((1, 3))
-        g_rot = np.vstack([g_a, g_b, g_axes, -g_axes, g_da, g_db])
+        g_rot = np.vstack([crossed[: 2 * no], g_axes, -g_axes, g_da, g_db])
         g_shift = np.vstack([-u, u, zero, zero, s_da, s_db])
-        bodies = self.gradient_bodies(a, b)
         m = len(self.rows) + 1
-        res = np.zeros(m)
+        res = np.empty(m)
         res[o.rows] = np.einsum("ri,ri->r", u, arm - ca)
         res[x.rows] = ell * np.einsum("ri,ri->r", ua, vb)
         res[m - 1] = d_res
-        jac = np.zeros((m, 6 * B + 6))  # the ground's six columns are dropped at the end
-        blocks = np.hstack([np.einsum("ri,rij->rj", g_rot, Jx[bodies]), g_shift])
-        np.add.at(jac, (self.gradient_rows[:, None], 6 * bodies[:, None] + np.arange(6)), blocks)
-        return res, jac[:, : 6 * B]
-
-    def gradient_bodies(self, a: int, b: int) -> IntArray:
-        """The body of each gradient block ``evaluate`` stacks, in its order."""
-        o, x = self.offset_rows, self.axes_rows
-        return np.concatenate([o.a, o.b, x.a, x.b, [a], [b]]).astype(np.intp)
+        moving = self._moving_block
+        blocks = np.hstack(
+            [np.einsum("ri,rij->rj", g_rot[moving], Jl[self._block_body]), g_shift[moving]]
+        )
+        jac = np.zeros(m * self.n)
+        jac[self._block_entry] = blocks.ravel()
+        return res, jac.reshape(m, self.n)
 
     @property
     def rows_drive_bodies(self) -> tuple[int, int]:
@@ -392,9 +408,10 @@ def _solve_step(
             joints=joints,
             source=source,
         )
-    scale = _column_scale(eqs)
-    U, sigma, _ = np.linalg.svd(J * scale, full_matrices=False)
+    scaled = J * _column_scale(eqs)
+    sigma = np.linalg.svd(scaled, compute_uv=False)  # the vectors only at a dead point
     if sigma.size and sigma[-1] < settings.dead_point * sigma[0]:
+        U = np.linalg.svd(scaled, full_matrices=False)[0]
         joints = eqs.joints_of(U[:, -1])
         # on the user's step, or on the way to it
         where = f"at {step.at(eqs)}" if step.part == step.value else step.between(eqs)
@@ -476,20 +493,23 @@ def _closed(
     at the change ``z0``: the pose, the change, and its residuals and Jacobian."""
     settings = eqs.settings
     tol = max(settings.solve_tolerance, float(np.finfo(float).eps))
-    seen: dict[bytes, tuple[FloatArray, FloatArray]] = {}
+    # the last point evaluated: least squares ask for the residuals and the
+    # Jacobian at each point, and mostly end on the last one they evaluated
+    seen: dict[bytes, tuple[FloatArray, FloatArray, FloatArray, FloatArray]] = {}
 
-    def evaluated(z: FloatArray) -> tuple[FloatArray, FloatArray]:
-        key = z.tobytes()  # least squares asks for the residuals and the Jacobian at each point
+    def evaluated(z: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        key = z.tobytes()
         if key not in seen:
             seen.clear()
-            seen[key] = eqs.evaluate(*eqs._pose(R0, p0, z), value)
+            R, p, Jl = eqs._pose(R0, p0, z)
+            seen[key] = (R, p, *eqs.evaluate(R, p, Jl, value))
         return seen[key]
 
     def fun(z: FloatArray) -> FloatArray:
-        return evaluated(z)[0]
+        return evaluated(z)[2]
 
     def jac(z: FloatArray) -> FloatArray:
-        return evaluated(z)[1]
+        return evaluated(z)[3]
 
     m = len(eqs.rows) + 1
     if m >= eqs.n:  # MINPACK's Levenberg-Marquardt, called with little overhead
@@ -497,8 +517,7 @@ def _closed(
     else:
         z = least_squares(fun, z0, jac=jac, method="trf", xtol=tol, ftol=tol, gtol=tol,
                           max_nfev=settings.evaluations).x  # fmt: skip
-    R, p, Jl = eqs._pose(R0, p0, z)
-    res, J = eqs.evaluate(R, p, Jl, value)
+    R, p, res, J = evaluated(z)
     return R, p, z, res, J
 
 
