@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from typing import Annotated, Any
+from typing import Annotated, Any, TypeVar
 
 from pydantic import (
     AfterValidator,
+    BaseModel,
     BeforeValidator,
     PlainValidator,
     StringConstraints,
@@ -23,6 +24,22 @@ from jointplay.model.tolerance import parse_angular_play, parse_play, parse_scat
 from jointplay.units import BASE_UNITS, NUMBER_FIRST, UNIT_EXAMPLES, shown, to_base
 
 Vec3 = tuple[float, float, float]
+
+EntryT = TypeVar("EntryT", bound=BaseModel)
+
+
+def with_values(entry: EntryT, **values: Any) -> EntryT:
+    """``entry`` with some fields given other values, already validated (as
+    validation makes them: a point a tuple of 3 floats), without validating
+    it again: a motion's posed model, whose entries the rigid motion of their
+    bodies keeps valid. A new object: nothing that ``entry`` worked out from
+    its fields (a ``cached_property``) comes with it."""
+    fields = {name: getattr(entry, name) for name in type(entry).model_fields}
+    unknown = set(values) - set(fields)
+    if unknown:
+        raise ValueError(f"{type(entry).__name__} has no field {sorted(unknown)[0]!r}")
+    fields.update(values)
+    return type(entry).model_construct(entry.model_fields_set | set(values), **fields)
 
 
 def _scalar(dimension: str) -> Callable[[Any], float]:

@@ -24,8 +24,9 @@ from jointplay.errors import ModelError, OptionError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.indeterminacy import Indeterminacy, steps_dict
 from jointplay.io.modelfile import model_from_dict
+from jointplay.model.fields import with_values
 from jointplay.model.joints.base import HOLDS
-from jointplay.model.mechanism import Model
+from jointplay.model.mechanism import Load, Model
 from jointplay.model.tables import DriveTable
 from jointplay.result import Result
 from jointplay.settings import MOTION, MotionSettings
@@ -40,53 +41,74 @@ if TYPE_CHECKING:
 
 def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") -> Model:
     """``model`` placed as its bodies are at ``step``, without its motion;
-    its loads' tables read at the step's drive value."""
-    data = model.model_dump(by_alias=True, exclude_none=True)
+    its loads' tables read at the step's drive value. Each entry is moved
+    rigidly with its body, which keeps it valid: the model is not validated
+    again (``fields.with_values``; ``source`` is kept for the callers' messages)."""
     drive = float(poses.values[step])
-    data.pop("motion", None)
 
-    def at(body: str, X: Any) -> list[float]:
-        return [float(c) for c in poses.place(step, body, np.asarray(X, dtype=float))]
+    def at(body: str, X: Any) -> tuple[float, float, float]:
+        x, y, z = (float(c) for c in poses.place(step, body, np.asarray(X, dtype=float)))
+        return (x, y, z)
 
-    def turned(body: str, v: Any) -> list[float]:
-        return [float(c) for c in poses.turn(step, body) @ np.asarray(v, dtype=float)]
+    def turned(body: str, v: Any) -> tuple[float, float, float]:
+        x, y, z = (float(c) for c in poses.turn(step, body) @ np.asarray(v, dtype=float))
+        return (x, y, z)
 
-    for joint, entry in zip(model.joints, data["joints"], strict=True):
+    joints = []
+    for joint in model.joints:
         a, b = joint.between
-        entry["at"] = at(b, joint.at)  # a sliding joint's centre travels with its slider
+        placement = {"at": at(b, joint.at)}  # a sliding joint's centre travels with its slider
         for key in ("axis", "up", "along"):
-            if entry.get(key) is not None:
-                entry[key] = turned(a, getattr(joint, key))
-    for point, entry in zip(model.points, data.get("points", []), strict=True):
-        entry["at"] = at(point.body, point.at)
-    for body, entry in zip(model.bodies, data["bodies"], strict=True):
+            if getattr(joint, key, None) is not None:
+                placement[key] = turned(a, getattr(joint, key))
+        joints.append(joint.placed(**placement))
+    points = tuple(with_values(p, at=at(p.body, p.at)) for p in model.points)
+    bodies = []
+    for body in model.bodies:
+        moved: dict[str, Any] = {}
         if body.center_of_mass is not None:
-            entry["center_of_mass"] = at(body.name, body.center_of_mass)
+            moved["center_of_mass"] = at(body.name, body.center_of_mass)
         if body.outline is not None:
-            entry["outline"] = [at(body.name, X) for X in body.outline]
-    for dev, entry in zip(model.deviations, data.get("deviations", []), strict=True):
+            moved["outline"] = tuple(at(body.name, X) for X in body.outline)
+        bodies.append(with_values(body, **moved) if moved else body)
+    deviations = []
+    for dev in model.deviations:
         # features made together on one body: their point and frame move with it
-        entry["at"] = at(dev.body, dev.at)
+        moved = {"at": at(dev.body, dev.at)}
         for key in ("axis", "up"):
-            if entry.get(key) is not None:
-                entry[key] = turned(dev.body, getattr(dev, key))
-    groups = [(model.loads, data.get("loads", []))]
-    for case, loads in (model.load_cases or {}).items():
-        groups.append((loads, data["load_cases"][case]))
-    for loads, entries in groups:
-        for load, entry in zip(loads, entries, strict=True):
+            if getattr(dev, key) is not None:
+                moved[key] = turned(dev.body, getattr(dev, key))
+        deviations.append(with_values(dev, **moved))
+
+    def posed_loads(loads: tuple[Load, ...]) -> tuple[Load, ...]:
+        out = []
+        for load in loads:
+            moved: dict[str, Any] = {}
             if load.at is not None:
-                entry["at"] = at(load.body, load.at)
+                moved["at"] = at(load.body, load.at)
             for key in ("force", "torque"):
                 value = getattr(load, key)
                 if value is None:
                     continue
                 # a table over the drive's value, read at this step's value
-                value = [c.at(drive) if isinstance(c, DriveTable) else c for c in value]
+                value = tuple(c.at(drive) if isinstance(c, DriveTable) else c for c in value)
                 if load.follows == "body":
                     value = turned(load.body, [float(c) for c in value])
-                entry[key] = value
-    return model_from_dict(data, source=source)
+                moved[key] = value
+            out.append(with_values(load, **moved))
+        return tuple(out)
+
+    cases = model.load_cases
+    return with_values(
+        model,
+        bodies=tuple(bodies),
+        joints=tuple(joints),
+        points=points,
+        deviations=tuple(deviations),
+        loads=posed_loads(model.loads),
+        load_cases=None if cases is None else {c: posed_loads(ld) for c, ld in cases.items()},
+        motion=None,
+    )
 
 
 #: Between the names in a CSV cell of contacts (a name may hold spaces).

@@ -27,7 +27,7 @@ from pydantic import BaseModel, ConfigDict, model_validator
 
 from jointplay.geometry import FloatArray, is_parallel, joint_frame, left_jacobian_inverse, skew
 from jointplay.model.deviations import MOTION_WORDS, Deviation, mean_components
-from jointplay.model.fields import Direction, Name, Play, Point, PositiveStiffness
+from jointplay.model.fields import Direction, Name, Play, Point, PositiveStiffness, with_values
 from jointplay.model.tolerance import PLAY_FIELDS
 from jointplay.settings import DEFAULT
 
@@ -372,6 +372,23 @@ class Joint(BaseModel):
     @cached_property
     def centre(self) -> FloatArray:
         return np.array(self.at, dtype=float)
+
+    #: The fields that place the joint in the mechanism: its centre and its
+    #: axes. Its contacts are in its own frame, and do not depend on them.
+    PLACEMENT: ClassVar[tuple[str, ...]] = ("at", "axis", "up", "along")
+
+    def placed(self, **placement: Any) -> Self:
+        """This joint moved rigidly with its bodies (a motion's pose): other
+        values of its ``PLACEMENT`` fields, validated (tuples of floats). A
+        rigid motion keeps what validation checked, so it is not validated
+        again (``fields.with_values``); its contacts, which the placement
+        does not change, are this joint's own (``cones``), its frame and
+        centre made anew from its fields."""
+        if not set(placement) <= set(self.PLACEMENT):
+            raise ValueError(f"not a placement: {sorted(set(placement) - set(self.PLACEMENT))}")
+        moved = with_values(self, **placement)
+        moved.__dict__["cones"] = self.cones  # where ``cached_property`` keeps it
+        return moved
 
     def contacts(self) -> tuple[Contact, ...]:
         raise NotImplementedError
