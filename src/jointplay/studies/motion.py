@@ -42,8 +42,11 @@ if TYPE_CHECKING:
 def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") -> Model:
     """``model`` placed as its bodies are at ``step``, without its motion;
     its loads' tables read at the step's drive value. Each entry is moved
-    rigidly with its body, which keeps it valid: the model is not validated
-    again (``fields.with_values``; ``source`` is kept for the callers' messages)."""
+    rigidly with its body and the model is not validated again
+    (``fields.with_values``): the file's model was, and the checks that
+    depend on the pose (plays against the model's extent, a shared
+    deviation's frames) are not run at each step. ``source`` is kept for
+    the callers' messages."""
     drive = float(poses.values[step])
 
     def at(body: str, X: Any) -> tuple[float, float, float]:
