@@ -262,10 +262,6 @@ class _Equations:
         jac[self._block_entry] = blocks.ravel()
         return res, jac.reshape(m, self.n)
 
-    @property
-    def rows_drive_bodies(self) -> tuple[int, int]:
-        return self._drive_bodies
-
     def joints_of(self, weights: FloatArray) -> tuple[str, ...]:
         """The joints whose equations carry ``weights`` (per row) most."""
         size = np.abs(weights)
