@@ -480,3 +480,34 @@ def test_the_shares_of_the_variance_at_every_pose_are_each_pose_s_own() -> None:
         np.testing.assert_allclose(at_pose.sobol.first, alone.sobol.first, atol=1e-6)
         np.testing.assert_allclose(at_pose.sobol.total, alone.sobol.total, atol=1e-6)
         np.testing.assert_allclose(at_pose.sensitivity, alone.sensitivity, rtol=0, atol=1e-9)
+
+
+def test_a_load_that_follows_its_body_keeps_its_ranges_along_the_turned_axes() -> None:
+    """A ``follows: body`` load whose components are ranges: at every pose
+    they vary along the body's axes as the pose has turned them, so a set of
+    parts drawn with given load values is the motion of the model whose load
+    is those values, turning with its body (each pose turned by its own)."""
+    ranged = {
+        "body": "coupler",
+        "at": [100, 150, 0],
+        "force": [0, {"min": -20, "max": -10}, {"min": -4, "max": 4}],
+        "follows": "body",
+    }
+    model = _load("four_bar.yaml", loads=[ranged])
+    asm = assemble(model)
+    plays, lmap = play_map(asm).nominal, load_map(asm)
+    assert lmap.labels == ("loads[0].force[1]", "loads[0].force[2]")
+    study = MotionMonteCarlo(motion=Motion(steps=STEPS))
+    for values in ((-20.0, 4.0), (-10.0, -4.0)):
+        r = study.run_parts(model, plays[None], np.array([values]))
+        fixed = {**ranged, "force": [0.0, *values]}
+        direct = Motion(steps=STEPS).run(_load("four_bar.yaml", loads=[fixed]))
+        _close(r.displacement[:, 0], direct.displacement)
+    # the ranges themselves turn: at a pose the coupler has turned, the axis
+    # a component was given along is no longer the global one
+    poses = nominal_poses(model, np.linspace(0.0, 2 * np.pi, STEPS))
+    posed = posed_model(model, poses, 1)
+    turn = poses.turn(1, "coupler")
+    directions = [part.direction for part in posed.loads[0].ranges()]
+    np.testing.assert_allclose(directions, turn[:, 1:].T, atol=1e-15)
+    assert not np.allclose(directions[0], (0.0, 1.0, 0.0))

@@ -20,6 +20,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    PrivateAttr,
     StrictBool,
     field_serializer,
     model_validator,
@@ -215,6 +216,16 @@ class Requirement(BaseModel):
         return np.abs(d @ (u / np.linalg.norm(u)))
 
 
+@dataclass(frozen=True)
+class LoadRange:
+    """A load component given as a range: ``Load.ranges``."""
+
+    key: Literal["force", "torque"]
+    index: int
+    value: Toleranced
+    direction: tuple[float, float, float]
+
+
 class Load(BaseModel):
     """A force at a point of a body, a torque on a body, or both."""
 
@@ -231,6 +242,26 @@ class Load(BaseModel):
     #: force and torque keep their global directions ("global"), or turn with
     #: the body ("body").
     follows: Literal["global", "body"] = "global"
+    #: At a motion's pose, a load that follows its body holds its components
+    #: turned to global axes (their means, for a range); its ranges are kept
+    #: here, each with the global direction it now acts along (``ranges``).
+    _turned_ranges: tuple[LoadRange, ...] | None = PrivateAttr(default=None)
+
+    def ranges(self) -> tuple[LoadRange, ...]:
+        """The components given as a range (``{min, max}``): ``(key, index,
+        range, direction)``, ``key`` "force" or "torque", ``direction`` the
+        global axis the component acts along (the body's axis it was given
+        in, at a motion's pose, for a load that follows its body)."""
+        if self._turned_ranges is not None:
+            return self._turned_ranges
+        out = []
+        for key in ("force", "torque"):
+            for c, value in enumerate(getattr(self, key) or ()):
+                if isinstance(value, Toleranced):
+                    axis = [0.0, 0.0, 0.0]
+                    axis[c] = 1.0
+                    out.append(LoadRange(key, c, value, (axis[0], axis[1], axis[2])))
+        return tuple(out)
 
     @model_validator(mode="after")
     def _check(self) -> Load:

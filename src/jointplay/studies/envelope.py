@@ -63,7 +63,6 @@ from jointplay.errors import (
 )
 from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model, check_case
-from jointplay.model.tolerance import Toleranced
 from jointplay.proven import Resolution, direction, proven
 from jointplay.solver.solve import Workspace
 from jointplay.studies.variation import deviation_map, load_map, play_map
@@ -159,13 +158,7 @@ class Envelope:
         if self.plays == "max" and pmap.variables:
             highs = np.array([v.value.high for v in pmap.variables])
             ws = ws.with_radii(pmap.radii(highs)[0])
-        varying = any(
-            isinstance(c, Toleranced)
-            for case in self._cases(model)
-            for load in model.loads_of(case)
-            for vector in (load.force, load.torque)
-            for c in vector or ()
-        )
+        varying = any(load.ranges() for case in self._cases(model) for load in model.loads_of(case))
         loaded = any(model.loads_of(case) for case in self._cases(model))
         mode = self.loads
         if mode == "auto":

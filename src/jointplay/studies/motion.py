@@ -14,7 +14,7 @@ optimum).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -96,9 +96,16 @@ def posed_model(model: Model, poses: Poses, step: int, source: str = "<model>") 
                 # a table over the drive's value, read at this step's value
                 value = tuple(c.at(drive) if isinstance(c, DriveTable) else c for c in value)
                 if load.follows == "body":
-                    value = turned(load.body, [float(c) for c in value])
+                    value = turned(load.body, [float(c) for c in value])  # a range's mean
                 moved[key] = value
-            out.append(with_values(load, **moved))
+            posed = with_values(load, **moved)
+            if load.follows == "body":
+                # a range still varies along the body's axis it was given in
+                posed._turned_ranges = tuple(
+                    replace(part, direction=turned(load.body, part.direction))
+                    for part in load.ranges()
+                )
+            out.append(posed)
         return tuple(out)
 
     cases = model.load_cases

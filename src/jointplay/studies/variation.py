@@ -115,20 +115,15 @@ def load_map(asm: Assembly, case: str | None = None) -> LoadMap:
         entries += [(f"load_cases.{case}[{i}]", load) for i, load in enumerate(own)]
     variables, rows = [], []
     for entry, load in entries:
-        for key in ("force", "torque"):
-            vector = getattr(load, key)
-            for c, component in enumerate(vector or ()):
-                if isinstance(component, Toleranced):
-                    e = np.zeros(3)
-                    e[c] = 1.0
-                    unit = (float(e[0]), float(e[1]), float(e[2]))
-                    one = (
-                        Load.model_construct(body=load.body, at=load.at, force=unit)
-                        if key == "force"
-                        else Load.model_construct(body=load.body, torque=unit)
-                    )
-                    variables.append(LoadVariable(f"{entry}.{key}[{c}]", component))
-                    rows.append(asm.work_of([one]))
+        for part in load.ranges():  # each along its axis (a turned one, at a motion's pose)
+            unit = part.direction
+            one = (
+                Load.model_construct(body=load.body, at=load.at, force=unit)
+                if part.key == "force"
+                else Load.model_construct(body=load.body, torque=unit)
+            )
+            variables.append(LoadVariable(f"{entry}.{part.key}[{part.index}]", part.value))
+            rows.append(asm.work_of([one]))
     W = np.array(rows) if rows else np.zeros((0, asm.m))
     nominal = np.array([float(v.value) for v in variables])
     return LoadMap(tuple(variables), nominal, asm.work_of(model.loads_of(case)), W)
