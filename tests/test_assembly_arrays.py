@@ -168,3 +168,35 @@ def test_a_studys_radii_keep_the_arrays() -> None:
     assert other.joint_rows is asm.joint_rows
     assert same(other.stack.r, radii)
     assert same(other.stack.A, asm.stack.A) and same(other.stack.B, asm.stack.B)
+
+
+#: The two types MANY leaves out, each with its options given and not.
+PLACED_TOO = {
+    "point": [{"gap": 0.1}, {"gap": 0.0}],
+    "rigid": [{}],
+}
+
+
+@pytest.mark.parametrize("kind", sorted({**MANY, **PLACED_TOO}))
+def test_a_joint_s_contacts_do_not_depend_on_where_it_is_placed(kind: str) -> None:
+    """``Joint.placed`` (a motion's pose) keeps the joint's contacts as they
+    are and does not make them again: that holds only if a type's contacts,
+    in its joint frame, depend on none of its placement fields. Each joint
+    is placed elsewhere and turned, and its contacts made anew from the moved
+    fields are the kept ones, to the last bit."""
+    from scipy.spatial.transform import Rotation
+
+    turn = Rotation.from_rotvec([0.3, -1.1, 0.7]).as_matrix()
+    for i, fields in enumerate({**MANY, **PLACED_TOO}[kind]):
+        j = joint(kind, f"j{i}", **fields)
+        placement: dict[str, Any] = {"at": (4.0, 5.0, -6.0)}
+        for key in ("axis", "up", "along"):
+            value = getattr(j, key, None)
+            if value is not None:
+                placement[key] = tuple(float(c) for c in turn @ np.asarray(value, dtype=float))
+        moved = j.placed(**placement)
+        data = {**j.model_dump(by_alias=True, exclude_none=True), **placement}
+        fresh = type(j).model_validate(data)
+        assert len(moved.cones) == len(fresh.contacts()), j.name
+        pairs = zip(moved.cones, fresh.contacts(), strict=True)
+        assert all(same_contact(a, b) for a, b in pairs), j.name
