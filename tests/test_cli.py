@@ -536,3 +536,22 @@ def test_motion_fail_on_requirements_is_decided_by_the_nominal_motion(tmp_path: 
         assert doc["monte_carlo"]["requirements"][0]["outside"] > 0
         codes[factor] = proc.returncode
     assert codes == {1.005: 0, 0.995: 4}
+
+
+def test_montecarlo_json_parses_strictly_where_no_part_fails() -> None:
+    """JSON has no Infinity: an estimate's relative error with no failing
+    part is written null, and every parser reads the output."""
+    from typer.testing import CliRunner
+
+    from jointplay.cli import app
+
+    out = CliRunner().invoke(
+        app, ["montecarlo", "examples/gallery/four_bar.yaml", "-n", "200", "--json"]
+    )
+    assert out.exit_code == 0, out.output
+
+    def refuse(constant: str) -> None:
+        raise AssertionError(f"not JSON: {constant}")
+
+    doc = json.loads(out.stdout, parse_constant=refuse)
+    assert doc["relative_error"] == [None]

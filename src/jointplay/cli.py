@@ -103,6 +103,23 @@ ToOption = Annotated[
 ]
 
 
+def _json(doc: Any) -> str:
+    """``doc`` as JSON that every parser reads: a number that is not finite
+    (an estimate's relative error with no failing part) is written null,
+    since JSON has no Infinity or NaN."""
+
+    def finite(v: Any) -> Any:
+        if isinstance(v, float):
+            return v if v == v and abs(v) != float("inf") else None
+        if isinstance(v, dict):
+            return {k: finite(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [finite(x) for x in v]
+        return v
+
+    return json.dumps(finite(doc), indent=2, allow_nan=False)
+
+
 def _sweep_settings(
     vary: list[str] | None,
     rotate_load: int | None,
@@ -259,7 +276,7 @@ def solve(
                 first = next(iter(not_held))
                 whole = {**_error_doc(not_held[first]), "case": first}
             doc = docs.get(None, {**whole, "cases": docs})
-            typer.echo(json.dumps(doc, indent=2))
+            typer.echo(_json(doc))
         else:
             for name, result in results.items():
                 render(model, result, str(model_path), _console(), case=name)
@@ -952,7 +969,7 @@ def _finish_study(
     if plot is not None:
         _save_plot(figure(), plot, said=not as_json)
     if as_json:
-        typer.echo(json.dumps(result.to_dict(), indent=2))
+        typer.echo(_json(result.to_dict()))
     else:
         render()
 
@@ -1106,7 +1123,7 @@ def _guarded(run: Any, as_json: bool) -> None:
             run()
     except JointplayError as exc:
         if as_json:
-            typer.echo(json.dumps(_error_doc(exc), indent=2))
+            typer.echo(_json(_error_doc(exc)))
         _say(exc)
         raise typer.Exit(exc.exit_code) from None
     except (typer.Exit, typer.Abort, KeyboardInterrupt):
@@ -1141,7 +1158,7 @@ def main() -> None:
             message = f"{exc.format_message()}{hint}"  # type: ignore[attr-defined]
             if "--json" in sys.argv[1:]:  # --json's output parses, whatever went wrong
                 doc = {"status": "invalid", "kind": "invalid option", "message": message}
-                typer.echo(json.dumps(doc, indent=2))
+                typer.echo(_json(doc))
             Console(stderr=True, highlight=False, soft_wrap=True).print(
                 f"jointplay: invalid option: {message}", markup=False
             )
