@@ -80,3 +80,15 @@ def test_warnings_follow_a_copied_model() -> None:
     model = jointplay.model_from_dict(spherical_shaft())
     assert model.warnings == ()
     assert len(model.model_copy(update={"loads": ()}).warnings) == 1  # not cached
+
+
+def test_a_turn_a_drives_backlash_allows_is_not_blamed_on_coincident_joints() -> None:
+    """A crank turning within a large backlash (0.5 written without a unit:
+    rad) turns far beyond small displacements: the warning says the plays let
+    it, a backlash among them, not that joints sit too close to be apart."""
+    data = yaml.safe_load((ROOT / "examples" / "gallery" / "four_bar.yaml").read_text())
+    motor = next(j for j in data["joints"] if j["name"] == "motor")
+    motor["backlash"] = 0.5
+    result = jointplay.solve(jointplay.model_from_dict(data))
+    turn = next(w for w in result.warnings if w.startswith("body 'crank' turns by"))
+    assert "backlash" in turn and "move them apart" not in turn

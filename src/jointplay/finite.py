@@ -129,8 +129,8 @@ def linearization(asm: Assembly, x: FloatArray, reach_mm: FloatArray) -> Lineari
             warnings.append(
                 f"body '{name}' turns by {turn:.3g} rad ({np.degrees(turn):.3g} deg): far "
                 "beyond small displacements, so points away from its joints move much "
-                "less than printed. Its joints hardly hold that turn (nearly coincident "
-                "joints, or a contact almost on an axis): move them apart, or solve with "
-                "--exact"
+                "less than printed. Its joints' plays let it turn that far: a large play "
+                "or backlash (check its units), joints nearly coincident, or a contact "
+                "almost on an axis; solve with --exact for the exact geometry"
             )
     return Linearization(worst, where, tuple(warnings))
