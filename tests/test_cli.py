@@ -555,3 +555,22 @@ def test_montecarlo_json_parses_strictly_where_no_part_fails() -> None:
 
     doc = json.loads(out.stdout, parse_constant=refuse)
     assert doc["relative_error"] == [None]
+
+
+@pytest.mark.parametrize("command", ["solve", "tolerances", "montecarlo"])
+def test_a_study_of_the_written_pose_says_the_motion_checks_every_pose(command: str) -> None:
+    """The slider-crank's requirement passes at the pose written (0 deg) and
+    fails over most of its turn: a study of that one pose says so, and how to
+    check every pose, on stderr (its report and its --json stay as they are)."""
+    extra = ["-n", "200"] if command != "solve" else []
+    proc = run(command, str(GALLERY / "slider_crank.yaml"), *extra)
+    assert proc.returncode == 0, proc.stderr
+    note = " ".join(proc.stderr.split())
+    assert "checked at the pose written in" in note
+    assert f"`jointplay motion {GALLERY / 'slider_crank.yaml'}`" in note
+    assert "73 steps" in note
+    as_json = run(command, str(GALLERY / "slider_crank.yaml"), *extra, "--json")
+    assert as_json.returncode == 0 and as_json.stderr == ""
+    json.loads(as_json.stdout)
+    plain = run(command, str(ROOT / "examples" / "studies" / "shaft_fits.yaml"), *extra)
+    assert "jointplay motion" not in plain.stderr  # no motion: nothing to say

@@ -280,6 +280,7 @@ def solve(
         else:
             for name, result in results.items():
                 render(model, result, str(model_path), _console(), case=name)
+            _at_written_pose(model, str(model_path), as_json)
 
     _guarded(run, as_json)
     if not_held:
@@ -375,6 +376,7 @@ def montecarlo(
             as_json,
             lambda: render_montecarlo(result, str(model_path), _console()),
         )
+        _at_written_pose(model, str(model_path), as_json)
 
     _guarded(run, as_json)
 
@@ -806,6 +808,7 @@ def tolerances(
             as_json,
             lambda: render_tolerances(result, source, _console()),
         )
+        _at_written_pose(model, source, as_json)
 
     _guarded(run, as_json)
 
@@ -1043,6 +1046,20 @@ def _first_case(model: Any, case: str | None) -> str | None:
 
 def _note(text: str) -> None:
     Console(stderr=True, highlight=False, soft_wrap=True).print(f"jointplay: {text}", markup=False)
+
+
+def _at_written_pose(model: Any, source: str, as_json: bool) -> None:
+    """A study of one pose on a model with a ``motion``: say that its
+    requirements were checked at the pose in the file only (the motion may
+    fail them elsewhere in its cycle), and how to check them at every pose."""
+    if as_json or model.motion is None or not model.requirements:
+        return
+    start, stop = model.motion.range
+    _note(
+        f"the requirements were checked at the pose written in {source} only; its motion "
+        f"drives '{model.motion.drive}' from {start} to {stop}: `jointplay motion {source}` "
+        f"checks them at each of its {model.motion.steps} steps"
+    )
 
 
 def _with_progress(label: str, total: int, shown: bool, run: Callable[[Any], R]) -> R:
