@@ -15,6 +15,21 @@ class JointplayError(Exception):
     #: What the command line says before the message ("jointplay: LABEL: ...").
     label: str = "error"
 
+    def __reduce__(self) -> tuple[object, ...]:
+        # rebuilt from its message and fields, not by calling __init__ again
+        # (whose keyword-only fields pickle would not pass): an error raised
+        # in a study's worker process reaches the caller whole
+        return (_rebuilt, (type(self), self.args, self.__dict__))
+
+
+def _rebuilt(
+    cls: type[JointplayError], args: tuple[object, ...], state: dict[str, object]
+) -> JointplayError:
+    error = cls.__new__(cls)
+    error.args = args
+    error.__dict__.update(state)
+    return error
+
 
 class ModelError(JointplayError, ValueError):
     """The model (file or Python objects) is invalid.
