@@ -15,6 +15,21 @@ class JointplayError(Exception):
     #: What the command line says before the message ("jointplay: LABEL: ...").
     label: str = "error"
 
+    def __reduce__(self) -> tuple[object, ...]:
+        # whole, fields and all, from a study's worker process: pickle's
+        # default calls the class with the message alone, which the
+        # keyword-only fields refuse (the pool then broke: exit 1)
+        return (_rebuilt, (type(self), self.args, self.__dict__))
+
+
+def _rebuilt(
+    cls: type[JointplayError], args: tuple[object, ...], fields: dict[str, object]
+) -> JointplayError:
+    exc = cls.__new__(cls, *args)
+    exc.args = args
+    exc.__dict__.update(fields)
+    return exc
+
 
 class ModelError(JointplayError, ValueError):
     """The model (file or Python objects) is invalid.
