@@ -574,3 +574,30 @@ def test_a_study_of_the_written_pose_says_the_motion_checks_every_pose(command: 
     json.loads(as_json.stdout)
     plain = run(command, str(ROOT / "examples" / "studies" / "shaft_fits.yaml"), *extra)
     assert "jointplay motion" not in plain.stderr  # no motion: nothing to say
+
+
+def test_a_sweep_step_its_joints_do_not_hold_names_its_load_as_solve_does(
+    tmp_path: Path,
+) -> None:
+    # an arm on one ball, pushed aside at its end by a load the sweep raises from 0:
+    # from the second step it swings about the ball. The steps share the first
+    # step's workspace, whose model had the load at 0, and the verdict called the
+    # load "the weight of 'arm'" (the arm has no mass)
+    data = {
+        "bodies": [{"name": "S0", "ground": True}, {"name": "arm"}],
+        "joints": [
+            {"name": "ball", "type": "spherical", "between": ["S0", "arm"], "at": [0, 0, 0],
+             "clearance": 0.2},
+        ],
+        "loads": [{"body": "arm", "at": [300, 0, 0], "force": [0, 5, 0]}],
+    }  # fmt: skip
+    path = tmp_path / "arm.json"
+    path.write_text(json.dumps(data))
+    solved = run("solve", str(path))
+    assert solved.returncode == 3
+    proc = run("sweep", str(path), "--vary", "loads[0].force[1]=0:10:3")
+    assert proc.returncode == 3 and proc.stdout == ""
+    assert proc.stderr == solved.stderr.replace(
+        "jointplay: not held: ", "jointplay: not held: at the step loads[0].force[1] = 5.0: "
+    )
+    assert "most by loads[0] on 'arm'" in proc.stderr

@@ -335,3 +335,150 @@ def test_probes_push_against_a_standing_preload() -> None:
     free = Envelope("c", directions=60).run(ball(standing=False))
     assert free.largest == pytest.approx(0.2, abs=MM)
     np.testing.assert_allclose(free.extent, [[-0.2, 0.2]] * 3, atol=MM)
+
+
+# -- a mechanism its joints do not hold: every study says so, as solve does
+
+
+def arm(tmp_path: Path, *loads: dict[str, Any], cases: dict[str, Any] | None = None) -> Path:
+    """An arm held by one ball joint (J = 0.2 mm, or 0.2 to 0.4 mm part to part)
+    at the origin, its functional point 'tip' at its far end, 300 mm along X:
+    it swings freely about the ball, held only along X."""
+    data: dict[str, Any] = {
+        "name": "arm on one ball",
+        "bodies": [{"name": "S0", "ground": True}, {"name": "arm"}],
+        "joints": [
+            {
+                "name": "ball",
+                "type": "spherical",
+                "between": ["S0", "arm"],
+                "at": [0, 0, 0],
+                "clearance": {"min": 0.2, "max": 0.4},
+            }
+        ],
+        "points": [{"name": "tip", "body": "arm", "at": [300, 0, 0]}],
+        "requirements": [{"point": "tip", "max_displacement": "0.3 mm"}],
+        "loads": list(loads),
+    }
+    if cases is not None:
+        data["load_cases"] = cases
+    path = tmp_path / "arm.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+SIDE_LOAD = {"body": "arm", "at": [300, 0, 0], "force": [0, 10, 0]}
+
+
+@pytest.mark.parametrize(
+    "study",
+    [
+        ["envelope", "--point", "tip"],  # probes: the side load is no probe, and was left out
+        ["envelope", "--point", "tip", "--loads", "model"],
+        ["montecarlo", "--samples", "50"],
+        ["montecarlo", "--samples", "50", "--chunk", "25", "--workers", "2"],  # from a worker
+        ["contributions"],
+        ["tolerances", "--samples", "50"],
+    ],
+)
+def test_a_study_of_an_arm_its_ball_does_not_hold_exits_3_as_solve(
+    tmp_path: Path, study: list[str]
+) -> None:
+    # a side load at the end of an arm on one ball turns it about Z: solve exits 3.
+    # The envelope printed extents (0 across) and exited 0; a Monte Carlo from
+    # worker processes died unpickling the verdict (exit 1)
+    path = arm(tmp_path, SIDE_LOAD)
+    runner = CliRunner()
+    solved = runner.invoke(app, ["solve", str(path)])
+    assert solved.exit_code == 3
+    assert "body 'arm': rotation about the global Z axis is not held by any joint" in (
+        solved.output
+    )
+    assert "most by loads[0] on 'arm'" in solved.output
+    out = runner.invoke(app, [study[0], str(path), *study[1:]])
+    assert out.exit_code == 3, out.output
+    assert out.stdout == ""  # no number
+    assert out.stderr == solved.stderr  # the same verdict, word for word
+    as_json = runner.invoke(app, [study[0], str(path), *study[1:], "--json"])
+    assert as_json.exit_code == 3
+    doc = json.loads(as_json.stdout)
+    assert doc["status"] == "unbounded" and doc["body"] == "arm"
+    assert doc["motion"] == "rotation about the global Z axis"
+
+
+def test_an_envelope_under_a_load_case_the_joints_do_not_hold_exits_3_naming_it(
+    tmp_path: Path,
+) -> None:
+    # one case pulls along the arm (held), the other across it (not held): solve
+    # prints the first and exits 3 naming the second; the envelope over both cases
+    # listed the second and gave the first's numbers with exit 0
+    along = {"body": "arm", "at": [300, 0, 0], "force": [10, 0, 0]}
+    path = arm(tmp_path, cases={"pulled": [along], "pushed aside": [SIDE_LOAD]})
+    runner = CliRunner()
+    solved = runner.invoke(app, ["solve", str(path), "--case", "pushed aside"])
+    assert solved.exit_code == 3
+    verdict = "jointplay: not held: under load case 'pushed aside': body 'arm': rotation"
+    assert solved.output.startswith(verdict)
+    out = runner.invoke(app, ["envelope", str(path), "--point", "tip"])
+    assert out.exit_code == 3, out.output
+    assert out.stdout == "" and out.stderr == solved.stderr
+    # the case the ball holds has its envelope: the tip pulled out by J/2 at most
+    held = runner.invoke(app, ["envelope", str(path), "--point", "tip", "--case", "pulled"])
+    assert held.exit_code == 0, held.output
+    assert "largest displacement: 0.2 mm along [1, 0, 0]" in held.output
+
+
+def test_a_free_motion_no_load_drives_keeps_the_envelope_and_each_probe_names_its_axis(
+    tmp_path: Path,
+) -> None:
+    # the arm pulled along itself: its swing is free but nothing drives it, so a
+    # solve answers (the swing at 0 by convention) and so does the envelope, over
+    # the probes that drive no swing: along X only
+    along = {"body": "arm", "at": [300, 0, 0], "force": [10, 0, 0]}
+    path = arm(tmp_path, along)
+    runner = CliRunner()
+    assert runner.invoke(app, ["solve", str(path)]).exit_code == 0
+    env = Envelope("tip", directions=20, loads="probes").run(jointplay.load(path))
+    np.testing.assert_allclose(env.extent, [[-0.2, 0.2], [0.0, 0.0], [0.0, 0.0]], atol=MM)
+    # a probe across the arm along Y turns it about Z, one along Z about Y: the note
+    # named the Z axis for both
+    [words] = env.not_held
+    assert "along [0, 1, 0] drives body 'arm': rotation about the global Z axis" in words
+    assert "along [0, 0, 1] drives body 'arm': rotation about the global Y axis" in words
+
+
+def test_a_probe_across_an_arm_off_the_origin_names_the_axis_it_turns_about() -> None:
+    # the ball at (100, 50, 0), the point at (400, 150, 0): a probe along Z turns
+    # the arm about the horizontal axis across the lever (300, 100, 0), through the
+    # ball; one in the plane, across the lever, about the Z axis through the ball
+    model = ball_at_origin().model_copy(deep=True)
+    data = model.model_dump(mode="json", exclude_none=True)
+    data["joints"][0]["at"] = [100, 50, 0]
+    data["points"][0]["at"] = [400, 150, 0]
+    env = Envelope("c", directions=20).run(jointplay.model_from_dict(data))
+    [words] = env.not_held
+    assert (
+        "along [0, 0, 1] drives body 'b': rotation about an axis along [0.3162, -0.9487, 0]"
+        in words
+    )
+    assert "along [-0.316, 0.949, 0] drives body 'b': rotation about an axis parallel to " in (
+        words
+    )
+    assert "global Z through (100, 50, 0) mm" in words
+    # the probes held: along the lever, where the ball's J/2 = 0.2 mm is the reach
+    assert env.largest == pytest.approx(0.2, abs=MM)
+
+
+def test_a_worst_case_over_deviation_zones_is_refused_where_the_loads_swing_the_arm(
+    tmp_path: Path,
+) -> None:
+    # over zones, the worst case along a direction is the support of every
+    # position the zones allow, whatever the loads: it took no verdict on them
+    from jointplay.studies.parts import Measure
+    from jointplay.studies.worstcase import worst_cases
+
+    data = json.loads(arm(tmp_path, SIDE_LOAD).read_text())
+    data["joints"][0]["deviation"] = {"position": "0.02 mm"}
+    model = jointplay.model_from_dict(data)
+    with pytest.raises(jointplay.UnboundedMechanismError, match="most by loads\\[0\\] on 'arm'"):
+        worst_cases(model, [Measure("tip", (0.0, 1.0, 0.0))], None, source="arm.json")

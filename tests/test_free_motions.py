@@ -294,3 +294,36 @@ def test_the_retry_shares_the_free_motions_and_answers_as_a_new_workspace(
     monkeypatch.setattr(pipeline, "answer", refused_at_first)
     jointplay.solve(bearing_chain(15)).check()
     assert made == [1] and retried == [1]
+
+
+def _arm(**arm: Any) -> jointplay.Model:
+    """An arm on one ball joint at the origin: free to swing about it."""
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "S0", "ground": True}, {"name": "arm", **arm}],
+            "joints": [
+                {
+                    "name": "ball",
+                    "type": "spherical",
+                    "between": ["S0", "arm"],
+                    "at": [0, 0, 0],
+                    "clearance": 0.2,
+                }
+            ],
+            "gravity": [0, 0, "-9.81 m/s^2"],
+        }
+    )
+
+
+def test_the_verdict_names_a_weight_only_where_a_weight_drives_the_motion() -> None:
+    # its weight 300 mm out swings a heavy arm down about the ball
+    heavy = _arm(mass="2 kg", center_of_mass=[300, 0, 0])
+    with pytest.raises(jointplay.UnboundedMechanismError, match="most by the weight of 'arm'"):
+        Workspace.of(heavy).solve()
+    # a load given to the solve, none of the model's, was called a weight too
+    light = _arm()
+    push = jointplay.Load(body="arm", at=(300, 0, 0), force=(0, 1, 0))
+    with pytest.raises(jointplay.UnboundedMechanismError) as caught:
+        Workspace.of(light).solve([push])
+    assert "rotation about the global Z axis" in str(caught.value)
+    assert "most by a load on 'arm'" in str(caught.value) and "weight" not in str(caught.value)

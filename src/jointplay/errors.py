@@ -16,19 +16,19 @@ class JointplayError(Exception):
     label: str = "error"
 
     def __reduce__(self) -> tuple[object, ...]:
-        # rebuilt from its message and fields, not by calling __init__ again
-        # (whose keyword-only fields pickle would not pass): an error raised
-        # in a study's worker process reaches the caller whole
+        # whole, fields and all, from a study's worker process: pickle's
+        # default calls the class with the message alone, which the
+        # keyword-only fields refuse (the pool then broke: exit 1)
         return (_rebuilt, (type(self), self.args, self.__dict__))
 
 
 def _rebuilt(
-    cls: type[JointplayError], args: tuple[object, ...], state: dict[str, object]
+    cls: type[JointplayError], args: tuple[object, ...], fields: dict[str, object]
 ) -> JointplayError:
-    error = cls.__new__(cls)
-    error.args = args
-    error.__dict__.update(state)
-    return error
+    exc = cls.__new__(cls, *args)
+    exc.args = args
+    exc.__dict__.update(fields)
+    return exc
 
 
 class ModelError(JointplayError, ValueError):

@@ -64,6 +64,7 @@ from jointplay.errors import (
 from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model, check_case
 from jointplay.proven import Resolution, direction, proven
+from jointplay.solver import held
 from jointplay.solver.solve import Workspace
 from jointplay.studies.variation import deviation_map, load_map, play_map
 from jointplay.units import LIMITS
@@ -158,6 +159,8 @@ class Envelope:
         if self.plays == "max" and pmap.variables:
             highs = np.array([v.value.high for v in pmap.variables])
             ws = ws.with_radii(pmap.radii(highs)[0])
+        for each in self._cases(model):  # probes stand in for the loads: check them first
+            held.check_loads(ws, each)
         varying = any(load.ranges() for case in self._cases(model) for load in model.loads_of(case))
         loaded = any(model.loads_of(case) for case in self._cases(model))
         mode = self.loads
@@ -439,8 +442,6 @@ def _held_directions(
 ) -> tuple[FloatArray, list[str], UnboundedMechanismError | None]:
     """The probe directions that drive no free motion (a subspace of the
     sphere's), the words for those that do, and the free motion they drive."""
-    from jointplay.solver import held
-
     held.check_driven(ws, g0)  # the weights alone drive a free motion: exit 3, as a solve
     if ws.N.shape[1] == 0:
         return directions, [], None
@@ -452,14 +453,18 @@ def _held_directions(
     if rank == 0:
         return directions, [], None
     basis = Vt[rank:].T  # (3, k): the probe directions that drive nothing
-    driven = Vt[:rank]
-    why = held.unbounded(ws.asm, np.asarray(ws.N @ (C @ driven[0])), ws.settings)
-    what = str(why).split(" is not held by any joint")[0]  # "body 'door': rotation about ..."
-    not_held = [
-        f"a force at the point with a part along {_words(driven[0])}"
-        + (f" or {_words(driven[1])}" if rank > 1 else "")
-        + f" drives {what}, which no joint holds"
+    driven = _near_the_axes(Vt[:rank], ws.settings.free_motion_rcond)
+    # each driven direction drives its own motion: a force along Y at an arm's
+    # end on a ball turns it about Z, one along Z about Y
+    whys = [held.unbounded(ws.asm, np.asarray(ws.N @ (C @ u)), ws.settings) for u in driven]
+    why = whys[0]
+    clauses = [
+        f"{'a force at the point' if i == 0 else 'one'} with a part along {_words(u)} drives "
+        + str(w).split(" is not held by any joint")[0]  # "body 'door': rotation about ..."
+        for i, (u, w) in enumerate(zip(driven, whys, strict=True))
     ]
+    listed = clauses[0] if rank == 1 else ", ".join(clauses[:-1]) + ", and " + clauses[-1]
+    not_held = [f"{listed}, which no joint holds"]
     k = basis.shape[1]
     if k == 0:
         return np.zeros((0, 3)), not_held, why
@@ -469,6 +474,24 @@ def _held_directions(
         theta = 2 * np.pi * np.arange(max(n, 4)) / max(n, 4)
         out = np.outer(np.cos(theta), basis[:, 0]) + np.outer(np.sin(theta), basis[:, 1])
     return out, not_held, why
+
+
+def _near_the_axes(rows: FloatArray, step: float) -> FloatArray:
+    """An orthonormal basis of the span of ``rows`` (orthonormal), as near
+    the global axes as it goes, each with its largest component positive:
+    the axes' parts in the span in turn, the longest first, each less its
+    parts along those taken (an SVD's basis of a span that holds the Y and
+    Z axes may be any pair of its directions). Components below ``step``,
+    the rank cut's round-off, are 0."""
+    left = rows.T @ rows  # the projection on the span: the axes' parts are its columns
+    out: list[FloatArray] = []
+    for _ in range(len(rows)):
+        j = int(np.argmax(np.linalg.norm(left, axis=0)))
+        u = left[:, j] / np.linalg.norm(left[:, j])
+        u = direction(u if u[np.argmax(np.abs(u))] > 0 else -u, step)
+        out.append(u)
+        left = left - np.outer(u, u @ left)
+    return np.array(out)
 
 
 def _is_held(ws: Workspace, g0: FloatArray, W: FloatArray, u: FloatArray) -> bool:

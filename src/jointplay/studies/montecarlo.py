@@ -32,6 +32,7 @@ from jointplay.errors import StudyError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.proven import Resolution, proven
+from jointplay.solver import held
 from jointplay.solver.batch import Start, solved_start
 from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
@@ -184,7 +185,9 @@ _PREPARED_KEPT = 4  # runs: a process may serve a few studies at once (Dask)
 def _prepare(model: Model, case: str | None) -> _Prepared:
     asm = assemble(model)
     lmap = load_map(asm, case)
-    nominal = solved_start(Workspace(asm), lmap.g0)
+    ws = Workspace(asm)
+    held.check_loads(ws, case)  # a model its joints do not hold has no samples to draw
+    nominal = solved_start(ws, lmap.g0)
     return _Prepared(
         asm,
         play_map(asm, model.name or "<model>"),

@@ -429,6 +429,19 @@ def _step_name(sweep: Sweep, index: tuple[int, ...]) -> str:
     return ", ".join(parts)
 
 
+def _own_verdict(
+    model: Model, case: str | None, exc: UnboundedMechanismError
+) -> UnboundedMechanismError:
+    """The verdict of a solve of the step's own model: the workspace of a
+    step before, whose loads were others, cannot name this step's loads by
+    their entries."""
+    try:
+        Workspace.of(model).solve(model.loads_of(case))
+    except UnboundedMechanismError as own:
+        return own
+    return exc  # not reached: the same mechanism under the same loads
+
+
 def solve_steps(
     base: dict[str, Any], sweep: Sweep, start: int, steps: Sequence[tuple[int, ...]], source: str
 ) -> _Chunk:
@@ -452,6 +465,8 @@ def solve_steps(
                 f"at the step {_step_name(sweep, index)}: {where}{exc.problem}", source=source
             ) from None
         except UnboundedMechanismError as exc:
+            if ws is not None and ws.asm.model is not model:
+                exc = _own_verdict(model, sweep.case, exc)
             raise UnboundedMechanismError(
                 f"at the step {_step_name(sweep, index)}: {exc}",
                 body=exc.body,

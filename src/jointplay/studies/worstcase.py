@@ -114,6 +114,7 @@ def _over_load_sets(
 
 
 def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, source: str) -> Reach:
+    from jointplay.solver import held
     from jointplay.solver.solve import Workspace
     from jointplay.studies.envelope import Envelope, _point_map, _ZoneProgram
 
@@ -127,9 +128,10 @@ def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, sour
         return Reach(m.label, env.largest, words, over)
     point = next(p for p in model.points if p.name == m.point)
     asm = assemble(model)
+    ws = Workspace(asm)
+    held.check_loads(ws, case)  # the support is over positions: the loads' verdict first
     if point.body not in asm.body_index:  # the ground does not move
         return Reach(m.label, 0.0, words, over, 0.0)
-    ws = Workspace(asm)
     if inputs.pmap.variables:
         highs = np.array([v.value.high for v in inputs.pmap.variables])
         ws = ws.with_radii(inputs.pmap.radii(highs)[0])
