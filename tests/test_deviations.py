@@ -495,6 +495,210 @@ def test_solve_takes_a_measured_deviation_on_the_command_line(tmp_path: Path) ->
     assert "Traceback" not in bad.output
 
 
+def test_a_part_measured_outside_its_zone_is_solved_and_said_out_of_tolerance() -> None:
+    """l2's position zone is a disc of diameter 0.02 mm: a bore measured
+    0.05 mm off is a rejected part. It is solved as measured (a designer
+    measures it to see what it does), and the report says it is out of
+    tolerance and echoes what was measured, in text and in JSON."""
+    import json
+
+    from test_cli import run
+
+    given = ("--deviations", "l2.position=[0, 0.05 mm, 0]")
+    warning = (
+        "joint 'l2': its measured position is 0.05 mm from its zone's centre, beyond the "
+        "zone's radius of 0.01 mm (a disc across the axis of diameter 0.02 mm): the part is "
+        "out of tolerance"
+    )
+    proc = run("solve", str(EXAMPLE), "--json", *given)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["warnings"] == [warning]
+    assert doc["measured_deviations"] == {"l2": {"position": [0.0, 0.05, 0.0]}}
+    part = jointplay.with_deviations(jointplay.load(EXAMPLE), {"l2": {"position": [0, 0.05, 0]}})
+    expected = jointplay.solve(part).points["B"].displacement
+    assert np.allclose(doc["points"]["B"]["displacement"], expected, atol=MM, rtol=0)
+    text = run("solve", str(EXAMPLE), *given).stdout
+    assert "measured deviations: l2.position = [0, 0.05, 0] mm\n" in text
+    assert f"warning: {warning}" in " ".join(text.split())
+    # with none measured, neither the echo nor the warning
+    plain = run("solve", str(EXAMPLE), "--json")
+    assert "measured_deviations" not in json.loads(plain.stdout)
+    assert "measured deviations" not in run("solve", str(EXAMPLE)).stdout
+
+
+def measured_warnings(model: Any, name: str, **given: Any) -> tuple[str, ...]:
+    part = jointplay.with_deviations(model, {name: given})
+    jointplay.solve(part).check()  # legal: the part is solved as measured
+    return part.warnings
+
+
+ZONED = pivoted_shaft(bore={"deviation": {"position": "20 um"}})
+CENTRED = pivoted_shaft(
+    bore={"deviation": {"position": {"diameter": "20 um", "mean": [0, 0.003, 0]}}}
+)
+LIMITED = pivoted_shaft(bore={"deviation": {"position": {"y": {"min": -0.01, "max": 0.02}}}})
+BALL = pivoted_shaft(ball={"clearance": 0.01, "deviation": {"position": "20 um"}})
+
+
+@pytest.mark.parametrize(
+    ("model", "name", "given"),
+    [
+        (ZONED, "l2", {"position": [0, "10 um", 0]}),  # on the disc's edge
+        # on the edge in decimals: |(2, 2.1)| um is 2.9000000000000002 in doubles
+        (
+            pivoted_shaft(bore={"deviation": {"position": "5.8 um"}}),
+            "l2",
+            {"position": [0, "2 um", "2.1 um"]},
+        ),
+        (ZONED, "l2", {"position": [0, "3 um", "-4 um"]}),
+        (CENTRED, "l2", {"position": [0, "13 um", 0]}),  # the edge, around the mean
+        (LIMITED, "l2", {"position": [0, 0.02, 0]}),  # on a limit
+        (LIMITED, "l2", {"position": [0, -0.01, 0]}),
+        (BALL, "l1", {"position": ["6 um", "8 um", 0]}),  # a ball's edge, along its x too
+        (EXAMPLE, "l2", {"orientation": [0, 0, "0.25 mrad"]}),  # 0.01 mm over 40 mm
+        (EXAMPLE, "l2", {"orientation": [0, "0.15 mrad", "-0.2 mrad"]}),
+        (pivoted_shaft(), "l2", {"position": [0, 0.04, 0]}),  # the model gives no zone
+        (EXAMPLE, "l2", {"position": [0, 0, 0]}),  # the mean: no deviation at all
+    ],
+)
+def test_a_part_measured_inside_its_zone_or_on_its_edge_is_not_warned(
+    model: Any, name: str, given: dict[str, Any]
+) -> None:
+    model = jointplay.load(EXAMPLE) if model is EXAMPLE else model
+    assert measured_warnings(model, name, **given) == ()
+
+
+@pytest.mark.parametrize(
+    ("model", "name", "given", "words"),
+    [
+        (
+            ZONED,
+            "l2",
+            {"position": [0, "6 um", "8.1 um"]},
+            "joint 'l2': its measured position is 0.0100802 mm from its zone's centre, beyond "
+            "the zone's radius of 0.01 mm (a disc across the axis of diameter 0.02 mm)",
+        ),
+        (
+            CENTRED,  # 0 is 3 um from the mean; -8 um is 11 um from it
+            "l2",
+            {"position": [0, "-8 um", 0]},
+            "joint 'l2': its measured position is 0.011 mm from its zone's centre [0, 0.003, 0] "
+            "mm, beyond the zone's radius of 0.01 mm",
+        ),
+        (
+            LIMITED,
+            "l2",
+            {"position": [0, -0.011, 0]},
+            "joint 'l2': its measured position along y is -0.011 mm, outside the zone's "
+            "[-0.01, 0.02] mm",
+        ),
+        (
+            LIMITED,
+            "l2",
+            {"position": [0, 0.01, 0.005]},
+            "joint 'l2': its measured position along z is 0.005 mm, where its zone (limits "
+            "along y only) allows 0 mm",
+        ),
+        (
+            BALL,
+            "l1",
+            {"position": ["11 um", 0, 0]},
+            "joint 'l1': its measured position is 0.011 mm from its zone's centre, beyond the "
+            "zone's radius of 0.01 mm (a ball of diameter 0.02 mm)",
+        ),
+        (
+            EXAMPLE,
+            "l2",
+            {"orientation": [0, 0, "0.3 mrad"]},
+            "joint 'l2': its measured tilt is 0.0003 rad from its zone's centre, beyond the "
+            "zone's largest tilt of 0.00025 rad (0.01 mm over 40 mm)",
+        ),
+        (
+            two_bores([group(axis=[1, 0, 0], position="20 um")]),
+            "setup",
+            {"position": [0, 0, "-12 um"]},
+            "shared deviation 'setup': its measured position is 0.012 mm from its zone's "
+            "centre, beyond the zone's radius of 0.01 mm",
+        ),
+    ],
+)
+def test_a_part_measured_outside_its_zone_is_warned_with_the_numbers(
+    model: Any, name: str, given: dict[str, Any], words: str
+) -> None:
+    model = jointplay.load(EXAMPLE) if model is EXAMPLE else model
+    (warning,) = measured_warnings(model, name, **given)
+    assert warning.startswith(words) and warning.endswith(": the part is out of tolerance")
+
+
+def revolute_with_a_disc() -> Any:
+    """A wheel on one revolute joint with an axial play, its bore's position
+    zone a disc across the axis: a shift along the axis moves its thrust
+    faces, so it can be measured, but the zone allows none."""
+    return jointplay.model_from_dict(
+        {
+            "bodies": [{"name": "frame", "ground": True}, {"name": "wheel"}],
+            "joints": [
+                {
+                    "name": "hub",
+                    "type": "revolute",
+                    "between": ["frame", "wheel"],
+                    "at": [0, 0, 0],
+                    "axis": [1, 0, 0],
+                    "length": 20,
+                    "clearance": 0.05,
+                    "axial_clearance": 0.05,
+                    "deviation": {"position": "20 um"},
+                }
+            ],
+            "loads": [{"body": "wheel", "at": [0, 10, 0], "force": [1, -1, 0]}],
+        }
+    )
+
+
+def test_a_measured_shift_along_an_axis_its_disc_does_not_allow_is_out_of_tolerance() -> None:
+    model = revolute_with_a_disc()
+    assert measured_warnings(model, "hub", position=[0, 0.01, 0]) == ()
+    (warning,) = measured_warnings(model, "hub", position=["2 um", 0.005, 0])
+    assert warning == (
+        "joint 'hub': its measured position along x is 0.002 mm, where its zone (a disc across "
+        "the axis of diameter 0.02 mm) allows 0 mm: the part is out of tolerance"
+    )
+
+
+def test_a_part_measured_twice_is_checked_against_the_zones_the_model_gave() -> None:
+    """A second ``with_deviations`` finds the first one's zones of no size:
+    it checks against the model's own, and keeps the first one's record for
+    what it does not measure again."""
+    model = jointplay.load(EXAMPLE)
+    first = jointplay.with_deviations(model, {"l2": {"position": [0, 0.05, 0]}})
+    inside = jointplay.with_deviations(first, {"l2": {"orientation": [0, 0, "0.1 mrad"]}})
+    assert [m.describe() for m in inside.measured] == [
+        "l2.position = [0, 0.05, 0] mm",
+        "l2.orientation = [0, 0, 0.0001] rad",
+    ]
+    assert len(inside.warnings) == 1 and "position is 0.05 mm" in inside.warnings[0]
+    remeasured = jointplay.with_deviations(inside, {"l2": {"position": [0, 0.005, 0]}})
+    assert remeasured.warnings == ()
+    assert [m.kind for m in remeasured.measured] == ["orientation", "position"]
+
+
+def test_a_measured_part_stays_measured_through_a_change_of_its_loads() -> None:
+    part = jointplay.with_deviations(jointplay.load(EXAMPLE), {"l2": {"position": [0, 0.05, 0]}})
+    unloaded = part.replace(loads=[{"body": "S1", "at": [300, 0, 0], "force": [0, -1, 0]}])
+    assert unloaded.measured == part.measured and unloaded.warnings == part.warnings
+    # other joints are another mechanism: what was measured need not be in it
+    assert part.replace(joints=part.model_dump()["joints"]).measured == ()
+
+
+def test_a_measured_part_pickles_with_its_measurements() -> None:
+    import pickle
+
+    part = jointplay.with_deviations(jointplay.load(EXAMPLE), {"l2": {"position": [0, 0.05, 0]}})
+    again = pickle.loads(pickle.dumps(part))
+    assert again.measured == part.measured and again.warnings == part.warnings
+
+
 def test_the_batch_tries_a_failed_row_again_only_from_a_nearer_start(monkeypatch: Any) -> None:
     """Rows whose active set is not the first one found fail on it; trying
     them again from the same start would cost a Newton run each, every time

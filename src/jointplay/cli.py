@@ -229,6 +229,7 @@ def solve(
     A model with load cases is solved for each case (or only --case NAME).
     """
     from jointplay.io.modelfile import load
+    from jointplay.model.deviations import measured_doc
     from jointplay.present.textreport import render
     from jointplay.solver.solve import Workspace
 
@@ -276,6 +277,8 @@ def solve(
                 first = next(iter(not_held))
                 whole = {**_error_doc(not_held[first]), "case": first}
             doc = docs.get(None, {**whole, "cases": docs})
+            if model.measured:  # the part solved, as given (mm, rad)
+                doc["measured_deviations"] = measured_doc(model.measured)
             typer.echo(_json(doc))
         else:
             for name, result in results.items():

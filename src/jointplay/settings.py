@@ -106,7 +106,9 @@ class SolverSettings:
     #: stops, what results and eliminations treat as an exact zero, and where
     #: the iterative refinement of each interior-point step's linear solve
     #: stops (with stiff springs pressed far past their play, Clarabel's
-    #: default left some programs "AlmostSolved" at a 1e-7 gap).
+    #: default left some programs "AlmostSolved" at a 1e-7 gap). Also how
+    #: far past its zone's edge a measured deviation is still on it: an edge
+    #: written in decimals lands an ulp off (|(2, 2.1)| um against 2.9 um).
     round_off: float = 1e-14
     #: Regularization of a singular KKT system (loads of unit norm): small
     #: against every pivot of a well-posed one, large against round-off (its

@@ -23,7 +23,14 @@ import yaml
 from pydantic import BaseModel, ConfigDict, TypeAdapter, ValidationError
 
 from jointplay.errors import ModelError
-from jointplay.model.deviations import SharedDeviation, mean_components
+from jointplay.model.deviations import (
+    Kind,
+    MeasuredDeviation,
+    SharedDeviation,
+    Zones,
+    mean_components,
+    outside,
+)
 from jointplay.model.fields import Name, _vector
 from jointplay.model.joints import JOINT_TYPES, Joint
 from jointplay.model.mechanism import (
@@ -655,10 +662,16 @@ def with_deviations(
     ``{joint: {"position": [x, y, z], "orientation": [0, wy, wz]}}`` in the
     joint frame (mm and rad, or strings with units), or the same for a shared
     deviation by its name, in its own frame. A given zone becomes that value
-    exactly; the other zone stays as the model has it."""
+    exactly; the other zone stays as the model has it. A value outside the
+    zone the model gave is taken still (a rejected part, measured to see what
+    it does), with a warning (``Model.warnings``); ``Model.measured`` lists
+    what was given."""
     names = [j.name for j in model.joints]
     shared = [d.name for d in model.deviations]
     data = model.model_dump(by_alias=True, exclude_none=True)
+    # measured once before: checked against the zones the model gave then
+    designed = {m.name: m.zones for m in model.measured}
+    records: list[MeasuredDeviation] = []
     for name, given in measured.items():
         if name not in names and name not in shared:
             known = ", ".join(shown(n) for n in [*names, *shared])
@@ -688,14 +701,25 @@ def with_deviations(
                     source=source,
                     entry="--deviations",
                 )
-        _measure(entry, given, name, source)
+        zones: Zones | None
+        if name in shared:
+            group = model.deviations[shared.index(name)]
+            zones, ball, who = group, group.axis is None, f"shared deviation {shown(name)}"
+        else:
+            own = model.joints[names.index(name)]
+            zones, ball, who = own.deviation, own.type_name == "spherical", f"joint {shown(name)}"
+        zones = designed.get(name, zones)
+        for kind, value in _measure(entry, given, name, source).items():
+            problem = None if zones is None else outside(zones, kind, value, ball)
+            warning = None if problem is None else f"{who}: {problem}"
+            records.append(MeasuredDeviation(name, kind, value, zones, warning))
         if not {"position", "orientation"} & set(entry):  # measured at 0: none
             if name in shared:
                 entry["position"] = {"diameter": 0}
             else:
                 del joint["deviation"]
     try:
-        return model_from_dict(data, source=source)
+        out = model_from_dict(data, source=source)
     except ModelError as exc:
         raise ModelError(
             f"the measured deviations ({', '.join(map(shown, measured))}) do not fit the "
@@ -703,20 +727,30 @@ def with_deviations(
             source=source,
             entry="--deviations",
         ) from None
+    again = {(m.name, m.kind) for m in records}
+    kept = [m for m in model.measured if (m.name, m.kind) not in again]
+    out._measured = (*kept, *records)
+    return out
 
 
-def _measure(entry: dict[str, Any], given: Mapping[str, Any], name: str, source: str) -> None:
+def _measure(
+    entry: dict[str, Any], given: Mapping[str, Any], name: str, source: str
+) -> dict[Kind, tuple[float, float, float]]:
     """A deviation's zones replaced by the measured values: a position as
     limits of no width on the directions where it is not 0 (so that a joint
     that leaves a direction free, a point contact's sideways slip, takes the
-    others), an orientation as a tilt of no size around its value."""
-    for kind, dimension in (("position", "length"), ("orientation", "angle")):
+    others), an orientation as a tilt of no size around its value. Returns
+    the values (mm, rad)."""
+    values: dict[Kind, tuple[float, float, float]] = {}
+    kinds: tuple[tuple[Kind, str], ...] = (("position", "length"), ("orientation", "angle"))
+    for kind, dimension in kinds:
         if kind not in given:
             continue
         try:
             value = _vector(dimension)(given[kind])
         except ValueError as exc:
             raise ModelError(f"{name}.{kind}: {exc}", source=source, entry="--deviations") from None
+        values[kind] = value
         if not any(value):
             entry.pop(kind, None)
         elif kind == "position":
@@ -725,6 +759,7 @@ def _measure(entry: dict[str, Any], given: Mapping[str, Any], name: str, source:
             entry[kind] = {"xyz"[a]: {"min": value[a], "max": value[a]} for a in kept}
         else:
             entry[kind] = {"angle": 0, "mean": list(value)}
+    return values
 
 
 def _check_sizes(data: dict[str, Any], source: str) -> None:

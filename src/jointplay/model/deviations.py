@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Annotated, Any, Self
+from typing import Annotated, Any, Literal, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -67,6 +67,8 @@ _AXES = "xyz"
 #: The largest tilt a zone may reach (rad, about 6 degrees): beyond it a tilt
 #: is no small displacement (its linear model is off by over half a percent).
 LARGEST_TILT = 0.1
+#: The two zones of a deviation, as ``with_deviations`` measures them.
+Kind = Literal["position", "orientation"]
 #: The components of a small torsor (t, w) of a joint's features, in words.
 MOTION_WORDS = (
     "shift along x",
@@ -374,6 +376,115 @@ def measured(t: Vec3 | None, w: Vec3 | None) -> Deviation:
     position = None if t is None else PositionZone(diameter=0.0, mean=t)
     orientation = None if w is None else OrientationZone(angle=0.0, mean=w)
     return Deviation(position=position, orientation=orientation)
+
+
+@dataclass(frozen=True)
+class MeasuredDeviation:
+    """A deviation as measured on one part (``with_deviations``): a joint's
+    or a shared deviation's ``name``, its ``kind`` and ``value`` (position in
+    mm, orientation in rad, in its frame), the ``zones`` the model gave it
+    (None: none; kept to check a second measurement against), and the
+    warning when the value lies outside them (``outside``)."""
+
+    name: str
+    kind: Kind
+    value: Vec3
+    zones: Zones | None
+    warning: str | None
+
+    @property
+    def unit(self) -> str:
+        return "mm" if self.kind == "position" else "rad"
+
+    def describe(self) -> str:
+        """'l2.position = [0, 0.05, 0] mm'."""
+        return f"{self.name}.{self.kind} = {_listed(self.value)} {self.unit}"
+
+
+def _listed(values: Sequence[float]) -> str:
+    """'[0, 0.05, 0]' (no '-0')."""
+    return "[" + ", ".join(f"{v + 0.0:.6g}" for v in values) + "]"
+
+
+def measured_doc(measured: Sequence[MeasuredDeviation]) -> dict[str, dict[str, list[float]]]:
+    """``{name: {kind: [x, y, z]}}`` (mm, rad), as ``with_deviations`` takes them."""
+    out: dict[str, dict[str, list[float]]] = {}
+    for m in measured:
+        out.setdefault(m.name, {})[m.kind] = [v + 0.0 for v in m.value]
+    return out
+
+
+def _past(size: float, limit: float, scale: float) -> bool:
+    """Whether ``size`` is beyond ``limit``: a value on the edge, written in
+    decimals, can land its round-off past it (|(2, 2.1)| um is 2.9000000000000002
+    against 2.9): within ``round_off`` of the largest value at hand it is on it."""
+    return size - limit > DEFAULT.round_off * scale
+
+
+def outside(zones: Zones, kind: Kind, value: Vec3, ball: bool) -> str | None:
+    """Where a measured ``value`` (mm or rad, in the deviation's frame) lies
+    outside the zone of ``kind`` of ``zones`` (``ball``: a diameter is a
+    ball, else a disc across the axis x), in words; None inside it, on its
+    edge, or where the zones have none of that kind."""
+    v = np.asarray(value, dtype=float)
+    found: list[str] = []
+    if kind == "position" and zones.position is not None:
+        p = zones.position
+        if p.diameter is not None:
+            mean = np.asarray(p.mean, dtype=float)
+            scale = max(float(np.linalg.norm(v)), float(np.linalg.norm(mean)), p.diameter)
+            across = (0, 1, 2) if ball else (1, 2)
+            shape = "a ball" if ball else "a disc across the axis"
+            zone = f"{shape} of diameter {p.diameter:.6g} mm"
+            for a in () if ball else (0,):  # a disc allows no shift along its axis
+                if _past(abs(v[a] - mean[a]), 0.0, scale):
+                    found.append(
+                        f"its measured position along {_AXES[a]} is {v[a]:.6g} mm, where its "
+                        f"zone ({zone}) allows {mean[a] + 0.0:.6g} mm"
+                    )
+            size = float(np.linalg.norm((v - mean)[list(across)]))
+            if _past(size, p.diameter / 2.0, scale):
+                centre = f" {_listed(p.mean)} mm" if any(p.mean) else ""
+                found.append(
+                    f"its measured position is {size:.6g} mm from its zone's centre{centre}, "
+                    f"beyond the zone's radius of {p.diameter / 2.0:.6g} mm ({zone})"
+                )
+        else:
+            for a, axis in enumerate(_AXES):
+                lim = getattr(p, axis)
+                if lim is None:
+                    if _past(abs(v[a]), 0.0, float(np.max(np.abs(v)))):
+                        given = ", ".join(x for x in _AXES if getattr(p, x) is not None)
+                        found.append(
+                            f"its measured position along {axis} is {v[a]:.6g} mm, where its "
+                            f"zone (limits along {given} only) allows 0 mm"
+                        )
+                    continue
+                scale = max(abs(v[a]), abs(lim.min), abs(lim.max))
+                if _past(v[a], lim.max, scale) or _past(lim.min, v[a], scale):
+                    found.append(
+                        f"its measured position along {axis} is {v[a]:.6g} mm, outside the "
+                        f"zone's [{lim.min:.6g}, {lim.max:.6g}] mm"
+                    )
+    if kind == "orientation" and zones.orientation is not None:
+        o = zones.orientation
+        mean = np.asarray(o.mean, dtype=float)
+        scale = max(float(np.linalg.norm(v)), float(np.linalg.norm(mean)), o.radius)
+        size = float(np.linalg.norm((v - mean)[1:]))
+        if _past(size, o.radius, scale):
+            centre = f" {_listed(o.mean)} rad" if any(o.mean) else ""
+            over = (
+                f" ({o.tolerance:.6g} mm over {o.over:.6g} mm)"
+                if o.tolerance is not None and o.over is not None
+                else ""
+            )
+            found.append(
+                f"its measured tilt is {size:.6g} rad from its zone's centre{centre}, beyond "
+                f"the zone's largest tilt of {o.radius:.6g} rad{over}"
+            )
+    if not found:
+        return None
+    return "; ".join(found) + ": the part is out of tolerance"
 
 
 def _by_name(schema: dict[str, Any]) -> None:

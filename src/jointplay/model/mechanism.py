@@ -29,6 +29,7 @@ from pydantic import (
 from jointplay.geometry import FloatArray
 from jointplay.model.deviations import (
     MOTION_WORDS,
+    MeasuredDeviation,
     SharedDeviation,
     Zones,
     mean_components,
@@ -291,6 +292,8 @@ class Model(BaseModel):
     deviations: tuple[SharedDeviation, ...] = ()
     #: The large motion the mechanism is driven through (``jointplay motion``).
     motion: MotionSection | None = None
+    #: The deviations measured on the part this model is (``with_deviations``).
+    _measured: tuple[MeasuredDeviation, ...] = PrivateAttr(default=())
 
     @field_serializer("gravity")
     def _gravity_with_its_unit(self, gravity: tuple[float, float, float] | None) -> Any:
@@ -433,10 +436,16 @@ class Model(BaseModel):
         return self.loads + self.weights() + own
 
     @property
+    def measured(self) -> tuple[MeasuredDeviation, ...]:
+        """The deviations measured on the part (``with_deviations``), as given."""
+        return self._measured
+
+    @property
     def warnings(self) -> tuple[str, ...]:
         """What the model says that is legal but likely a slip: no loads at all
         (everything stays at 0), or a play large against its joint (a value
-        meant in um, written as mm)."""
+        meant in um, written as mm); and a measured deviation outside its
+        zone (a rejected part, measured to see what it does)."""
         out = []
         if not any(self.loads_of(case) for case in (self.case_names or (None,))):
             out.append(
@@ -473,6 +482,7 @@ class Model(BaseModel):
                             else f"um, write '{play:g} um'"
                         )
                     )
+        out += [m.warning for m in self._measured if m.warning is not None]
         return tuple(out)
 
     def deviation_sources(self) -> tuple[DeviationSource, ...]:
@@ -523,7 +533,10 @@ class Model(BaseModel):
         """A new validated model with some top-level fields changed."""
         data = self.model_dump(by_alias=True, exclude_none=True)
         data.update(changes)
-        return Model.model_validate(data)
+        out = Model.model_validate(data)
+        if not {"joints", "deviations"} & set(changes):  # still the measured part
+            out._measured = self._measured
+        return out
 
 
 @dataclass(frozen=True)

@@ -210,6 +210,9 @@ def render(
     title = model.name or source
     header = Text()
     header.append(f"{title}" + (f" - load case '{case}'" if case else "") + "\n", style="bold")
+    if model.measured:
+        given = "; ".join(m.describe() for m in model.measured)
+        header.append(f"measured deviations: {given}\n")
     header.append(f"status: {result.status}\n")
     header.append(certificate_words(result) + "\n")
     energy = result.potential_energy + 0.0  # no "-0" when nothing moves
