@@ -121,8 +121,14 @@ def _xyz_table(title: str, leading: list[str]) -> Table:
 def sobol_share(v: float, interval: Any) -> str:
     """A Sobol' index in percent with its interval, to one decimal each (an
     estimate's noise can take it below 0 or past 100: printed as it is)."""
-    lo, hi = (100 * float(x) for x in interval)
-    return f"{100 * v:.1f} [{lo:.1f}, {hi:.1f}]"
+    lo, hi = (float(x) for x in interval)
+    return f"{percent(v)} [{percent(lo)}, {percent(hi)}]"
+
+
+def percent(share: float) -> str:
+    """A share in percent to one decimal; one that rounds to 0 is 0.0, not
+    -0.0 (an estimate's noise about 0)."""
+    return f"{round(100 * share, 1) + 0.0:.1f}"
 
 
 #: The forces' sentence names this many joints at most (a large mechanism's
@@ -640,7 +646,12 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         parts.append(table)
         if notes:
             parts.append(notes)
-        if result.sobol is not None and not by_variance:  # asked for (--variance always)
+        if result.sobol is not None and not by_variance:  # asked for, or for another measure
+            if not result.sobol.variance[k] > 0:  # its indices are NaN: no table of them
+                parts.append(
+                    Text("the shares of its variance (Sobol' indices): none, it does not vary")
+                )
+                continue
             parts.append(Text("the shares of its variance (Sobol' indices):"))
             by_total = np.argsort(-result.sobol.total[k], kind="stable")
             parts.append(_variance_table(result, k, by_total, False, True))
@@ -804,7 +815,7 @@ def _variance_table(
             f"{result.width[i]:.6g}",
             sobol_share(float(sobol.first[k, i]), sobol.first_interval[k, i]),
             sobol_share(total, sobol.total_interval[k, i]),
-            f"{100 * float(sobol.interactions[k, i]):.1f}",
+            percent(float(sobol.interactions[k, i])),
         ]
         table.add_row(*row, *([_bar(min(max(100 * total, 0.0), 100.0))] if bars else []))
     return table
