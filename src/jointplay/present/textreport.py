@@ -696,7 +696,8 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
     for play, words in result.linear.plays_described.items():
         head.append(f"  {play}: {words}\n")
     head.append(
-        "worst case: the measure's greatest value over every combination of the tolerances' "
+        "worst case: the measure's greatest value (along a direction, the least and the "
+        "greatest d . u) over every combination of the tolerances' "
         "limits (each a certified equilibrium; with deviation zones, over every position they "
         "allow), passed only if no Monte Carlo sample goes past it, with the linear stack "
         "y0 -/+ sum |s| T / 2 as an estimate where it "
@@ -741,7 +742,11 @@ def _tolerance_table(r: Any, samples: int) -> list[Table | Text]:
     for name in ("", "worst case", "RSS", "Monte Carlo"):
         table.add_column(name, justify="left" if not name else "right")
     verdict = "pass" if r.worst_case_passes else "FAIL"
-    bound = f"within -/+{r.worst:.5g}" if r.two_sided else f"up to {r.worst:.5g}"
+    # along a direction, the signed range reached: one sign where the point goes one way
+    if r.two_sided and r.worst_low is not None and r.worst_high is not None:
+        bound = f"{r.worst_low + 0.0:.5g} to {r.worst_high + 0.0:.5g}"
+    else:
+        bound = f"up to {r.worst:.5g}"
     na = NOT_APPLICABLE
     rss = r.rss_applies
 
