@@ -88,6 +88,49 @@ def spherical_shaft(**over: object) -> dict[str, object]:
     return data
 
 
+def press(**over: object) -> dict[str, object]:
+    """A ram in a square guide along z (10 to 30 um of play each way), pushed
+    down by 1000 N onto a face stop of 5 to 15 um: under a centred load it
+    drops by half the stop's play, and nothing else moves it. Its die at
+    (0, 0, -150) has a requirement along -z and one across, along x."""
+    play = {"min": "10 um", "max": "30 um"}
+    data: dict[str, object] = {
+        "name": "press",
+        "bodies": [{"name": "frame", "ground": True}, {"name": "ram"}],
+        "joints": [
+            {
+                "name": "guide",
+                "type": "prismatic",
+                "between": ["frame", "ram"],
+                "at": [0, 0, 0],
+                "axis": [0, 0, 1],
+                "length": 200,
+                "width": 80,
+                "height": 80,
+                "clearance_y": play,
+                "clearance_z": play,
+            },
+            {
+                "name": "stop",
+                "type": "planar",
+                "between": ["frame", "ram"],
+                "at": [0, 0, -100],
+                "axis": [0, 0, 1],
+                "diameter": 60,
+                "clearance": {"min": "5 um", "max": "15 um"},
+            },
+        ],
+        "loads": [{"body": "ram", "at": [0, 0, -150], "force": [0, 0, "-1000 N"]}],
+        "points": [{"name": "die", "body": "ram", "at": [0, 0, -150]}],
+        "requirements": [
+            {"point": "die", "max_displacement": "20 um", "along": [0, 0, -1]},
+            {"point": "die", "max_displacement": "20 um", "along": [1, 0, 0]},
+        ],
+    }
+    data.update(over)
+    return data
+
+
 @pytest.fixture
 def shaft_dict() -> dict[str, object]:
     return spherical_shaft()

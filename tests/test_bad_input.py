@@ -120,7 +120,8 @@ CASES: list[tuple[str, Any, str]] = [
     (
         "an angle as a length",
         joint(0, clearance="0.5 deg"),
-        r"joints\[0\] 'l1': clearance: expected a length, got '0.5 deg'",
+        r"joints\[0\] 'l1': clearance: expected a length, got '0.5 deg', which is an angle; "
+        r"write a plain number in mm",
     ),
     (
         "a clearance on a rigid joint",

@@ -4,6 +4,8 @@ change, independent differences of full solves, the CLI."""
 from __future__ import annotations
 
 import json
+import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +14,7 @@ import pytest
 from typer.testing import CliRunner
 
 import jointplay
-from conftest import MM, ROOT, spherical_shaft
+from conftest import MM, ROOT, press, spherical_shaft
 from jointplay.cli import app
 from jointplay.studies.contributions import Contributions
 
@@ -191,3 +193,47 @@ def test_variance_always_prints_the_sobol_shares_on_a_linear_measure() -> None:
     assert out.exit_code == 0, out.output
     assert "RSS" in out.output and "the shares of its variance (Sobol' indices):" in out.output
     assert "first order %" in out.output
+
+
+def test_round_off_prints_as_zero_and_a_measure_that_does_not_vary_has_no_shares(
+    tmp_path: Path,
+) -> None:
+    """The press pushed off its axis with a side force that changes sign: the
+    contacts change, so the shares are of the variance (Sobol'). Nothing
+    pushes the ram across y, so the die's d . y is 0 in every set of parts:
+    to round-off, which the positions do not prove, so 0 exactly (the one
+    rule of ``jointplay.proven``). It has no variance, so no input has a
+    share of it; an input with no effect on |d die| has a share of 0.0, and
+    no cell shows -0.0 (nor 'nan')."""
+    data = press(
+        loads=[
+            {"body": "ram", "at": [20, 10, -150], "force": [0, 0, "-1000 N"]},
+            {"body": "ram", "at": [20, 10, -150], "force": [{"min": -5, "max": 5}, 0, 0]},
+        ],
+        points=[{"name": "die", "body": "ram", "at": [20, 10, -150]}],
+        requirements=[{"point": "die", "max_displacement": "20 um", "along": [0, -1, 0]}],
+    )
+    path = tmp_path / "press.json"
+    path.write_text(json.dumps(data))
+    args = ["contributions", str(path), "-n", "16", "--workers", "1"]
+    out = CliRunner().invoke(app, args)
+    assert out.exit_code == 0, out.output
+    assert "Sobol' indices from 16 base sets" in out.output  # |d die| is not linear
+    assert not re.search(r"(?<![\d.])-0(\.0*)?(?![\d.e])", out.output), out.output
+    assert "nan" not in out.output
+    assert "the shares of its variance (Sobol' indices): none, it does not vary" in out.output
+    doc = json.loads(CliRunner().invoke(app, [*args, "--json"]).output)
+    across = "d die along [0, -1, 0]"
+    nominal = doc["measures"][across]["nominal"]
+    assert nominal == 0.0 and math.copysign(1.0, nominal) == 1.0
+    assert doc["sobol"]["measures"][across]["variance"] == 0.0
+
+
+def test_a_share_that_rounds_to_zero_prints_without_a_sign() -> None:
+    """A Sobol' estimate's noise about 0 (an input with no effect) is 0.0 to
+    the one decimal printed, not -0.0; a share that is below 0 stays so."""
+    from jointplay.present.textreport import sobol_share
+
+    assert sobol_share(-4e-4, (-1e-3, 2e-4)) == "0.0 [-0.1, 0.0]"
+    assert sobol_share(-0.0, (-0.0, 0.0)) == "0.0 [0.0, 0.0]"
+    assert sobol_share(-0.028, (-0.142, 0.086)) == "-2.8 [-14.2, 8.6]"

@@ -131,6 +131,23 @@ def test_bad_motion_entries(motion: dict[str, object], words: str) -> None:
     assert words in str(err.value)
 
 
+def test_a_slide_driven_in_degrees_is_told_it_takes_a_length() -> None:
+    """'0 deg' is an angle (pint calls it dimensionless): the message names
+    the entry and says what the drive of a prismatic slide takes."""
+    data = jointplay.load(GALLERY / "slider_crank.yaml").model_dump(
+        by_alias=True, exclude_none=True
+    )
+    data["motion"] = {"drive": "guide", "range": ["0 deg", "50 mm"]}
+    with pytest.raises(
+        ModelError,
+        match=r"crank\.yaml: motion: range\[0\]: expected a length, got '0 deg', which is an "
+        r"angle; .*; the drive of prismatic joint 'guide' is its slide, which takes a length "
+        r"\(mm\), such as '25 mm'",
+    ) as err:
+        model_from_dict(data, source="crank.yaml")
+    assert err.value.exit_code == 2 and "dimensionless" not in str(err.value)
+
+
 def test_answer_at_a_pose_is_the_posed_models() -> None:
     model = jointplay.load(GALLERY / "slider_crank.yaml")
     result = Motion(steps=5).run(model)

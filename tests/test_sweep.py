@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import BALANCE, MM, RAD, ROOT, spherical_shaft
 from jointplay.cli import app
+from jointplay.errors import OptionError
 from jointplay.studies.sweep import RotateLoad, Sweep, Vary, parse_path
 
 UNBALANCE = ROOT / "examples" / "studies" / "rotating_unbalance.yaml"
@@ -154,6 +155,43 @@ def test_a_step_that_breaks_the_model_is_named() -> None:
     assert out.exit_code == 2
     assert "rotating_unbalance.yaml" in out.output
     assert "at the step joints[l2].clearance = -0.2" in out.output
+
+
+@pytest.mark.parametrize(
+    ("vary", "step"),
+    [
+        ("joints[l2].clearance=0.1:0.3 kg:5", "joints[l2].clearance = 0.1 kg"),  # every value
+        ("joints[l2].clearance=0.1,0.3 kg", "joints[l2].clearance = 0.3 kg"),  # the last
+    ],
+)
+def test_a_value_in_the_wrong_unit_is_the_option_s_error(vary: str, step: str) -> None:
+    """The model is valid; the values --vary writes into it are not: the
+    option is named, with its value, the entry it does not fit and the fix,
+    before any step is solved (exit 2)."""
+    out = CliRunner().invoke(app, ["sweep", str(UNBALANCE), "--vary", vary])
+    assert out.exit_code == 2, out.output
+    assert "invalid option" in out.output and "invalid model" not in out.output
+    assert f"--vary: at the step {step}: joints[1] 'l2': clearance: expected a length" in out.output
+    assert "which is a mass" in out.output and "rotating_unbalance.yaml" in out.output
+    assert "change the values given to --vary (a unit goes after the number" in out.output
+
+
+def test_values_that_do_not_fit_together_are_the_option_s_error() -> None:
+    """The first and the last step are valid models, but the grid's middle
+    step writes a joint axis of zeros: that step is named as the option's
+    (exit 2) when it is solved."""
+    data = shaft()
+    joints: Any = data["joints"]
+    joints[0]["axis"] = [1, 1, 0]
+    model = jointplay.model_from_dict(data)
+    sweep = Sweep(
+        vary=(Vary.parse("joints[l1].axis[0]=1,0,1"), Vary.parse("joints[l1].axis[1]=1,0,1"))
+    )
+    with pytest.raises(
+        OptionError, match=r"--vary: at the step joints\[l1\]\.axis\[0\] = 0\.0, "
+    ) as err:
+        sweep.run(model)
+    assert err.value.exit_code == 2 and "nonzero direction" in str(err.value)
 
 
 def test_a_step_the_joints_do_not_hold_exits_3_and_names_the_step(tmp_path: Path) -> None:

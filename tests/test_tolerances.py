@@ -17,6 +17,7 @@ import yaml
 from scipy import stats
 
 import jointplay
+from conftest import press
 from jointplay.studies.tolerances import Tolerances
 from test_cli import run
 
@@ -209,6 +210,13 @@ def test_the_dataframe_carries_what_the_json_does(
             as_json["worst_case"]["worst"],
             as_json["worst_case"]["at"],
         )
+        for column, key in (
+            ("worst_case_signed", "signed"),
+            ("worst_case_low", "low"),
+            ("worst_case_high", "high"),
+        ):  # along a direction only: |d| has none (null, NaN)
+            value, expected = getattr(row, column), as_json["worst_case"][key]
+            assert (value is None or np.isnan(value)) if expected is None else value == expected
         assert row.rss_ppm == as_json["rss"]["ppm"] and row.mc_ppm == as_json["monte_carlo"]["ppm"]
         mc = as_json["monte_carlo"]
         assert (row.mc_low, row.mc_high, row.beyond_worst_case) == (
@@ -238,3 +246,67 @@ def test_samples_pass_the_linear_stack_but_never_the_worst_case() -> None:
     env = Envelope(r.requirement.point).run(model)
     assert np.all(env.contains(d, tol=1e-6))  # mm
     assert r.worst == pytest.approx(env.largest, abs=1e-6)  # mm
+
+
+def test_a_one_signed_deviation_prints_its_signed_range_and_what_decides_it(
+    tmp_path: Path,
+) -> None:
+    """The press's ram drops by half the stop's play, 2.5 to 7.5 um, whatever
+    the guide's plays: along -z the worst case reaches 0.0025 to 0.0075 mm,
+    one sign only, not -/+0.0075; it is decided by the stop alone, so the
+    guide's plays are not named; across (x) nothing moves the die, and no
+    input decides it. The CSV carries the signed figures the JSON does."""
+    path = tmp_path / "press.json"
+    path.write_text(json.dumps(press()))
+    result = Tolerances(samples=200, seed=0).run(jointplay.load(path))
+    down, across = result.requirements
+    assert down.worst == pytest.approx(0.0075, abs=1e-6)  # mm
+    assert down.worst_signed == pytest.approx(0.0075, abs=1e-6)
+    assert (down.worst_low, down.worst_high) == pytest.approx((0.0025, 0.0075), abs=1e-6)
+    assert down.worst_at == "stop.clearance = 0.015 mm; the others do not change it"
+    assert across.worst == 0.0 and (across.worst_low, across.worst_high) == (0.0, 0.0)
+    assert across.worst_at == "every combination alike (no input changes it)"
+    csv = tmp_path / "t.csv"
+    text = run("tolerances", str(path), "-n", "200", "--csv", str(csv))
+    assert text.returncode == 0, text.stderr
+    assert "-/+" not in text.stdout.replace("y0 -/+ sum", "")  # the legend's linear stack
+    assert f"{down.worst_low:.5g} to {down.worst_high:.5g}" in text.stdout
+    assert "at stop.clearance = 0.015 mm; the others do not change it" in text.stdout
+    import pandas as pd
+
+    doc = json.loads(run("tolerances", str(path), "-n", "200", "--json").stdout)
+    for row, req in zip(pd.read_csv(csv).itertuples(), doc["requirements"], strict=True):
+        worst = req["worst_case"]
+        assert (row.worst_case_signed, row.worst_case_low, row.worst_case_high) == (
+            worst["signed"],
+            worst["low"],
+            worst["high"],
+        )
+    assert doc["requirements"][0]["worst_case"]["low"] == pytest.approx(0.0025, abs=1e-6)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from jointplay.present.plot import tolerances_figure
+
+    # the figure draws the worst case where it is reached: at its two ends, not at -0.0075
+    panel, _ = [a for a in tolerances_figure(result).axes if a.get_title()]  # down, across
+    drawn = {round(float(line.get_xdata()[0]), 9) for line in panel.get_lines()}
+    assert {0.0025, 0.0075, 0.02, -0.02} <= drawn and -0.0075 not in drawn
+
+
+def test_the_spindle_s_depth_of_cut_is_one_signed_and_decided_by_the_bearings() -> None:
+    """examples/gallery/spindle.yaml: along Z, the depth of cut, the tool tip
+    goes one way only (down, under the cutting force), and only the bearings'
+    radial plays count: the belt's backlash turns the tip across Y and the
+    front bearing's axial play moves it along X, so neither is named."""
+    path = ROOT / "examples" / "gallery" / "spindle.yaml"
+    doc = json.loads(run("tolerances", str(path), "-n", "200", "--json").stdout)
+    worst = doc["requirements"][0]["worst_case"]
+    assert worst["low"] < worst["high"] < 0 and worst["signed"] == worst["low"]
+    assert worst["worst"] == pytest.approx(-worst["low"])
+    text = run("tolerances", str(path), "-n", "200").stdout
+    assert f"{worst['low']:.5g} to {worst['high']:.5g}" in text
+    assert (
+        "front bearing.clearance = " in worst["at"] and "rear bearing.clearance = " in worst["at"]
+    )
+    assert "backlash" not in worst["at"] and "axial_clearance" not in worst["at"]

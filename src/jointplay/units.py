@@ -239,7 +239,7 @@ def _factor(expression: str, dimension: str) -> float | tuple[str, str]:
     if quantity.dimensionality != reference.dimensionality or turns[0] != turns[1]:
         if quantity.dimensionality == reference.dimensionality and not quantity.dimensionless:
             kind = f"a unit whose angle differs from {base}'s"
-        elif quantity.dimensionless:
+        elif quantity.dimensionless and not turns[0]:  # pint's "dimensionless" angles are angles
             kind = (
                 f"dimensionless (a bare number means the base unit; a unit must be {_a(dimension)})"
             )

@@ -515,7 +515,7 @@ class Model(BaseModel):
             raise KeyError("motion")
         joint = self.joint(self.motion.drive)
         kind = coordinate_of(joint, *self.motion.range)
-        return (joint, kind, *range_of(self.motion, kind))
+        return (joint, kind, *range_of(self.motion, kind, joint_type=joint.type_name))
 
     def body(self, name: str) -> Body:
         for b in self.bodies:

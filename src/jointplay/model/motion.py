@@ -159,10 +159,14 @@ def coordinate_of(
 
 
 def range_of(
-    section: MotionSection, coordinate: Coordinate, names: tuple[str, str, str, str] = FILE_NAMES
+    section: MotionSection,
+    coordinate: Coordinate,
+    names: tuple[str, str, str, str] = FILE_NAMES,
+    joint_type: str = "",
 ) -> tuple[float, float]:
     """The range in the coordinate's base unit (rad or mm); ``ValueError``
-    naming the end that does not read (as ``names`` call the ends)."""
+    naming the end that does not read (as ``names`` call the ends) and what
+    the drive of the joint (of type ``joint_type``) takes."""
     out = []
     for i, value in enumerate(section.range):
         if coordinate == "spin" and plain_angle(value):
@@ -173,11 +177,12 @@ def range_of(
         except ValueError as exc:
             told = without_plain_hint(str(exc), "angle") if coordinate == "spin" else exc
             kind, example = (
-                ("an angle", "'90 deg'") if coordinate == "spin" else ("a length", "'25 mm'")
+                ("an angle", "'90 deg'") if coordinate == "spin" else ("a length (mm)", "'25 mm'")
             )
+            joint = f"{joint_type} joint" if joint_type else "joint"
             raise ValueError(
-                f"{names[i]}: {told}; the {coordinate} of joint '{section.drive}' is {kind}, "
-                f"such as {example}"
+                f"{names[i]}: {told}; the drive of {joint} '{section.drive}' is its "
+                f"{coordinate}, which takes {kind}, such as {example}"
             ) from None
     if out[0] == out[1]:
         raise ValueError(

@@ -1220,21 +1220,26 @@ def tolerances_figure(result: TolerancesResult) -> Figure:
             label=f"Monte Carlo, {len(values):,} parts",
         )
         high = req.max_displacement
-        ends = [high, r.worst, *((values.min(), values.max()) if len(values) else ())]
+        # along a direction, the signed range the worst case reaches (one sign, maybe)
+        reached, words = [r.worst], f"worst case {r.worst:.4g} mm"
+        if r.two_sided and r.worst_low is not None and r.worst_high is not None:
+            reached = [r.worst_low, r.worst_high]
+            words = f"worst case {r.worst_low + 0.0:.4g} to {r.worst_high + 0.0:.4g} mm"
+        ends = [high, *reached, *((values.min(), values.max()) if len(values) else ())]
         for sign in (1, -1) if r.two_sided else (1,):
-            first = sign == 1
             ax.axvline(
                 sign * high,
                 color=TOUCHING,
                 linewidth=1.5,
-                label=f"limit {high:g} mm" if first else None,
+                label=f"limit {high:g} mm" if sign == 1 else None,
             )
+        for n, end in enumerate(reached):
             ax.axvline(
-                sign * r.worst,
+                end,
                 color="black",
                 linestyle="--",
                 linewidth=1.2,
-                label=f"worst case {r.worst:.4g} mm" if first else None,
+                label=words if n == 0 else None,
             )
         if r.linear_agrees:
             ax.axvspan(r.linear_low, r.linear_high, color=LOAD, alpha=0.12, label="linear estimate")

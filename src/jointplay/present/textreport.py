@@ -121,8 +121,14 @@ def _xyz_table(title: str, leading: list[str]) -> Table:
 def sobol_share(v: float, interval: Any) -> str:
     """A Sobol' index in percent with its interval, to one decimal each (an
     estimate's noise can take it below 0 or past 100: printed as it is)."""
-    lo, hi = (100 * float(x) for x in interval)
-    return f"{100 * v:.1f} [{lo:.1f}, {hi:.1f}]"
+    lo, hi = (float(x) for x in interval)
+    return f"{percent(v)} [{percent(lo)}, {percent(hi)}]"
+
+
+def percent(share: float) -> str:
+    """A share in percent to one decimal; one that rounds to 0 is 0.0, not
+    -0.0 (an estimate's noise about 0)."""
+    return f"{round(100 * share, 1) + 0.0:.1f}"
 
 
 #: The forces' sentence names this many joints at most (a large mechanism's
@@ -643,7 +649,12 @@ def render_contributions(result: ContributionsResult, source: str, console: Cons
         parts.append(table)
         if notes:
             parts.append(notes)
-        if result.sobol is not None and not by_variance:  # asked for (--variance always)
+        if result.sobol is not None and not by_variance:  # asked for, or for another measure
+            if not result.sobol.variance[k] > 0:  # its indices are NaN: no table of them
+                parts.append(
+                    Text("the shares of its variance (Sobol' indices): none, it does not vary")
+                )
+                continue
             parts.append(Text("the shares of its variance (Sobol' indices):"))
             by_total = np.argsort(-result.sobol.total[k], kind="stable")
             parts.append(_variance_table(result, k, by_total, False, True))
@@ -688,7 +699,8 @@ def render_tolerances(result: TolerancesResult, source: str, console: Console) -
     for play, words in result.linear.plays_described.items():
         head.append(f"  {play}: {words}\n")
     head.append(
-        "worst case: the measure's greatest value over every combination of the tolerances' "
+        "worst case: the measure's greatest value (along a direction, the least and the "
+        "greatest d . u) over every combination of the tolerances' "
         "limits (each a certified equilibrium; with deviation zones, over every position they "
         "allow), passed only if no Monte Carlo sample goes past it, with the linear stack "
         "y0 -/+ sum |s| T / 2 as an estimate where it "
@@ -733,7 +745,11 @@ def _tolerance_table(r: Any, samples: int) -> list[Table | Text]:
     for name in ("", "worst case", "RSS", "Monte Carlo"):
         table.add_column(name, justify="left" if not name else "right")
     verdict = "pass" if r.worst_case_passes else "FAIL"
-    bound = f"within -/+{r.worst:.5g}" if r.two_sided else f"up to {r.worst:.5g}"
+    # along a direction, the signed range reached: one sign where the point goes one way
+    if r.two_sided and r.worst_low is not None and r.worst_high is not None:
+        bound = f"{r.worst_low + 0.0:.5g} to {r.worst_high + 0.0:.5g}"
+    else:
+        bound = f"up to {r.worst:.5g}"
     na = NOT_APPLICABLE
     rss = r.rss_applies
 
@@ -807,7 +823,7 @@ def _variance_table(
             f"{result.width[i]:.6g}",
             sobol_share(float(sobol.first[k, i]), sobol.first_interval[k, i]),
             sobol_share(total, sobol.total_interval[k, i]),
-            f"{100 * float(sobol.interactions[k, i]):.1f}",
+            percent(float(sobol.interactions[k, i])),
         ]
         table.add_row(*row, *([_bar(min(max(100 * total, 0.0), 100.0))] if bars else []))
     return table

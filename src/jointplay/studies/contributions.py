@@ -185,15 +185,17 @@ class Contributions:
         sigma = np.array([sigma[g[0]] for g in groups])
         # a slope whose effect over its whole tolerance is below the length the
         # positions prove is their round-off: 0 (jointplay.proven)
-        step = Resolution.of(asm.s, asm.ell).length / np.where(width > 0, width, 1.0)
+        length = Resolution.of(asm.s, asm.ell).length
+        step = length / np.where(width > 0, width, 1.0)
         sensitivity, up, down = (proven(v, step) for v in (sensitivity, up, down))
+        nominal = proven(y[:, 0], length)  # a measure below the proven length is 0, not -0
         half_width = np.sum(np.abs(sensitivity) * width, axis=1) / 2
         linearity = check_linearity(
             model,
             self.case,
             Inputs(pmap, lmap, dmap),
             measures,
-            y[:, 0],
+            nominal,
             per_column,
             half_width,
             seed=self.seed,
@@ -211,7 +213,7 @@ class Contributions:
             tuple(m.label for m in measures),
             tuple(labels),
             described,
-            y[:, 0],
+            nominal,
             sensitivity,
             up,
             down,

@@ -466,8 +466,9 @@ class Motion:
         where = OPTION_NAMES if self.range is not None else FILE_NAMES
         try:
             start, stop = section["range"]
-            kind = coordinate_of(model.joint(section["drive"]), start, stop, where)
-            range_of(MotionSection(**section), kind, where)
+            joint = model.joint(section["drive"])
+            kind = coordinate_of(joint, start, stop, where)
+            range_of(MotionSection(**section), kind, where, joint.type_name)
         except ValueError as exc:
             if self.range is not None:
                 raise OptionError(str(exc)) from None

@@ -14,7 +14,8 @@ requirement's ``along`` (``Measure``, ``measures_of``, ``measured``).
 ``solve_sets`` solves such rows the way the Monte Carlo study solves its
 samples (``montecarlo._solve_chunk``): the batch solver, started from the
 nominal answer, in chunks that may go to worker processes. Every answer is
-a certified equilibrium; a set of parts that cannot be assembled gives NaN.
+a certified equilibrium, its displacements to what it proves (``proven``); a
+set of parts that cannot be assembled gives NaN.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from jointplay.errors import StudyError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
 from jointplay.model.tolerance import Toleranced
+from jointplay.proven import Resolution, proven
 from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import (
@@ -160,13 +162,15 @@ def _solve_rows(
     if dmap.variables:
         radii = radii + dmap.radii_shift(deviations)
         centres = dmap.centres(deviations)
-    batch = Workspace(prepared.asm).solve_batch(
-        work, radii, centres, forces=False, starts=prepared.starts
-    )
+    ws = Workspace(prepared.asm)
+    batch = ws.solve_batch(work, radii, centres, forces=False, starts=prepared.starts)
     d = np.zeros((len(values), len(model.points), 3))
+    # below what the positions prove is round-off, 0 as in the Monte Carlo: else a
+    # measure that does not vary has a variance, and Sobol' shares, of round-off
+    length = Resolution.of(prepared.asm.s, prepared.asm.ell, settings=ws.settings).length
     for p, point in enumerate(model.points):
         motion = batch.body_displacement(point.body)
-        d[:, p] = motion[:, :3] + np.cross(motion[:, 3:], np.asarray(point.at))
+        d[:, p] = proven(motion[:, :3] + np.cross(motion[:, 3:], np.asarray(point.at)), length)
     d[~batch.assembled] = np.nan
     return first, d
 

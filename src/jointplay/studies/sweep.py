@@ -221,7 +221,8 @@ class Sweep:
 
     def _check(self, model: Model, base: dict[str, Any], source: str) -> None:
         """Every path names a number of the model, and every step is a valid
-        model (checked on the first and last values of each parameter)."""
+        model (checked on the first and the last step: a range's ends, and its
+        unit)."""
         for v in self.vary:
             try:
                 _locate(base, v.path)
@@ -245,6 +246,28 @@ class Sweep:
                     f"the sweep is under {shown(self.case)}; give --case {path[1]}",
                     source=source,
                 )
+        last = tuple(len(v.values) - 1 for v in self.vary)
+        last += (self.rotate.steps - 1,) if self.rotate is not None else ()
+        for index in dict.fromkeys(((0,) * len(last), last)):  # before any solve
+            step_model(base, self, index, source)
+
+
+#: How to give the sweep other values (after the entry's own fix, for the file).
+VARY_FIX = "change the values given to --vary (a unit goes after the number: '0:10 N:11')"
+
+
+def step_model(base: dict[str, Any], sweep: Sweep, index: tuple[int, ...], source: str) -> Model:
+    """The model at step ``index``; the model itself is valid, so where the
+    step's is not, the option's values are wrong: an ``OptionError``."""
+    try:
+        return model_from_dict(_step_data(base, sweep, index), source=source)
+    except ModelError as exc:
+        where = f"{exc.entry}: " if exc.entry else ""
+        raise OptionError(
+            f"at the step {_step_name(sweep, index)}: {where}{exc.problem}; {VARY_FIX}",
+            source=source,
+            entry="--vary" if sweep.vary else "--rotate-load",
+        ) from None
 
 
 def parse_path(path: str) -> list[str | int]:
@@ -451,8 +474,8 @@ def solve_steps(
     shape: Model | None = None
     reused = 0
     for index in steps:
+        model = step_model(base, sweep, index, source)
         try:
-            model = model_from_dict(_step_data(base, sweep, index), source=source)
             frame = _without_loads(model)
             if ws is not None and frame == shape:
                 reused += 1

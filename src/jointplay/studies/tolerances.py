@@ -8,8 +8,9 @@ results side by side"), for each requirement's measure y: |d| of its point
 - *Worst case*: y's greatest value over the tolerances' limits
   (``worstcase.py``: every combination of the plays' lower and upper limits
   and of the varying loads' limits and mean, or the deviation zones'
-  support), with the configuration that reaches it; it passes only if no
-  Monte Carlo sample goes past it. Beside it the *linear estimate*
+  support), with the configuration that reaches it (the inputs that decide
+  it) and, along a direction, the least and the greatest d . u; it passes
+  only if no Monte Carlo sample goes past it. Beside it the *linear estimate*
   (arithmetic stack) y0 -/+ sum_i |s_i| T_i / 2, from the contributions'
   sensitivities s_i at the nominal and the tolerance widths T_i (where the
   contacts change at the nominal, each side's own slope): shown only where
@@ -107,6 +108,10 @@ class RequirementTolerances:
     worst_at: str  # the configuration that reaches it
     worst_over: str  # over which sets of parts and loads
     worst_signed: float | None  # along a direction: d . u at the worst case
+    #: Along a direction: the least and the greatest d . u over the worst
+    #: case's sets (one sign where the point goes one way only)
+    worst_low: float | None
+    worst_high: float | None
     linear_low: float  # the linear estimate (the stack at the nominal's slopes)
     linear_high: float
     linear: bool  # the measure is linear over the ranges: RSS applies
@@ -177,6 +182,8 @@ class RequirementTolerances:
                 "at": self.worst_at,
                 "over": self.worst_over,
                 "signed": self.worst_signed,
+                "low": self.worst_low,
+                "high": self.worst_high,
                 "passes": self.worst_case_passes,
                 "linear_estimate": {
                     "low": self.linear_low,
@@ -314,6 +321,8 @@ def _one(
         reach.at,
         reach.over,
         reach.signed,
+        reach.low,
+        reach.high,
         y0 + fall,
         y0 + rise,
         is_linear,
@@ -368,6 +377,9 @@ class TolerancesResult:
                     "requirement": r.requirement.describe(),
                     "nominal": r.nominal,
                     "worst_case": r.worst,
+                    "worst_case_signed": r.worst_signed,
+                    "worst_case_low": r.worst_low,
+                    "worst_case_high": r.worst_high,
                     "worst_case_passes": r.worst_case_passes,
                     "worst_case_at": r.worst_at,
                     "linear_low": r.linear_low,

@@ -9,7 +9,9 @@ at the limits, but on the mechanism's own equilibria:
   limits and mean (their limits only where three values each would be more
   than ``MOST_LOAD_SETS``), each solved as the model's own equilibrium,
   springs and all (one batch, certified answers). The worst case is the
-  largest of those answers, at the combination it names: exact there. A
+  largest of those answers, at the combination it names (only the inputs
+  that decide it: those left out reach it at any of their values): exact
+  there. A
   smaller play can push a point further (a gear between two bearings tilts
   more about a tighter one), so the lower limits count as much as the upper
   ones; between the limits a part may still go further, and the Monte Carlo
@@ -38,6 +40,7 @@ from jointplay.assembly import assemble
 from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
+from jointplay.proven import Resolution, proven
 from jointplay.studies.contributions import unit_of
 from jointplay.studies.envelope import MOST_LOAD_SETS
 from jointplay.studies.parts import Inputs, Measure, inputs_of, measured, solve_sets
@@ -55,6 +58,10 @@ class Reach:
     at: str  # the configuration, in words
     over: str  # over which load sets (or positions), in words
     signed: float | None = None  # d . u at the worst case (along a direction)
+    #: Along a direction: the least and the greatest d . u over the same sets
+    #: (mm), which may both have one sign.
+    low: float | None = None
+    high: float | None = None
 
 
 def worst_cases(
@@ -97,20 +104,48 @@ def _over_load_sets(
         or "the model's loads"
     )
 
-    def at(j: int) -> str:
-        names = [v.label for v in plays] + [v.label for v in lmap.variables]
-        words = ", ".join(
-            f"{name} = {value:g} {unit_of(name)}"
-            for name, value in zip(names, rows[j], strict=True)
-        )
-        return words or "the plays as given"
+    names = [v.label for v in plays] + [v.label for v in lmap.variables]
+    shape = [len(g) for g in grids]
+    asm = assemble(model)
+    length = Resolution.of(asm.s, asm.ell).length
+
+    def at(size: FloatArray, j: int) -> str:
+        if not names:
+            return "the plays as given"
+        deciding = _deciding(size.reshape(shape), np.unravel_index(j, shape), length)
+        if not deciding:
+            return "every combination alike (no input changes it)"
+        words = ", ".join(f"{names[i]} = {rows[j, i]:g} {unit_of(names[i])}" for i in deciding)
+        return words + ("" if len(deciding) == len(names) else "; the others do not change it")
 
     out = []
     for k, m in enumerate(measures):
-        top = int(np.nanargmax(np.abs(y[k])))
-        signed = None if m.along is None else float(y[k, top])
-        out.append(Reach(m.label, float(abs(y[k, top])), at(top), over, signed))
+        size = np.abs(y[k])
+        top = int(np.nanargmax(size))
+        if m.along is None:
+            out.append(Reach(m.label, float(size[top]), at(size, top), over))
+            continue
+        low, high = float(np.nanmin(y[k])), float(np.nanmax(y[k]))
+        out.append(
+            Reach(m.label, float(size[top]), at(size, top), over, float(y[k, top]), low, high)
+        )
     return tuple(out)
+
+
+def _deciding(size: FloatArray, top: tuple[Any, ...], length: float) -> list[int]:
+    """The inputs (axes of the grid ``size``) that decide its greatest value at
+    ``top``: the others, left to any of their values together, keep it to
+    ``length`` (what the positions prove). Each input is let go in turn while
+    that holds, so the named ones with the others free reach it."""
+    worst = size[top]
+    free: list[int] = []
+    for i in range(size.ndim):
+        trial = [*free, i]
+        index = tuple(slice(None) if a in trial else top[a] for a in range(size.ndim))
+        shortfall = worst - size[index]
+        if not np.isnan(shortfall).any() and not np.any(proven(shortfall, length)):
+            free = trial
+    return [i for i in range(size.ndim) if i not in free]
 
 
 def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, source: str) -> Reach:
@@ -131,16 +166,15 @@ def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, sour
     ws = Workspace(asm)
     held.check_loads(ws, case)  # the support is over positions: the loads' verdict first
     if point.body not in asm.body_index:  # the ground does not move
-        return Reach(m.label, 0.0, words, over, 0.0)
+        return Reach(m.label, 0.0, words, over, 0.0, 0.0, 0.0)
     if inputs.pmap.variables:
         highs = np.array([v.value.high for v in inputs.pmap.variables])
         ws = ws.with_radii(inputs.pmap.radii(highs)[0])
     program = _ZoneProgram(ws, inputs.dmap, _point_map(asm, point.body, np.asarray(point.at)))
     u = np.asarray(m.along)
     # the greatest and the least d . u: a component unbounded either way has no worst case
-    ends: list[FloatArray | None] = [program.support(u), program.support(-u)]
-    if ends[0] is None or ends[1] is None:
-        return Reach(m.label, math.inf, words, over, math.inf if ends[0] is None else -math.inf)
-    high, low = float(u @ ends[0]), float(u @ ends[1])
+    ends = [program.support(u), program.support(-u)]
+    high = math.inf if ends[0] is None else float(u @ ends[0])
+    low = -math.inf if ends[1] is None else float(u @ ends[1])
     signed = high if abs(high) >= abs(low) else low
-    return Reach(m.label, abs(signed), words, over, signed)
+    return Reach(m.label, abs(signed), words, over, signed, low, high)
