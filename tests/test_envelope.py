@@ -482,3 +482,49 @@ def test_a_worst_case_over_deviation_zones_is_refused_where_the_loads_swing_the_
     model = jointplay.model_from_dict(data)
     with pytest.raises(jointplay.UnboundedMechanismError, match="most by loads\\[0\\] on 'arm'"):
         worst_cases(model, [Measure("tip", (0.0, 1.0, 0.0))], None, source="arm.json")
+
+
+#: A ram in a guide, on a one-sided point stop below it, pushed up: the load
+#: lifts it off the stop, which nothing else holds along the guide.
+RAM_LIFTED = {
+    "name": "press",
+    "bodies": [{"name": "frame", "ground": True}, {"name": "ram"}],
+    "joints": [
+        {"name": "guide", "type": "prismatic", "between": ["frame", "ram"], "at": [0, 0, 0],
+         "axis": [0, 0, 1], "length": 200, "width": 80, "height": 80,
+         "clearance_y": {"min": "10 um", "max": "30 um"},
+         "clearance_z": {"min": "10 um", "max": "30 um"}},
+        {"name": "stop", "type": "point", "between": ["frame", "ram"], "at": [0, 0, -100],
+         "axis": [0, 0, 1]},
+    ],
+    "loads": [{"body": "ram", "at": [0, 0, -150], "force": [0, 0, "1000 N"]}],
+    "points": [{"name": "die", "body": "ram", "at": [0, 0, -150]}],
+    "requirements": [{"point": "die", "max_displacement": "20 um", "along": [1, 0, 0]}],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "study",
+    [
+        ["envelope", "--point", "die"],
+        ["envelope", "--point", "die", "--loads", "model"],
+        ["montecarlo", "--samples", "50"],
+        ["contributions"],
+        ["tolerances", "--samples", "50"],
+    ],
+)
+def test_a_study_of_a_ram_its_loads_lift_off_its_stop_exits_3_as_solve(
+    tmp_path: Path, study: list[str]
+) -> None:
+    # no free motion of the joints' rows: a one-sided contact the loads lift a
+    # part off, found by the cone program; the probe envelope printed a Z extent
+    # of 0 to 0 and exited 0, and --loads model named no body
+    path = tmp_path / "press.json"
+    path.write_text(json.dumps(RAM_LIFTED))
+    runner = CliRunner()
+    solved = runner.invoke(app, ["solve", str(path)])
+    assert solved.exit_code == 3
+    assert "body 'ram': translation along the global +Z axis is not held" in solved.output
+    out = runner.invoke(app, [study[0], str(path), *study[1:]])
+    assert out.exit_code == 3, out.output
+    assert out.stdout == "" and out.stderr == solved.stderr

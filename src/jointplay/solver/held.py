@@ -38,21 +38,6 @@ def check_driven(ws: WorkspaceData, g: FloatArray, loads: Sequence[Load] = ()) -
     raise unbounded(ws.asm, ws.N @ drive, ws.settings, loads=loads)
 
 
-def check_loads(ws: WorkspaceData, case: str | None = None) -> None:
-    """Solve's verdict, for a study before it solves anything: the model's
-    own loads in load case ``case`` (``Model.loads_of``) that drive a free
-    motion raise the ``UnboundedMechanismError`` a solve raises, in its
-    words (under that case, as ``solve --case`` says). A study's probes or
-    samples stand in for those loads, so without it a mechanism that is not
-    held would get numbers."""
-    loads = ws.asm.model.loads_of(case)
-    g = ws.asm.g if case is None else ws.asm.work_of(loads)  # as a solve takes them
-    try:
-        check_driven(ws, g, loads)
-    except UnboundedMechanismError as exc:
-        raise (exc if case is None else exc.in_case(case)) from None
-
-
 def driven_motion(ws: WorkspaceData, g: FloatArray, fallback: FloatArray) -> FloatArray:
     """A motion that the joints let go on for ever and the loads ``g``
     drive (a body lifting off its point contacts, say), in the simplest

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from jointplay.assembly import assemble
+from jointplay.errors import SolverError, UnassembledError, UnboundedMechanismError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Load, Model
 from jointplay.numerics import linalg
@@ -37,6 +38,21 @@ class Workspace(WorkspaceData):
             if exact:
                 return exact_rotations.solve_exact(self, loads)
             return pipeline.solve_loads(self, loads)
+
+    def check_held(self, case: str | None = None) -> None:
+        """Solve's verdict on the model's own loads (in load case ``case``),
+        for a study whose probes or samples stand in for them: where the
+        joints do not hold those loads (a free motion they drive, a part they
+        lift off), the ``UnboundedMechanismError`` a solve raises, in its
+        words and under that case; a study of such a mechanism has no numbers.
+        Nominal parts that cannot be assembled, or a nominal answer declined,
+        are left to the study, which meets them part by part in its own words."""
+        try:
+            self.solve(loads=self.asm.model.loads_of(case))
+        except UnboundedMechanismError as exc:
+            raise (exc if case is None else exc.in_case(case)) from None
+        except (UnassembledError, SolverError):
+            return
 
     def solve_batch(
         self,

@@ -46,7 +46,6 @@ from jointplay.errors import UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
 from jointplay.proven import Resolution, proven
-from jointplay.solver import held
 from jointplay.solver.solve import Workspace
 from jointplay.studies.linearity import Linearity, check_linearity
 from jointplay.studies.parts import Inputs, measures_of
@@ -132,7 +131,7 @@ class Contributions:
         radii = pmap.radii(values[:, :n_plays]) + dmap.radii_shift(deviations)
         centres = dmap.centres(deviations) if dmap.variables else None
         ws = Workspace(asm)
-        held.check_loads(ws, self.case)  # the nominal row's verdict, in a solve's words
+        ws.check_held(self.case)  # the nominal row's verdict, in a solve's words
         batch = ws.solve_batch(work, radii, centres, forces=False)
         names = [p.name for p in model.points]
         y = np.zeros((len(measures), len(values)))

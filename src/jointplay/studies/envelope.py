@@ -160,7 +160,7 @@ class Envelope:
             highs = np.array([v.value.high for v in pmap.variables])
             ws = ws.with_radii(pmap.radii(highs)[0])
         for each in self._cases(model):  # probes stand in for the loads: check them first
-            held.check_loads(ws, each)
+            ws.check_held(each)
         varying = any(load.ranges() for case in self._cases(model) for load in model.loads_of(case))
         loaded = any(model.loads_of(case) for case in self._cases(model))
         mode = self.loads

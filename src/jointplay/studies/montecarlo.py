@@ -32,7 +32,6 @@ from jointplay.errors import StudyError, UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.proven import Resolution, proven
-from jointplay.solver import held
 from jointplay.solver.batch import Start, solved_start
 from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
@@ -186,7 +185,7 @@ def _prepare(model: Model, case: str | None) -> _Prepared:
     asm = assemble(model)
     lmap = load_map(asm, case)
     ws = Workspace(asm)
-    held.check_loads(ws, case)  # a model its joints do not hold has no samples to draw
+    ws.check_held(case)  # a model its joints do not hold has no samples to draw
     nominal = solved_start(ws, lmap.g0)
     return _Prepared(
         asm,

@@ -149,7 +149,6 @@ def _deciding(size: FloatArray, top: tuple[Any, ...], length: float) -> list[int
 
 
 def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, source: str) -> Reach:
-    from jointplay.solver import held
     from jointplay.solver.solve import Workspace
     from jointplay.studies.envelope import Envelope, _point_map, _ZoneProgram
 
@@ -164,7 +163,7 @@ def _over_zones(model: Model, inputs: Inputs, m: Measure, case: str | None, sour
     point = next(p for p in model.points if p.name == m.point)
     asm = assemble(model)
     ws = Workspace(asm)
-    held.check_loads(ws, case)  # the support is over positions: the loads' verdict first
+    ws.check_held(case)  # the support is over positions: the loads' verdict first
     if point.body not in asm.body_index:  # the ground does not move
         return Reach(m.label, 0.0, words, over, 0.0, 0.0, 0.0)
     if inputs.pmap.variables:
