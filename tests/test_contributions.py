@@ -237,3 +237,28 @@ def test_a_share_that_rounds_to_zero_prints_without_a_sign() -> None:
     assert sobol_share(-4e-4, (-1e-3, 2e-4)) == "0.0 [-0.1, 0.0]"
     assert sobol_share(-0.0, (-0.0, 0.0)) == "0.0 [0.0, 0.0]"
     assert sobol_share(-0.028, (-0.142, 0.086)) == "-2.8 [-14.2, 8.6]"
+
+
+def test_a_measure_that_stays_put_but_not_at_0_has_no_shares_and_stderr_stays_quiet(
+    tmp_path: Path,
+) -> None:
+    # the stop's play fixed (10 um): the die sits 5 um down in every set of parts,
+    # but its variance was the solver's round-off (3e-36), shares were drawn from
+    # it, and SALib's "constant values" warnings reached stderr
+    data = press()
+    data["joints"][1]["clearance"] = "10 um"  # type: ignore[index]
+    data["loads"].append(  # type: ignore[attr-defined]
+        {"body": "ram", "at": [0, 0, -150], "force": [{"min": -5, "max": 5}, 0, 0]}
+    )
+    path = tmp_path / "press.json"
+    path.write_text(json.dumps(data))
+    proc = CliRunner().invoke(app, ["contributions", str(path), "-n", "16"])
+    assert proc.exit_code == 0, proc.output
+    assert proc.stderr == ""
+    text = " ".join(proc.stdout.split())
+    assert "d die along [0, 0, -1]: 0.005 mm at the nominal" in text
+    assert "the shares of its variance (Sobol' indices): none, it does not vary" in text
+    doc = json.loads(
+        CliRunner().invoke(app, ["contributions", str(path), "-n", "16", "--json"]).stdout
+    )
+    assert doc["sobol"]["measures"]["d die along [0, 0, -1]"]["variance"] == 0.0

@@ -34,6 +34,7 @@ import numpy as np
 
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
+from jointplay.proven import Resolution
 from jointplay.studies.parts import inputs_of, measured, measures_of, solve_sets
 from jointplay.studies.variation import nothing_varies
 
@@ -102,6 +103,8 @@ class Sobol:
         """The indices of the measures ``y`` (M, rows of the design) of ``model``."""
         from SALib.analyze import sobol as analysis
 
+        from jointplay.assembly import assemble
+
         inputs = inputs_of(model, self.case, source)
         measures = measures_of(model, source)
         n, d = self.samples, len(inputs.groups)
@@ -111,6 +114,12 @@ class Sobol:
         f = f[:, keep]
         both = np.concatenate([f[:, :, 0], f[:, :, -1]], axis=1)  # A and B
         variance = np.var(both, axis=1) if np.any(keep) else np.full(len(measures), np.nan)
+        # a measure whose spread the positions do not prove does not vary: its
+        # variance is the solver's round-off, and so would its shares be
+        asm = assemble(model)
+        length = Resolution.of(asm.s, asm.ell).length
+        if np.any(keep):
+            variance[np.ptp(both, axis=1) <= length] = 0.0
         first = np.full((len(measures), d), np.nan)
         first_ci = np.full((len(measures), d, 2), np.nan)
         total, total_ci = first.copy(), first_ci.copy()
