@@ -706,6 +706,22 @@ def test_two_held_spins_that_lock_together_are_both_named() -> None:
         nominal_poses(model_from_dict(data, source="four_bar"), np.radians([0.0, 1.0]))
     assert err.value.kind == "locked" and "weld" in err.value.joints
     assert "the drive 'motor' cannot move" in str(err.value)
+    assert "no joint can drive it" in str(err.value)  # the weld fixes every body
+
+
+def test_a_linkage_no_joint_can_drive_is_not_told_to_drive_another() -> None:
+    """Pin C's axis across the others' (a slip in the file): the four-bar
+    cannot move at all, so the fix is the joints' geometry, not another
+    drive."""
+    data = jointplay.load(GALLERY / "four_bar.yaml").model_dump(by_alias=True, exclude_none=True)
+    data["joints"] = list(data["joints"])
+    [pin] = [j for j in data["joints"] if j["name"] == "pin C"]
+    pin["axis"] = [0, 1, 0]
+    with pytest.raises(MotionError) as err:
+        nominal_poses(model_from_dict(data, source="four_bar"), np.radians([0.0, 1.0]))
+    assert err.value.kind == "locked" and "pin C" in err.value.joints
+    words = str(err.value)
+    assert "no joint can drive it" in words and "drive another joint" not in words
 
 
 def test_without_the_backlash_that_held_it_the_drive_moves() -> None:

@@ -536,6 +536,15 @@ def _moves(J: FloatArray, others: IntArray, rcond: float) -> bool:
     return int(np.sum(full > rcond * full[0])) > int(np.sum(kept > rcond * full[0]))
 
 
+def _mobility(J: FloatArray, rows: IntArray, rcond: float) -> int:
+    """How many motions of the bodies the rows ``rows`` of ``J`` leave free
+    (its rank against J's largest singular value, as ``_moves``)."""
+    full = np.linalg.svd(J, compute_uv=False)
+    kept = np.linalg.svd(J[rows], compute_uv=False) if rows.size else np.zeros(0)
+    top = full[0] if full.size else 0.0
+    return J.shape[1] - int(np.sum(kept > rcond * top)) if top > 0 else J.shape[1]
+
+
 def _check_movable(eqs: _Equations, R: FloatArray, p: FloatArray, source: str | None) -> None:
     """``MotionError`` (exit 2) if, at the written pose, the other joints'
     ideal constraints leave the driven coordinate no motion at all (the
@@ -590,9 +599,18 @@ def _check_movable(eqs: _Equations, R: FloatArray, p: FloatArray, source: str | 
         # the other rows' combination that makes the drive's: the joints it weighs most
         weights = np.linalg.lstsq(J[rows].T, J[-1], rcond=None)[0]
         joints = tuple(j for j in eqs.joints_of(weights) if j != eqs.drive_joint)
+        named = ", ".join(repr(j) for j in joints)
+        if _mobility(J, rows, rcond) == 0:  # no joint could drive it: the linkage is locked
+            fix = (
+                "no joint can drive it: the linkage cannot move at all as written; check "
+                "those joints' types, axes and centres (a rigid joint in the loop, or a "
+                "pin whose axis is not parallel to the others', locks it)"
+            )
+        else:
+            fix = "drive another joint"
         message = (
-            f"{drive}: the ideal joints {', '.join(repr(j) for j in joints)} leave its "
-            f"{eqs.drive} no motion (they fix the linkage without it); drive another joint"
+            f"{drive}: the ideal joints {named} leave its "
+            f"{eqs.drive} no motion (they fix the linkage without it); {fix}"
         )
     raise MotionError(message, kind="locked", step=0, value=0.0, joints=joints, source=source)
 
