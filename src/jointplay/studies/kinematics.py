@@ -542,7 +542,7 @@ def _mobility(J: FloatArray, rows: IntArray, rcond: float) -> int:
     full = np.linalg.svd(J, compute_uv=False)
     kept = np.linalg.svd(J[rows], compute_uv=False) if rows.size else np.zeros(0)
     top = full[0] if full.size else 0.0
-    return J.shape[1] - int(np.sum(kept > rcond * top)) if top > 0 else J.shape[1]
+    return int(J.shape[1]) - int(np.sum(kept > rcond * top)) if top > 0 else int(J.shape[1])
 
 
 def _check_movable(eqs: _Equations, R: FloatArray, p: FloatArray, source: str | None) -> None:
