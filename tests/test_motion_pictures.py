@@ -162,6 +162,24 @@ def test_bands_and_an_envelope_are_drawn_as_given(
         displacement_series(result, "piston top", [("short", d[:3], d[:3])])
 
 
+def test_the_envelope_s_legend_names_the_loads_it_is_under() -> None:
+    """``motion --plot`` draws the envelope with the loads it is under in its
+    legend: a constant force (nothing that varies) leaves the default at the
+    probes, as the single-pose envelope's, and the legend says 1 N probes
+    (the gallery's gas-force table takes the model's loads: its test is in
+    test_motion_studies.py)."""
+    from jointplay.studies.motion_studies import MotionEnvelope, MotionStudiesResult
+
+    model, result = _slider_crank(-1500.0, steps=3)
+    envelope = MotionEnvelope(directions=24, motion=Motion(steps=3)).run(model)
+    studies = MotionStudiesResult(result, envelope=envelope)
+    extras = MotionPictures(*studies.picture_extras(), envelope_label=studies.envelope_label())
+    ax = motion_figure(result, extras).axes[0]
+    legend = ax.get_legend()
+    assert legend is not None
+    assert "worst-case envelope under 1 N probes" in [t.get_text() for t in legend.get_texts()]
+
+
 def test_no_curve_beside_bands_is_drawn_in_the_limit_s_colour(
     four_bar: tuple[jointplay.Model, MotionResult],
 ) -> None:

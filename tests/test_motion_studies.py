@@ -177,6 +177,59 @@ def test_envelope_at_a_pose_is_the_posed_models_envelope() -> None:
     json.loads(json.dumps(result.to_dict()))
 
 
+def test_a_load_table_puts_the_motion_s_envelope_under_the_model_s_loads() -> None:
+    """The slider-crank's gas force is a table over the crank's angle, always
+    toward the crank (-X): over the motion the envelope's default is that
+    load, as the single-pose envelope's is for load ranges, and it is
+    one-sided at every step; the 1 N probes it once took by default pushed
+    the piston both ways (half of that band never happens). The text and
+    the figure's legend name the loads; the probes stay at hand."""
+    model = _load("slider_crank.yaml")
+    motion = Motion(steps=STEPS)
+    nominal = motion.run(model)
+    under_model = MotionEnvelope(directions=24, motion=motion).run(model)
+    assert under_model.loads == "model" and under_model.under == "the model's loads"
+    lower, upper = under_model.extent("piston top", ALONG_X)
+    assert np.all(upper < 0.0)  # never pushed away from the crank
+    assert np.all(lower <= nominal.displacement[:, 0, 0])  # the plays at their upper limits
+    poses = nominal_poses(model, np.linspace(0.0, 2 * np.pi, STEPS))
+    for s in (0, 4):  # each step: the posed model's envelope under its loads
+        direct = Envelope("piston top", directions=24, loads="model").run(
+            posed_model(model, poses, s)
+        )
+        _close(under_model.at(s, "piston top").hull, direct.hull)
+    said = MotionStudiesResult(nominal, envelope=under_model)
+    assert "envelope of piston top (along [1, 0, 0]) under the model's loads: farthest" in (
+        " ".join(said.findings())
+    )
+    assert said.envelope_label() == "worst-case envelope under the model's loads"
+    probed = MotionEnvelope(directions=24, loads="probes", motion=motion).run(model)
+    assert probed.loads == "probes" and probed.under == "1 N probes"
+    lower, upper = probed.extent("piston top", ALONG_X)
+    assert np.all(lower < 0.0) and np.all(upper > 0.0)
+    said = MotionStudiesResult(nominal, envelope=probed)
+    assert "(along [1, 0, 0]) under 1 N probes: farthest" in " ".join(said.findings())
+    # at one pose the table is one load: the single-pose default stays the probes
+    assert Envelope("piston top", directions=24).run(model).over.startswith("probe forces of 1 N")
+
+
+def test_a_motion_envelope_of_points_without_requirements_names_its_loads() -> None:
+    """Without a requirement there is no sentence per requirement: one line
+    still says what the envelope columns are under."""
+    model = _load("slider_crank.yaml", requirements=[])
+    motion = Motion(steps=3)
+    found = MotionEnvelope(directions=24, motion=motion).run(model)
+    said = MotionStudiesResult(motion.run(model), envelope=found).findings()
+    assert said == ["envelopes (their columns above) under the model's loads"]
+
+
+def test_probes_against_a_weight_say_so() -> None:
+    """A probe envelope pushes against the weights: its words say it."""
+    model = _load("four_bar.yaml")  # its links' weights
+    found = MotionEnvelope(directions=24, loads="probes", motion=Motion(steps=2)).run(model)
+    assert found.under == "1 N probes against the standing loads"
+
+
 #: Sobol' base sets of parts in the contributions tests: fewer than the
 #: default, the same on both sides of each comparison.
 SOBOL_SAMPLES = 64
@@ -320,6 +373,26 @@ def test_cli_motion_with_studies_json_and_csv(tmp_path: Path) -> None:
     assert doc["contributions"]["measures"][0]["leading"] in doc["contributions"]["plays"]
     header = csv.read_text().splitlines()[0]
     assert "fingertip |d| p97.5 (mm)" in header and "leading play" in header
+
+
+def test_cli_motion_loads_chooses_the_envelope_s_loads_and_names_them() -> None:
+    """``--loads`` as ``jointplay envelope`` takes it; the sentence under the
+    table says which loads the envelope is under; without --envelope, or
+    with another word, it is an option error (exit 2), not ignored."""
+    crank = str(GALLERY / "slider_crank.yaml")
+    default = run_cli("motion", crank, "--steps", "3", "--envelope")
+    assert default.returncode == 0, default.stderr
+    assert "(along [1, 0, 0]) under the model's loads: farthest at step" in default.stdout
+    probes = run_cli("motion", crank, "--steps", "3", "--envelope", "--loads", "probes")
+    assert probes.returncode == 0, probes.stderr
+    assert "(along [1, 0, 0]) under 1 N probes: farthest at step" in probes.stdout
+    alone = run_cli("motion", crank, "--steps", "3", "--loads", "probes")
+    assert alone.returncode == 2 and alone.stdout == ""
+    assert "--loads probes: the loads of the envelope at every pose; add --envelope" in (
+        " ".join(alone.stderr.split())
+    )
+    wrong = run_cli("motion", crank, "--steps", "3", "--envelope", "--loads", "gas")
+    assert wrong.returncode == 2 and "expected 'auto', 'model' or 'probes'" in wrong.stderr
 
 
 def _stderr_on_a_terminal(*args: str) -> tuple[int, str, str]:

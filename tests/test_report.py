@@ -23,6 +23,7 @@ from typer.testing import CliRunner
 import jointplay
 from conftest import PAPER, ROOT
 from jointplay.cli import app
+from jointplay.io.modelfile import model_from_dict
 from jointplay.present.report import Report
 from jointplay.studies.sweep import RotateLoad, Sweep
 
@@ -289,3 +290,55 @@ def test_the_summary_reads_point_gaps_and_skips_plays_of_zero() -> None:
         if cone.kind == "ball" and cone.radius > 0
     ]
     assert f"{100 * max(with_play):.1f} %" in html[html.index(">Summary</h2>") :]
+
+
+def test_a_model_with_a_motion_is_summed_up_over_the_motion_and_at_its_written_pose() -> None:
+    """The slider-crank passes at the pose written in the file (0 deg) and
+    fails over most of its turn: the summary says how many steps fail and
+    the worst, and labels its single-pose figures with their pose (they once
+    read "all pass" unqualified); its gas-force table is shown as a table,
+    not as the one value a solve at 0 deg reads (-1500 N)."""
+    import html as html_lib
+
+    from jointplay.studies.motion import Motion
+
+    crank = ROOT / "examples" / "gallery" / "slider_crank.yaml"
+    model = jointplay.load(crank)
+    page = html_lib.unescape(Report(samples=500, seed=0).render(model, "slider_crank.yaml"))
+    motion = Motion().run(model)
+    failing = int(np.sum(motion.measured[:, 0] > motion.limits[0]))
+    worst = motion.worst_step(0)
+    assert 0 < failing < motion.steps
+    summary = page[page.index("<h2>Summary</h2>") : page.index("Model</h2>")]
+    assert "At a glance at the pose written in the file" in summary
+    assert (
+        f"1 of 1 requirements FAIL: piston top at {failing} of {motion.steps} steps, worst at "
+        f"step {worst} ({motion.shown_value(worst):g} deg): "
+        f"{motion.measured[worst, 0]:.6g} mm against 0.05 mm"
+    ) in summary
+    assert "At the pose written in the file, over the tolerances: worst case" in summary
+    assert "<h2>Solution (at the pose written in the file)</h2>" in page
+    assert "The studies below are at the pose written in the file ('main bearing' at 0 deg" in page
+    every_pose = page[page.index("Requirements at every pose") :]
+    assert f"<td>FAILED at {failing} of {motion.steps} steps</td>" in every_pose
+    loads = page[page.index("<caption>Loads</caption>") : page.index("Functional points")]
+    assert "<td>x -1500 to -150 over the motion (table below); y 0; z 0</td>" in loads
+    assert "(-1500, 0, 0)" not in loads
+    row = r"<tr><td>\(every case\)</td><td>piston</td><td>force x \(N\)</td><td>([^<]+)</td>"
+    rows = re.findall(row + r"<td>([^<]+)</td></tr>", loads)
+    table = model.loads[0].force[0]
+    given = zip(table.drive, table.value, strict=True)
+    assert rows == [(f"{np.degrees(d):g}", f"{v:g}") for d, v in given]
+
+
+def test_a_load_range_is_shown_as_its_range() -> None:
+    """A load component given as a range is shown as one, not as the mean a
+    nominal solve takes."""
+    data = jointplay.load(ROOT / "examples" / "gallery" / "four_bar.yaml").model_dump(
+        by_alias=True, exclude_none=True
+    )
+    del data["motion"]
+    model = model_from_dict(data, source="four_bar")
+    page = Report(studies=False).render(model, "four_bar")
+    assert "<td>x 0; y -20 to -10 N (uniform); z -4 to 4 N (uniform)</td>" in page
+    assert "pose written" not in page  # one pose only: nothing to tell it from

@@ -12,7 +12,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any, Literal, TypeVar
 
 import typer
 from rich.console import Console
@@ -609,6 +609,16 @@ def motion(
     envelope: Annotated[
         bool, typer.Option("--envelope", help="Each point's worst-case envelope at every pose.")
     ] = False,
+    loads: Annotated[
+        str | None,
+        typer.Option(
+            "--loads",
+            metavar="auto|model|probes",
+            help="With --envelope: over the model's loads at each pose, or over probe forces "
+            "at the point in every direction the mechanism holds (auto: the model's if it has "
+            "cases, ranges or tables over the drive).",
+        ),
+    ] = None,
     contributions: Annotated[
         bool,
         typer.Option("--contributions", help="Which play drives each measure, at every pose."),
@@ -651,6 +661,15 @@ def motion(
                     f"--range {span}: expected START:STOP, e.g. '0 deg:360 deg'", source=source
                 )
             bounds = (parts[0].strip(), parts[1].strip())  # as written: "90" has no unit
+        if loads is not None and loads not in ("auto", "model", "probes"):
+            raise OptionError(f"--loads {loads!r}: expected 'auto', 'model' or 'probes'")
+        if loads is not None and not envelope:  # it would be ignored: say so
+            raise OptionError(
+                f"--loads {loads}: the loads of the envelope at every pose; add --envelope"
+            )
+        chosen: Literal["auto", "model", "probes"] = (
+            "model" if loads == "model" else "probes" if loads == "probes" else "auto"
+        )
         _check_outputs(csv, plot)
         model = load(model_path)
         settings = Motion(drive=drive, range=bounds, steps=steps, case=case)
@@ -668,7 +687,7 @@ def motion(
                         model, workers=workers, source=source
                     ),
                 ),
-                MotionEnvelope(motion=settings).run(
+                MotionEnvelope(loads=chosen, motion=settings).run(
                     model,
                     source=source,
                     progress=_stage(bar, "envelopes at every pose", nominal.steps),
@@ -689,7 +708,10 @@ def motion(
             csv,
             plot,
             lambda: _motion_plots().motion_figure(
-                nominal, _motion_plots().MotionPictures(*studies.picture_extras())
+                nominal,
+                _motion_plots().MotionPictures(
+                    *studies.picture_extras(), envelope_label=studies.envelope_label()
+                ),
             ),
             as_json,
             lambda: render_motion(

@@ -74,6 +74,8 @@ class DisplacementSeries:
     bands: tuple[Band, ...] = ()
     envelope: tuple[FloatArray, FloatArray] | None = None
     worst_step: int | None = None
+    #: The envelope's legend: what loads it is under ("... under 1 N probes").
+    envelope_label: str = "worst-case envelope"
 
 
 def requirement_of(result: MotionResult, point: str) -> Requirement | None:
@@ -95,10 +97,12 @@ def displacement_series(
     point: str,
     bands: Sequence[Band] = (),
     envelope: tuple[FloatArray, FloatArray] | None = None,
+    envelope_label: str = "worst-case envelope",
 ) -> DisplacementSeries:
     """The displacement panel's data for ``point``. ``bands`` and
     ``envelope`` are per step (mm), along the requirement's direction when
-    it has one, else of the displacement's size."""
+    it has one, else of the displacement's size; ``envelope_label`` its
+    legend, naming the loads it is under."""
     k = _point_index(result, point)
     d = result.displacement[:, k]
     req = requirement_of(result, point)
@@ -125,6 +129,7 @@ def displacement_series(
             checked,
             env,
             worst,
+            envelope_label,
         )
     curves = (
         ("|d|", np.linalg.norm(d, axis=1)),
@@ -132,7 +137,16 @@ def displacement_series(
     )
     limit = None if req is None else req.max_displacement
     return DisplacementSeries(
-        point, shown_drive(result), result.unit, curves, None, limit, checked, env, worst
+        point,
+        shown_drive(result),
+        result.unit,
+        curves,
+        None,
+        limit,
+        checked,
+        env,
+        worst,
+        envelope_label,
     )
 
 
@@ -143,7 +157,7 @@ def draw_displacement(ax: Axes, series: DisplacementSeries, drive: str) -> None:
         ax.fill_between(series.drive, lower, upper, alpha=0.25, linewidth=0, label=label)
     if series.envelope is not None:
         lower, upper = series.envelope
-        ax.plot(series.drive, lower, "--", color="#555555", lw=1.0, label="worst-case envelope")
+        ax.plot(series.drive, lower, "--", color="#555555", lw=1.0, label=series.envelope_label)
         ax.plot(series.drive, upper, "--", color="#555555", lw=1.0)
     for i, (label, values) in enumerate(series.curves):
         main = i == 0  # the measure; the components thinner
@@ -278,10 +292,12 @@ def draw_joint_forces(ax: Axes, result: MotionResult) -> None:
 class MotionPictures:
     """Optional extras of ``motion_figure``, per point name: percentile
     ``bands`` and a worst-case ``envelope`` (per step, mm, as
-    ``displacement_series`` takes them)."""
+    ``displacement_series`` takes them); ``envelope_label`` the envelopes'
+    legend, naming the loads they are under."""
 
     bands: dict[str, Sequence[Band]] = field(default_factory=dict)
     envelopes: dict[str, tuple[FloatArray, FloatArray]] = field(default_factory=dict)
+    envelope_label: str = "worst-case envelope"
 
 
 def shown_points(result: MotionResult) -> list[str]:
@@ -310,7 +326,11 @@ def motion_figure(
     grid = fig.add_gridspec(rows, 5)
     for i, name in enumerate(points):
         series = displacement_series(
-            result, name, extras.bands.get(name, ()), extras.envelopes.get(name)
+            result,
+            name,
+            extras.bands.get(name, ()),
+            extras.envelopes.get(name),
+            extras.envelope_label,
         )
         draw_displacement(fig.add_subplot(grid[i, :3]), series, result.drive)
         draw_path(fig.add_subplot(grid[i, 3:]), path_series(result, name, magnify))

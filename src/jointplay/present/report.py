@@ -27,6 +27,7 @@ import numpy as np
 
 from jointplay.errors import UnboundedMechanismError
 from jointplay.geometry import FloatArray
+from jointplay.model.tables import DriveTable
 from jointplay.model.tolerance import Toleranced, play_unit
 from jointplay.present.scene import Scene, mechanism_scene
 from jointplay.version import __version__
@@ -114,6 +115,8 @@ class Report:
             page.motion(model, motion, others=len(cases) > 1)
         if self.studies or self.sweep is not None:
             page.section("Studies")
+            if model.motion is not None and self.studies:
+                page.paragraph(_studies_at_the_written_pose(model, source, cases[0]))
             if len(cases) > 1:
                 under = [
                     *(["the Monte Carlo study and the contributions"] if self.studies else []),
@@ -182,6 +185,20 @@ class Report:
         if model.requirements:
             rows = side_by_side(model, linear, mc, source=source)
             page.tolerances(rows, mc.settings.confidence, mc.samples)
+
+
+def _studies_at_the_written_pose(model: Model, source: str, case: str | None) -> str:
+    """The studies' sentence for a model with a motion: they take one pose."""
+    from jointplay.studies.motion import shown_drive
+
+    joint, coordinate, _, _ = model.motion_drive()
+    unit = "deg" if coordinate == "spin" else "mm"
+    under = "" if case is None else f" --case {shlex.quote(case)}"
+    return (
+        f"The studies below are at the pose written in the file ('{joint.name}' at "
+        f"{shown_drive(coordinate, 0.0):g} {unit}, load tables read there); at every pose: "
+        f"jointplay motion {shlex.quote(source)}{under} --envelope --samples N --contributions."
+    )
 
 
 def _solved(ws: Workspace, model: Model, case: str | None, exact: bool) -> Result:
@@ -571,8 +588,11 @@ class _Page:
         self.title = title
         self.parts: list[str] = []
         self.views: list[dict[str, Any]] = []
-        #: Where the summary's verdict over the toleranced plays goes, once known.
-        self.summary_end = 0
+        #: Where the summary's verdicts over the motion and over the toleranced
+        #: plays go, in that order, once known (parts left empty till then).
+        self.slots: dict[str, int] = {}
+        #: The model has a motion: the summary's single-pose figures say their pose.
+        self.moving = False
 
     def section(self, title: str) -> None:
         self.parts.append(f"<h2>{html.escape(title)}</h2>")
@@ -599,6 +619,7 @@ class _Page:
         most, the requirements' verdicts and the key numbers; then the plays
         the nominal solve used (a toleranced play: its mean)."""
         self.section("Summary")
+        self.moving = model.motion is not None
         rows = []
         for case, result in results.items():
             played = (  # contacts with play: a rigid or zero-play one is always "full"
@@ -648,10 +669,14 @@ class _Page:
                     "warnings",
                 ],
                 rows,
-                "At a glance (the sections below give every number)",
+                "At a glance"
+                + (" at the pose written in the file" if self.moving else "")
+                + " (the sections below give every number)",
             )
         )
-        self.summary_end = len(self.parts)
+        for slot in ("motion", "tolerances"):
+            self.slots[slot] = len(self.parts)
+            self.parts.append("")
         plays = []
         for joint in model.joints:
             for field, value in joint.plays().items():
@@ -709,6 +734,7 @@ class _Page:
             (case, ld) for case in model.case_names for ld in (model.load_cases or {})[case]
         ]
         loads += [("(weight)", ld) for ld in model.weights()]
+        span = _motion_span(model)
         if loads:
             self.parts.append(
                 _table(
@@ -718,14 +744,17 @@ class _Page:
                             case,
                             ld.body,
                             "" if ld.at is None else _vec(ld.at),
-                            "" if ld.force is None else _vec(ld.force),
-                            "" if ld.torque is None else _vec(ld.torque),
+                            _load_vector(ld.force, span),
+                            _load_vector(ld.torque, span),
                         )
                         for case, ld in loads
                     ],
                     "Loads",
                 )
             )
+        tables = _load_tables(model, loads)
+        if tables:
+            self.parts.append(tables)
         if model.points:
             self.parts.append(
                 _table(
@@ -746,7 +775,10 @@ class _Page:
     ) -> None:
         from jointplay.present.plot import clearance_figure, mechanism_figure
 
-        self.section("Solution" if case is None else f"Solution, load case '{case}'")
+        self.section(
+            ("Solution" if case is None else f"Solution, load case '{case}'")
+            + (" (at the pose written in the file)" if self.moving else "")
+        )
         from jointplay.present.textreport import certificate_words, indeterminacy_words
 
         self.parts.append(
@@ -983,18 +1015,18 @@ class _Page:
         worst_ppm = max(rows, key=lambda r: r.mc_ppm, default=None)
         if rows and worst_ppm is not None:
             # the summary's verdict is for the nominal plays; say the toleranced one there too
-            self.parts.insert(
-                self.summary_end,
+            self.parts[self.slots["tolerances"]] = (
                 "<p>"
                 + html.escape(
-                    "Over the tolerances: worst case "
+                    ("At the pose written in the file, over" if self.moving else "Over")
+                    + " the tolerances: worst case "
                     + (f"{len(failing)} of {len(rows)} FAIL" if failing else "all pass")
                     + f"; Monte Carlo: {worst_ppm.mc_ppm:.4g} ppm out of spec for "
                     f"{worst_ppm.requirement.describe()}, the most of any requirement "
                     f"({worst_ppm.mc_interval_ppm[0]:.3g} to {worst_ppm.mc_interval_ppm[1]:.3g} "
                     "ppm at the confidence of the table). See the side-by-side table."
                 )
-                + "</p>",
+                + "</p>"
             )
         self.subsection("Requirements: worst case, RSS and Monte Carlo side by side")
 
@@ -1071,34 +1103,32 @@ class _Page:
             f"MODEL{case} --csv FILE; these figures: jointplay motion MODEL{case} --plot FILE."
         )
         if mr.requirement_names:
-            rows = []
+            rows, failing = [], []
             for q, name in enumerate(mr.requirement_names):
                 worst = mr.worst_step(q)
-                measured = float(mr.measured[worst, q])
-                rows.append(
-                    (
-                        name,
-                        _num(mr.limits[q]),
-                        f"{worst} ({mr.shown_value(worst):g} {mr.unit})",
-                        _num(measured),
-                        "passed" if np.all(mr.measured[:, q] <= mr.limits[q]) else "FAILED",
+                measured = _num(float(mr.measured[worst, q]))
+                at = f"{worst} ({mr.shown_value(worst):g} {mr.unit})"
+                steps = int(np.sum(mr.measured[:, q] > mr.limits[q]))
+                verdict = f"FAILED at {steps} of {mr.steps} steps" if steps else "passed"
+                rows.append((name, _num(mr.limits[q]), at, measured, verdict))
+                if steps:
+                    failing.append(
+                        f"{name} at {steps} of {mr.steps} steps, worst at step {at}: "
+                        f"{measured} mm against {_num(mr.limits[q])} mm"
                     )
-                )
             head = ["point", "limit (mm)", "worst step", "measured there (mm)", "over the motion"]
             self.parts.append(_table(head, rows, "Requirements at every pose"))
             # the summary's verdicts are at the pose written in the file: say the motion's there
-            failing = [row for row in rows if row[4] == "FAILED"]
             words = (
                 "Over the motion (the summary above is at the pose written in the file): "
                 + (
-                    f"{len(failing)} of {len(rows)} requirements FAIL, "
-                    + "; ".join(f"{r[0]} at step {r[2]}: {r[3]} mm against {r[1]}" for r in failing)
+                    f"{len(failing)} of {len(rows)} requirements FAIL: " + "; ".join(failing)
                     if failing
                     else "all requirements pass at every pose"
                 )
                 + ". See the Motion section."
             )
-            self.parts.insert(self.summary_end, "<p>" + html.escape(words) + "</p>")
+            self.parts[self.slots["motion"]] = "<p>" + html.escape(words) + "</p>"
         split = steps_split_words(mr.indeterminate, mr.joint_names)
         if split is not None:
             self.paragraph(split)
@@ -1142,6 +1172,65 @@ class _Page:
             views=views,
             draw=_DRAW,
         )
+
+
+def _motion_span(model: Model) -> tuple[float, float] | None:
+    """The drive's range over the motion (rad or mm, low to high), if any."""
+    if model.motion is None:
+        return None
+    _, _, start, stop = model.motion_drive()
+    return min(start, stop), max(start, stop)
+
+
+def _load_vector(vector: Any, span: tuple[float, float] | None) -> str:
+    """A load's force or torque: a vector of plain components; where one
+    varies (a range, a table over the motion), each component in words, not
+    the one value a solve at the pose written takes."""
+    if vector is None:
+        return ""
+    if not any(isinstance(c, Toleranced | DriveTable) for c in vector):
+        return _vec(vector)
+    words = []
+    for axis, c in zip("xyz", vector, strict=True):
+        if isinstance(c, DriveTable) and span is not None:
+            inside = [d for d in c.drive if span[0] < d < span[1]]
+            values = [c.at(d) for d in (*span, *inside)]
+            text = f"{_num(min(values))} to {_num(max(values))} over the motion (table below)"
+        elif isinstance(c, Toleranced):
+            text = c.describe()
+        else:
+            text = _num(c)
+        words.append(f"{axis} {text}")
+    return "; ".join(words)
+
+
+def _load_tables(model: Model, loads: Sequence[tuple[str, Any]]) -> str:
+    """The rows of each load table over the motion, as the model gives them."""
+    from jointplay.studies.motion import shown_drive
+
+    found = [
+        (case, ld.body, f"{key} {axis} ({unit})", c)
+        for case, ld in loads
+        for key, unit in (("force", "N"), ("torque", "N·mm"))
+        for axis, c in zip("xyz", getattr(ld, key) or (None,) * 3, strict=True)
+        if isinstance(c, DriveTable)
+    ]
+    if not found:
+        return ""
+    joint, coordinate, _, _ = model.motion_drive()
+    unit = "deg" if coordinate == "spin" else "mm"
+    rows = [
+        (case, body, component, _num(shown_drive(coordinate, d)), _num(v))
+        for case, body, component, c in found
+        for d, v in zip(c.drive, c.value, strict=True)
+    ]
+    return _table(
+        ["case", "body", "component", f"{joint.name} ({unit})", "value"],
+        rows,
+        "Load tables over the motion: each component linear in the drive's value between "
+        "rows; a solve at the pose written in the file reads it at "
+        f"{shown_drive(coordinate, 0.0):g} {unit}",
+    )
 
 
 def _joint_sizes(joint: Any) -> str:

@@ -27,7 +27,10 @@ Over which loads (``Envelope.loads``):
   two limits, on a round bore) may push P a little further: raise
   ``levels`` to see.
 * ``auto`` (the default): ``model`` if the model has load cases or varying
-  load components, else ``probes``.
+  load components, else ``probes`` (``default_loads``). Over a motion
+  (``MotionEnvelope``) a component given as a table over the drive's value
+  varies too: the model says which load acts at each pose, and probes would
+  push the point where that load never sends it.
 
 With deviation zones (``deviations.py``) the envelope is the support of
 every position the plays and the zones allow (``_ZoneProgram``: one cone
@@ -63,6 +66,7 @@ from jointplay.errors import (
 )
 from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model, check_case
+from jointplay.model.tables import DriveTable
 from jointplay.proven import Resolution, direction, proven
 from jointplay.solver import held
 from jointplay.solver.solve import Workspace
@@ -161,11 +165,7 @@ class Envelope:
             ws = ws.with_radii(pmap.radii(highs)[0])
         for each in self._cases(model):  # probes stand in for the loads: check them first
             ws.check_held(each)
-        varying = any(load.ranges() for case in self._cases(model) for load in model.loads_of(case))
-        loaded = any(model.loads_of(case) for case in self._cases(model))
-        mode = self.loads
-        if mode == "auto":
-            mode = "model" if (model.case_names or varying) and loaded else "probes"
+        mode = self.loads if self.loads != "auto" else default_loads(model, self.case)
         directions = np.vstack([AXES, sphere_directions(self.directions)])
         if point.body not in asm.body_index:  # a point of the ground does not move
             zero = np.zeros_like(directions)
@@ -415,6 +415,28 @@ class Envelope:
             f"the mechanism holds, against {standing}"
         )
         return EnvelopeResult(self, body, held_dirs, h, d, far_d, far, over, tuple(not_held))
+
+
+def default_loads(
+    model: Model, case: str | None = None, *, tables: bool = False
+) -> Literal["model", "probes"]:
+    """What ``loads="auto"`` takes: the model's loads where they vary (load
+    cases, or a component given as a range; with ``tables``, over a motion,
+    also a component given as a table over the drive's value), else probes,
+    as it does where the model has no loads. ``case``: the load case taken
+    (None: every case)."""
+    cases = (case,) if case is not None else tuple(model.case_names) or (None,)
+    loads = [load for each in cases for load in model.loads_of(each)]
+    if not loads:
+        return "probes"
+    varying = bool(model.case_names) or any(load.ranges() for load in loads)
+    if tables:
+        varying = varying or any(
+            isinstance(c, DriveTable)
+            for load in loads
+            for c in (*(load.force or ()), *(load.torque or ()))
+        )
+    return "model" if varying else "probes"
 
 
 def _without_springs(fields: Any) -> dict[str, None]:

@@ -49,7 +49,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
     from jointplay.studies.contributions import Contributions, ContributionsResult
-    from jointplay.studies.envelope import EnvelopeResult
+    from jointplay.studies.envelope import Envelope, EnvelopeResult
 
 
 @dataclass(frozen=True)
@@ -531,7 +531,9 @@ def _floats(v: FloatArray) -> list[float | None]:
 class MotionEnvelope:
     """Settings of the worst-case envelope at every pose (``Envelope`` on
     each posed model, for every functional point); ``run`` returns a
-    ``MotionEnvelopeResult``."""
+    ``MotionEnvelopeResult``. ``loads``: as ``Envelope``'s, chosen once for
+    the whole motion: ``auto`` takes the model's loads where they vary, a
+    table over the drive's value included (``envelope.default_loads``)."""
 
     directions: int = 200
     plays: Literal["max", "mean"] = "max"
@@ -542,9 +544,15 @@ class MotionEnvelope:
         self, model: Model, *, source: str | None = None, progress: Progress | None = None
     ) -> MotionEnvelopeResult:
         """Every point's envelope at every pose; ``progress(done, total)`` after each pose."""
-        from jointplay.studies.envelope import Envelope
+        from jointplay.studies.envelope import Envelope, default_loads
 
         cycle = _Cycle.of(self.motion, model, source or model.name or "<model>")
+        # chosen on the model as written: at a pose its tables are read to one value
+        loads = (
+            default_loads(cycle.model, self.motion.case, tables=True)
+            if self.loads == "auto"
+            else self.loads
+        )
         names = tuple(p.name for p in cycle.model.points)
         if not names:
             raise StudyError(
@@ -560,9 +568,9 @@ class MotionEnvelope:
             posed = cycle.posed(s)
             found.append(
                 tuple(
-                    Envelope(
-                        name, self.directions, self.plays, self.loads, case=self.motion.case
-                    )._run(posed, source=cycle.source, carry=carried[name])
+                    Envelope(name, self.directions, self.plays, loads, case=self.motion.case)._run(
+                        posed, source=cycle.source, carry=carried[name]
+                    )
                     for name in names
                 )
             )
@@ -577,7 +585,17 @@ class MotionEnvelope:
             names,
             tuple(cycle.model.requirements),
             tuple(found),
+            _under(cycle.model, found[0][0].settings),
         )
+
+
+def _under(model: Model, envelope: Envelope) -> str:
+    """What a motion's envelope is under (``Envelope`` settings), in a few words."""
+    if envelope.loads == "model":
+        return "the model's loads"
+    # the probes push against what ``Envelope`` holds standing
+    standing = model.weights() or any(ld.standing for ld in model.loads)
+    return f"{envelope.probe:g} N probes" + (" against the standing loads" if standing else "")
 
 
 @dataclass(frozen=True)
@@ -592,6 +610,13 @@ class MotionEnvelopeResult:
     point_names: tuple[str, ...]
     requirements: tuple[Requirement, ...]
     envelopes: tuple[tuple[EnvelopeResult, ...], ...]  # (S, P)
+    #: What the envelope is under, in words: "the model's loads", "1 N probes".
+    under: str
+
+    @property
+    def loads(self) -> str:
+        """``"model"`` or ``"probes"``: the loads every step's envelope is over."""
+        return self.envelopes[0][0].settings.loads if self.envelopes else self.settings.loads
 
     @property
     def steps(self) -> int:
@@ -1041,6 +1066,11 @@ class MotionStudiesResult:
                 envelopes[name] = self.envelope.extent(name, u)
         return bands, envelopes
 
+    def envelope_label(self) -> str:
+        """The envelope's name in the motion's figure: what it is under."""
+        under = "" if self.envelope is None else f" under {self.envelope.under}"
+        return "worst-case envelope" + under
+
     def findings(self) -> list[str]:
         """A sentence per requirement and study: how many parts miss it
         anywhere in the cycle, where the envelope goes farthest, which play
@@ -1067,9 +1097,11 @@ class MotionStudiesResult:
             lo, hi = env.extent(req.point, req.along)
             what = "size" if req.along is None else _along(req.along)
             out.append(
-                f"envelope of {req.point} ({what}): farthest at step {s} (drive "
-                f"{env.shown_value(s):.6g} {env.unit}): {lo[s]:.6g} to {hi[s]:.6g} mm"
+                f"envelope of {req.point} ({what}) under {env.under}: farthest at step {s} "
+                f"(drive {env.shown_value(s):.6g} {env.unit}): {lo[s]:.6g} to {hi[s]:.6g} mm"
             )
+        if env is not None and not env.requirements:  # the columns alone would not say
+            out.append(f"envelopes (their columns above) under {env.under}")
         for k, measure in enumerate(con.measures if con is not None else ()):
             assert con is not None
             out.extend(_contribution_findings(con, k, measure))
