@@ -601,3 +601,31 @@ def test_a_sweep_step_its_joints_do_not_hold_names_its_load_as_solve_does(
         "jointplay: not held: ", "jointplay: not held: at the step loads[0].force[1] = 5.0: "
     )
     assert "most by loads[0] on 'arm'" in proc.stderr
+
+
+def test_motion_contributions_take_the_variance_mode_and_the_sobol_samples() -> None:
+    """The four-bar's fingertip is not linear over its ranges at any pose: by
+    default each pose takes 1,024 Sobol' base sets (minutes); --variance
+    never gives the linear shares alone, --variance always with
+    --sobol-samples 16 the shares of the variance from 16 base sets. Given
+    without --contributions, or not a power of 2, they are option errors."""
+    path = str(GALLERY / "four_bar.yaml")
+    base = ["motion", path, "--steps", "3", "--contributions", "--json"]
+    never = json.loads(run(*base, "--variance", "never").stdout)["contributions"]
+    assert "variance" not in never["measures"][0]["shares_of"]
+    always = run(*base, "--variance", "always", "--sobol-samples", "16")
+    assert always.returncode == 0, always.stderr
+    shares = json.loads(always.stdout)["contributions"]["measures"][0]
+    assert shares["shares_of"] == ["variance"] * 3
+    for extra, words in [
+        (["--variance", "never"], "--variance never: a setting of the contributions"),
+        (["--sobol-samples", "16"], "--sobol-samples 16: a setting of the contributions"),
+    ]:
+        proc = run("motion", path, "--steps", "3", *extra)
+        assert (
+            proc.returncode == 2 and words in proc.stderr and "add --contributions" in proc.stderr
+        )
+    proc = run("motion", path, "--steps", "3", "--contributions", "--sobol-samples", "100")
+    assert proc.returncode == 2 and "--sobol-samples 100: a power of 2" in proc.stderr
+    proc = run("motion", path, "--steps", "3", "--contributions", "--variance", "sometimes")
+    assert proc.returncode == 2 and "expected 'auto', 'always' or 'never'" in proc.stderr

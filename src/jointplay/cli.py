@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import sys
@@ -623,6 +624,25 @@ def motion(
         bool,
         typer.Option("--contributions", help="Which play drives each measure, at every pose."),
     ] = False,
+    variance: Annotated[
+        str | None,
+        typer.Option(
+            "--variance",
+            metavar="auto|always|never",
+            help="With --contributions: the shares of the variance (Sobol' indices) at every "
+            "pose: 'auto' where a measure is not linear over the ranges (the default), "
+            "'always', or 'never' (the linear shares alone: much faster).",
+        ),
+    ] = None,
+    sobol_samples: Annotated[
+        int | None,
+        typer.Option(
+            "--sobol-samples",
+            min=8,
+            help="With --contributions: the Sobol' base sets of parts, a power of 2 (default "
+            "1024; it solves samples x (inputs + 2) sets through the motion).",
+        ),
+    ] = None,
     fail_on_requirements: Annotated[
         bool,
         typer.Option(
@@ -662,11 +682,41 @@ def motion(
                 )
             bounds = (parts[0].strip(), parts[1].strip())  # as written: "90" has no unit
         if loads is not None and loads not in ("auto", "model", "probes"):
-            raise OptionError(f"--loads {loads!r}: expected 'auto', 'model' or 'probes'")
+            raise OptionError(
+                f"--loads {loads!r}: expected 'auto', 'model' or 'probes'", source=source
+            )
         if loads is not None and not envelope:  # it would be ignored: say so
             raise OptionError(
-                f"--loads {loads}: the loads of the envelope at every pose; add --envelope"
+                f"--loads {loads}: the loads of the envelope at every pose; add --envelope",
+                source=source,
             )
+        if variance is not None and variance not in ("auto", "always", "never"):
+            raise OptionError(
+                f"--variance {variance!r}: expected 'auto', 'always' or 'never'", source=source
+            )
+        for name, given in (("--variance", variance), ("--sobol-samples", sobol_samples)):
+            if given is not None and not contributions:  # it would be ignored: say so
+                raise OptionError(
+                    f"{name} {given}: a setting of the contributions at every pose; add "
+                    "--contributions",
+                    source=source,
+                )
+        if sobol_samples is not None:
+            from jointplay.studies.sobol import check_samples
+
+            try:
+                check_samples(sobol_samples)
+            except ValueError as exc:
+                words = str(exc).removeprefix("samples: ")
+                raise OptionError(
+                    f"--sobol-samples {sobol_samples}: {words}", source=source
+                ) from None
+        mode: Literal["auto", "always", "never"] = (
+            "always" if variance == "always" else "never" if variance == "never" else "auto"
+        )
+        shares = MotionContributions(
+            variance=mode, samples=1024 if sobol_samples is None else sobol_samples
+        )
         chosen: Literal["auto", "model", "probes"] = (
             "model" if loads == "model" else "probes" if loads == "probes" else "auto"
         )
@@ -694,7 +744,7 @@ def motion(
                 )
                 if envelope
                 else None,
-                MotionContributions(motion=settings).run(
+                dataclasses.replace(shares, motion=settings).run(
                     model,
                     source=source,
                     progress=_stage(bar, "contributions at every pose", nominal.steps),
