@@ -40,7 +40,7 @@ from jointplay.assembly import assemble
 from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
-from jointplay.proven import Resolution, proven
+from jointplay.proven import proven
 from jointplay.studies.contributions import unit_of
 from jointplay.studies.envelope import MOST_LOAD_SETS
 from jointplay.studies.parts import Inputs, Measure, inputs_of, measured, solve_sets
@@ -106,13 +106,11 @@ def _over_load_sets(
 
     names = [v.label for v in plays] + [v.label for v in lmap.variables]
     shape = [len(g) for g in grids]
-    asm = assemble(model)
-    length = Resolution.of(asm.s, asm.ell).length
 
     def at(size: FloatArray, j: int) -> str:
         if not names:
             return "the plays as given"
-        deciding = _deciding(size.reshape(shape), np.unravel_index(j, shape), length)
+        deciding = _deciding(size.reshape(shape), np.unravel_index(j, shape), inputs.length)
         if not deciding:
             return "every combination alike (no input changes it)"
         words = ", ".join(f"{names[i]} = {rows[j, i]:g} {unit_of(names[i])}" for i in deciding)
