@@ -576,6 +576,23 @@ def test_a_study_of_the_written_pose_says_the_motion_checks_every_pose(command: 
     assert "jointplay motion" not in plain.stderr  # no motion: nothing to say
 
 
+def test_the_motion_command_suggested_for_a_path_with_a_space_runs_as_printed(
+    tmp_path: Path,
+) -> None:
+    """The suggested command quotes the path as a shell needs it: pasted, it
+    names the model file, not two words of it."""
+    import shlex
+
+    path = tmp_path / "my models" / "slider crank.yaml"
+    path.parent.mkdir()
+    path.write_text((GALLERY / "slider_crank.yaml").read_text())
+    proc = run("solve", str(path))
+    assert proc.returncode == 0, proc.stderr
+    command = proc.stderr.split("`")[1]
+    assert command == f"jointplay motion '{path}'"
+    assert shlex.split(command) == ["jointplay", "motion", str(path)]
+
+
 def test_a_sweep_step_its_joints_do_not_hold_names_its_load_as_solve_does(
     tmp_path: Path,
 ) -> None:

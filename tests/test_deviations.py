@@ -683,6 +683,36 @@ def test_a_part_measured_twice_is_checked_against_the_zones_the_model_gave() -> 
     assert [m.kind for m in remeasured.measured] == ["orientation", "position"]
 
 
+def test_a_ball_measured_at_0_and_again_is_checked_against_its_ball() -> None:
+    """Measured at 0, the ball joint's deviation is gone from the part: the
+    second measurement is still checked against the ball the model gave (a
+    shift along x is in it), not against a disc across x."""
+    first = jointplay.with_deviations(BALL, {"l1": {"position": [0, 0, 0]}})
+    assert first.joint("l1").deviation is None
+    inside = jointplay.with_deviations(first, {"l1": {"position": ["6 um", "8 um", 0]}})
+    assert inside.warnings == ()
+    (warning,) = jointplay.with_deviations(first, {"l1": {"position": ["11 um", 0, 0]}}).warnings
+    assert warning.startswith(
+        "joint 'l1': its measured position is 0.011 mm from its zone's centre, beyond the "
+        "zone's radius of 0.01 mm (a ball of diameter 0.02 mm)"
+    )
+
+
+def test_a_component_no_zone_spans_must_sit_at_its_mean() -> None:
+    """The zones the studies draw from are the ones a measurement is checked
+    against: an orientation zone tilts about y and z only, so a turn about
+    x is outside it, as a shift along a disc's axis is."""
+    from jointplay.model.deviations import Zones, outside
+
+    tilt = Zones.model_validate({"orientation": "0.2 mrad"})
+    assert outside(tilt, "orientation", (0.0, 1e-4, -1e-4), False) is None
+    assert outside(tilt, "orientation", (1e-4, 0.0, 0.0), False) == (
+        "its measured turn about x is 0.0001 rad, where its zone (a tilt about y and z of up "
+        "to 0.0002 rad) allows 0 rad: the part is out of tolerance"
+    )
+    assert outside(tilt, "position", (1.0, 0.0, 0.0), False) is None  # no position zone
+
+
 def test_a_measured_part_stays_measured_through_a_change_of_its_loads() -> None:
     part = jointplay.with_deviations(jointplay.load(EXAMPLE), {"l2": {"position": [0, 0.05, 0]}})
     unloaded = part.replace(loads=[{"body": "S1", "at": [300, 0, 0], "force": [0, -1, 0]}])

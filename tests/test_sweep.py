@@ -194,6 +194,44 @@ def test_values_that_do_not_fit_together_are_the_option_s_error() -> None:
     assert err.value.exit_code == 2 and "nonzero direction" in str(err.value)
 
 
+def heavy_push() -> dict[str, Any]:
+    """The shaft pushed by 0.9e9 N along y and z: each component within the
+    1e9 N a force component may be, their sum turned onto one axis not."""
+    return shaft(loads=[{"body": "S1", "at": [300, 0, 0], "force": [0, 9e8, 9e8]}])
+
+
+def test_a_turn_that_breaks_the_model_is_the_turn_s_error(tmp_path: Path) -> None:
+    """Turned 315 deg about x, the push is 1.27e9 N along y: the step is
+    named as --rotate-load's, with a fix for the turn, not --vary's."""
+    path = tmp_path / "heavy.json"
+    path.write_text(json.dumps(heavy_push()))
+    args = ["sweep", str(path), "--rotate-load", "0", "--about", "x", "--steps", "8"]
+    out = CliRunner().invoke(app, args)
+    assert out.exit_code == 2, out.output
+    words = " ".join(out.output.split())
+    assert "--rotate-load: at the step loads[0] turned 315 deg: loads[0]: force" in words
+    assert "change the turn given to --rotate-load (--about, --from, --to)" in words
+    assert "--vary" not in words
+
+
+@pytest.mark.parametrize(
+    ("vary", "option", "fix"),
+    [
+        ("joints[l2].clearance=0.1:0.3:3", "--rotate-load", "change the turn given to"),
+        ("joints[l2].clearance=0.1:0.3 kg:3", "--vary", "change the values given to --vary"),
+    ],
+)
+def test_with_both_options_the_one_whose_values_break_the_step_is_named(
+    vary: str, option: str, fix: str
+) -> None:
+    """Valid --vary values with a turn that breaks the model: the turn's
+    error; --vary values in the wrong unit: --vary's, turned or not."""
+    sweep = Sweep(vary=(Vary.parse(vary),), rotate=RotateLoad(0, (1, 0, 0), 8))
+    with pytest.raises(OptionError) as err:
+        sweep.run(jointplay.model_from_dict(heavy_push()))
+    assert err.value.entry == option and fix in str(err.value)
+
+
 def test_a_step_the_joints_do_not_hold_exits_3_and_names_the_step(tmp_path: Path) -> None:
     data = shaft(loads=[{"body": "S1", "torque": [0, 1000, 0]}])
     path = tmp_path / "spin.json"

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ import yaml
 from scipy import stats
 
 import jointplay
-from conftest import press
+from conftest import MM, press, spherical_shaft
 from jointplay.studies.tolerances import Tolerances
 from test_cli import run
 
@@ -310,3 +311,56 @@ def test_the_spindle_s_depth_of_cut_is_one_signed_and_decided_by_the_bearings() 
         "front bearing.clearance = " in worst["at"] and "rear bearing.clearance = " in worst["at"]
     )
     assert "backlash" not in worst["at"] and "axial_clearance" not in worst["at"]
+
+
+def test_a_sample_below_the_printed_low_end_passes_the_worst_case() -> None:
+    """Along a direction the worst case prints the least to the greatest d . u
+    it reached, and a part outside that range on either side passes it. Here
+    10 N down at the ball (0.4 mm of play) drops the shaft's left end, and a
+    push (F, 1 N) up into the bore (0.1 mm) lifts its right end by less the
+    more F tilts the push: P, halfway, drops least at F = 0, between the
+    limits and the mean (-1, 1 and 3 N) the worst case takes. Those parts lie
+    below its low end, though |d . u| stays under its greatest value."""
+    data = spherical_shaft(
+        loads=[
+            {"body": "S1", "at": [0, 0, 0], "force": [0, 0, -10]},
+            {"body": "S1", "at": [200, 0, 0], "force": [0, {"min": -1, "max": 3}, 1]},
+        ],
+        points=[{"name": "P", "body": "S1", "at": [100, 0, 0]}],
+        requirements=[{"point": "P", "along": [0, 0, -1], "max_displacement": 0.2}],
+    )
+    joints: Any = data["joints"]
+    joints[0]["clearance"], joints[1]["clearance"] = 0.4, 0.1
+    model = jointplay.model_from_dict(data)
+    result = Tolerances(samples=300, seed=0).run(model)
+    (r,) = result.requirements
+    mc = result.montecarlo
+    y = -mc.displacement[:, mc.point_names.index("P"), 2]
+    push = mc.loads[:, mc.load_labels.index("loads[1].force[1]")]
+    # an independent solve at F = 0 drops P less than the worst case's low end
+    level = model.replace(
+        loads=[model.loads[0].model_dump(), {**model.loads[1].model_dump(), "force": [0, 0, 1]}]
+    )
+    assert -jointplay.solve(level).points["P"].displacement[2] < r.worst_low - MM
+    below = y < r.worst_low - MM
+    assert np.all(np.abs(push[below]) < 1) and np.sum(below) > 0.3 * len(y)
+    assert float(np.max(np.abs(y))) <= r.worst + MM  # none passes |d . u|'s greatest value
+    assert r.beyond_bound == int(np.sum(below)) and r.mc_low == float(np.min(y))
+    assert r.worst <= r.requirement.max_displacement and not r.worst_case_passes
+    assert f"they reach {r.mc_low:.6g} to {r.mc_high:.6g} mm" in r.beyond_words(300)
+
+
+def test_samples_pass_the_worst_case_outside_its_range_or_above_its_size() -> None:
+    """The count: along a direction, a value below the low end or above the
+    high end by more than the certified margin; for |d|, one above the worst
+    case by more than it. A value within the margin is the answers' round-off."""
+    from jointplay.studies.tolerances import CERTIFIED_MM, beyond_reach
+    from jointplay.studies.worstcase import Reach
+
+    along = Reach("d P along [0, 0, 1]", 0.3, "", "", 0.3, 0.1, 0.3)
+    c = CERTIFIED_MM
+    y = np.array([0.1 - 2 * c, 0.1 - c / 2, 0.2, 0.3 + c / 2, 0.3 + 2 * c, -0.2])
+    # -0.2: |y| is under 0.3, yet it is outside 0.1 to 0.3
+    assert beyond_reach(y, along) == 3
+    size = Reach("|d P|", 0.3, "", "")
+    assert beyond_reach(np.array([0.1, 0.3 + c / 2, 0.3 + 2 * c]), size) == 1

@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import shlex
 import sys
 import traceback
 import warnings
@@ -1132,7 +1133,8 @@ def _at_written_pose(model: Any, source: str, as_json: bool) -> None:
     start, stop = model.motion.range
     _note(
         f"the requirements were checked at the pose written in {source} only; its motion "
-        f"drives '{model.motion.drive}' from {start} to {stop}: `jointplay motion {source}` "
+        f"drives '{model.motion.drive}' from {start} to {stop}: "
+        f"`jointplay motion {shlex.quote(source)}` "
         f"checks them at each of its {model.motion.steps} steps"
     )
 

@@ -27,7 +27,6 @@ from jointplay.model.deviations import (
     Kind,
     MeasuredDeviation,
     SharedDeviation,
-    Zones,
     mean_components,
     outside,
 )
@@ -670,7 +669,8 @@ def with_deviations(
     shared = [d.name for d in model.deviations]
     data = model.model_dump(by_alias=True, exclude_none=True)
     # measured once before: checked against the zones the model gave then
-    designed = {m.name: m.zones for m in model.measured}
+    designed = {m.name: (m.zones, m.ball) for m in model.measured}
+    sources = {source.label: source for source in model.deviation_sources()}
     records: list[MeasuredDeviation] = []
     for name, given in measured.items():
         if name not in names and name not in shared:
@@ -701,18 +701,14 @@ def with_deviations(
                     source=source,
                     entry="--deviations",
                 )
-        zones: Zones | None
-        if name in shared:
-            group = model.deviations[shared.index(name)]
-            zones, ball, who = group, group.axis is None, f"shared deviation {shown(name)}"
-        else:
-            own = model.joints[names.index(name)]
-            zones, ball, who = own.deviation, own.type_name == "spherical", f"joint {shown(name)}"
-        zones = designed.get(name, zones)
+        who = f"shared deviation {shown(name)}" if name in shared else f"joint {shown(name)}"
+        own = sources.get(name)  # None: the model gives it no zones
+        model_zones = (None, False) if own is None else (own.deviation, own.ball)
+        zones, ball = designed.get(name, model_zones)
         for kind, value in _measure(entry, given, name, source).items():
             problem = None if zones is None else outside(zones, kind, value, ball)
             warning = None if problem is None else f"{who}: {problem}"
-            records.append(MeasuredDeviation(name, kind, value, zones, warning))
+            records.append(MeasuredDeviation(name, kind, value, zones, ball, warning))
         if not {"position", "orientation"} & set(entry):  # measured at 0: none
             if name in shared:
                 entry["position"] = {"diameter": 0}

@@ -383,13 +383,16 @@ class MeasuredDeviation:
     """A deviation as measured on one part (``with_deviations``): a joint's
     or a shared deviation's ``name``, its ``kind`` and ``value`` (position in
     mm, orientation in rad, in its frame), the ``zones`` the model gave it
-    (None: none; kept to check a second measurement against), and the
-    warning when the value lies outside them (``outside``)."""
+    (None: none; kept to check a second measurement against, with ``ball``,
+    whether their diameter is a ball: the part measured at 0 has no zones
+    left to say it), and the warning when the value lies outside them
+    (``outside``)."""
 
     name: str
     kind: Kind
     value: Vec3
     zones: Zones | None
+    ball: bool
     warning: str | None
 
     @property
@@ -423,68 +426,83 @@ def _past(size: float, limit: float, scale: float) -> bool:
 
 def outside(zones: Zones, kind: Kind, value: Vec3, ball: bool) -> str | None:
     """Where a measured ``value`` (mm or rad, in the deviation's frame) lies
-    outside the zone of ``kind`` of ``zones`` (``ball``: a diameter is a
-    ball, else a disc across the axis x), in words; None inside it, on its
-    edge, or where the zones have none of that kind."""
-    v = np.asarray(value, dtype=float)
+    outside the zones of ``kind`` of ``zones`` (``ball``: a diameter is a
+    ball, else a disc across the axis x), in words; None inside them, on
+    their edge, or where the zones have none of that kind. The zones are
+    those the studies draw from (``Zones.zones``): each zone's components
+    within its radius of the mean, every other component at its mean."""
+    first = 0 if kind == "position" else 3
+    mine = [z for z in zones.zones(ball) if first <= z.axes[0] < first + 3]
+    if not mine:
+        return None
+    v = np.zeros(6)
+    v[first : first + 3] = value
+    mean = zones.mean()
+    unit = "mm" if kind == "position" else "rad"
+    own = slice(first, first + 3)
+    scale = max(
+        float(np.linalg.norm(v[own])),
+        float(np.linalg.norm(mean[own])) + max(z.radius for z in mine),
+    )
+    centre = f" {_listed(mean[own].tolist())} {unit}" if any(mean[own]) else ""
     found: list[str] = []
-    if kind == "position" and zones.position is not None:
-        p = zones.position
-        if p.diameter is not None:
-            mean = np.asarray(p.mean, dtype=float)
-            scale = max(float(np.linalg.norm(v)), float(np.linalg.norm(mean)), p.diameter)
-            across = (0, 1, 2) if ball else (1, 2)
-            shape = "a ball" if ball else "a disc across the axis"
-            zone = f"{shape} of diameter {p.diameter:.6g} mm"
-            for a in () if ball else (0,):  # a disc allows no shift along its axis
-                if _past(abs(v[a] - mean[a]), 0.0, scale):
-                    found.append(
-                        f"its measured position along {_AXES[a]} is {v[a]:.6g} mm, where its "
-                        f"zone ({zone}) allows {mean[a] + 0.0:.6g} mm"
-                    )
-            size = float(np.linalg.norm((v - mean)[list(across)]))
-            if _past(size, p.diameter / 2.0, scale):
-                centre = f" {_listed(p.mean)} mm" if any(p.mean) else ""
+    for a in range(first, first + 3):
+        zone = next((z for z in mine if a in z.axes), None)
+        if zone is None:  # a component no zone spans: it sits at its mean
+            if _past(abs(v[a] - mean[a]), 0.0, scale):
+                what = f"position along {_AXES[a]}" if kind == "position" else MOTION_WORDS[a]
                 found.append(
-                    f"its measured position is {size:.6g} mm from its zone's centre{centre}, "
-                    f"beyond the zone's radius of {p.diameter / 2.0:.6g} mm ({zone})"
+                    f"its measured {what} is {v[a]:.6g} {unit}, where its zone "
+                    f"({_allowed(mine)}) allows {mean[a] + 0.0:.6g} {unit}"
                 )
-        else:
-            for a, axis in enumerate(_AXES):
-                lim = getattr(p, axis)
-                if lim is None:
-                    if _past(abs(v[a]), 0.0, float(np.max(np.abs(v)))):
-                        given = ", ".join(x for x in _AXES if getattr(p, x) is not None)
-                        found.append(
-                            f"its measured position along {axis} is {v[a]:.6g} mm, where its "
-                            f"zone (limits along {given} only) allows 0 mm"
-                        )
-                    continue
-                scale = max(abs(v[a]), abs(lim.min), abs(lim.max))
-                if _past(v[a], lim.max, scale) or _past(lim.min, v[a], scale):
-                    found.append(
-                        f"its measured position along {axis} is {v[a]:.6g} mm, outside the "
-                        f"zone's [{lim.min:.6g}, {lim.max:.6g}] mm"
-                    )
-    if kind == "orientation" and zones.orientation is not None:
-        o = zones.orientation
-        mean = np.asarray(o.mean, dtype=float)
-        scale = max(float(np.linalg.norm(v)), float(np.linalg.norm(mean)), o.radius)
-        size = float(np.linalg.norm((v - mean)[1:]))
-        if _past(size, o.radius, scale):
-            centre = f" {_listed(o.mean)} rad" if any(o.mean) else ""
-            over = (
-                f" ({o.tolerance:.6g} mm over {o.over:.6g} mm)"
-                if o.tolerance is not None and o.over is not None
-                else ""
-            )
-            found.append(
-                f"its measured tilt is {size:.6g} rad from its zone's centre{centre}, beyond "
-                f"the zone's largest tilt of {o.radius:.6g} rad{over}"
-            )
+        elif a == zone.axes[0]:
+            size = float(np.linalg.norm((v - mean)[list(zone.axes)]))
+            if _past(size, zone.radius, scale):
+                found.append(_beyond(zones, zone, v[a], mean[a], size, centre))
     if not found:
         return None
     return "; ".join(found) + ": the part is out of tolerance"
+
+
+def _shape(zone: Zone) -> str:
+    """A diameter's zone in words: 'a ball of diameter 0.02 mm'."""
+    shape = "a ball" if len(zone.axes) == 3 else "a disc across the axis"
+    return f"{shape} of diameter {2.0 * zone.radius:.6g} mm"
+
+
+def _allowed(mine: Sequence[Zone]) -> str:
+    """What a kind's zones span, in words, for a component none of them spans."""
+    if mine[0].name == "position":
+        return _shape(mine[0])
+    if mine[0].name == "orientation":
+        return f"a tilt about y and z of up to {mine[0].radius:.6g} rad"
+    return f"limits along {', '.join(z.name.removeprefix('position.') for z in mine)} only"
+
+
+def _beyond(zones: Zones, zone: Zone, v: float, mean: float, size: float, centre: str) -> str:
+    """A measured value ``size`` from the centre of ``zone``, past its radius, in words."""
+    R = zone.radius
+    if zone.name == "orientation":
+        o = zones.orientation
+        over = (
+            f" ({o.tolerance:.6g} mm over {o.over:.6g} mm)"
+            if o is not None and o.tolerance is not None and o.over is not None
+            else ""
+        )
+        return (
+            f"its measured tilt is {size:.6g} rad from its zone's centre{centre}, beyond "
+            f"the zone's largest tilt of {R:.6g} rad{over}"
+        )
+    if zone.name == "position":
+        return (
+            f"its measured position is {size:.6g} mm from its zone's centre{centre}, "
+            f"beyond the zone's radius of {R:.6g} mm ({_shape(zone)})"
+        )
+    axis = _AXES[zone.axes[0]]
+    return (
+        f"its measured position along {axis} is {v:.6g} mm, outside the zone's "
+        f"[{mean - R + 0.0:.6g}, {mean + R + 0.0:.6g}] mm"
+    )
 
 
 def _by_name(schema: dict[str, Any]) -> None:

@@ -45,10 +45,10 @@ from jointplay.assembly import assemble
 from jointplay.errors import UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
-from jointplay.proven import Resolution, proven
+from jointplay.proven import proven
 from jointplay.solver.solve import Workspace
 from jointplay.studies.linearity import Linearity, check_linearity
-from jointplay.studies.parts import Inputs, measures_of
+from jointplay.studies.parts import Inputs, measures_of, proven_length
 from jointplay.studies.sobol import Sobol, SobolResult, check_samples
 from jointplay.studies.variation import (
     DeviationMap,
@@ -184,7 +184,7 @@ class Contributions:
         sigma = np.array([sigma[g[0]] for g in groups])
         # a slope whose effect over its whole tolerance is below the length the
         # positions prove is their round-off: 0 (jointplay.proven)
-        length = Resolution.of(asm.s, asm.ell).length
+        length = proven_length(asm, ws.settings)
         step = length / np.where(width > 0, width, 1.0)
         sensitivity, up, down = (proven(v, step) for v in (sensitivity, up, down))
         nominal = proven(y[:, 0], length)  # a measure below the proven length is 0, not -0
@@ -192,7 +192,7 @@ class Contributions:
         linearity = check_linearity(
             model,
             self.case,
-            Inputs(pmap, lmap, dmap),
+            Inputs(pmap, lmap, dmap, length),
             measures,
             nominal,
             per_column,

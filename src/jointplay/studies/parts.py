@@ -27,12 +27,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from jointplay.assembly import assemble
+from jointplay.assembly import Assembly, assemble
 from jointplay.errors import StudyError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
 from jointplay.model.tolerance import Toleranced
 from jointplay.proven import Resolution, proven
+from jointplay.settings import DEFAULT, SolverSettings
 from jointplay.solver.solve import Workspace
 from jointplay.studies.parallel import run_chunks
 from jointplay.studies.variation import (
@@ -53,11 +54,13 @@ CHUNK = 10_000
 
 @dataclass(frozen=True)
 class Inputs:
-    """The varying inputs of a model in one load case."""
+    """The varying inputs of a model in one load case, and ``length`` (mm),
+    what the positions of its solved sets of parts prove (``proven_length``)."""
 
     pmap: PlayMap
     lmap: LoadMap
     dmap: DeviationMap
+    length: float
 
     @property
     def columns(self) -> int:
@@ -128,7 +131,14 @@ class Inputs:
 
 def inputs_of(model: Model, case: str | None, source: str) -> Inputs:
     asm = assemble(model)
-    return Inputs(play_map(asm, source), load_map(asm, case), deviation_map(asm))
+    maps = play_map(asm, source), load_map(asm, case), deviation_map(asm)
+    return Inputs(*maps, proven_length(asm))
+
+
+def proven_length(asm: Assembly, settings: SolverSettings = DEFAULT) -> float:
+    """mm: what a study's solved positions prove (``Resolution``); below it a
+    position, or a difference of two, is round-off."""
+    return Resolution.of(asm.s, asm.ell, settings=settings).length
 
 
 def solve_sets(
@@ -167,7 +177,7 @@ def _solve_rows(
     d = np.zeros((len(values), len(model.points), 3))
     # below what the positions prove is round-off, 0 as in the Monte Carlo: else a
     # measure that does not vary has a variance, and Sobol' shares, of round-off
-    length = Resolution.of(prepared.asm.s, prepared.asm.ell, settings=ws.settings).length
+    length = proven_length(prepared.asm, ws.settings)
     for p, point in enumerate(model.points):
         motion = batch.body_displacement(point.body)
         d[:, p] = proven(motion[:, :3] + np.cross(motion[:, 3:], np.asarray(point.at)), length)

@@ -34,7 +34,6 @@ import numpy as np
 
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
-from jointplay.proven import Resolution
 from jointplay.studies.parts import inputs_of, measured, measures_of, solve_sets
 from jointplay.studies.variation import nothing_varies
 
@@ -103,8 +102,6 @@ class Sobol:
         """The indices of the measures ``y`` (M, rows of the design) of ``model``."""
         from SALib.analyze import sobol as analysis
 
-        from jointplay.assembly import assemble
-
         inputs = inputs_of(model, self.case, source)
         measures = measures_of(model, source)
         n, d = self.samples, len(inputs.groups)
@@ -116,10 +113,8 @@ class Sobol:
         variance = np.var(both, axis=1) if np.any(keep) else np.full(len(measures), np.nan)
         # a measure whose spread the positions do not prove does not vary: its
         # variance is the solver's round-off, and so would its shares be
-        asm = assemble(model)
-        length = Resolution.of(asm.s, asm.ell).length
         if np.any(keep):
-            variance[np.ptp(both, axis=1) <= length] = 0.0
+            variance[np.ptp(both, axis=1) <= inputs.length] = 0.0
         first = np.full((len(measures), d), np.nan)
         first_ci = np.full((len(measures), d, 2), np.nan)
         total, total_ci = first.copy(), first_ci.copy()

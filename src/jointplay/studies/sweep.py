@@ -22,7 +22,7 @@ import itertools
 import math
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -254,20 +254,40 @@ class Sweep:
 
 #: How to give the sweep other values (after the entry's own fix, for the file).
 VARY_FIX = "change the values given to --vary (a unit goes after the number: '0:10 N:11')"
+ROTATE_FIX = "change the turn given to --rotate-load (--about, --from, --to), or the load it turns"
 
 
 def step_model(base: dict[str, Any], sweep: Sweep, index: tuple[int, ...], source: str) -> Model:
     """The model at step ``index``; the model itself is valid, so where the
-    step's is not, the option's values are wrong: an ``OptionError``."""
+    step's is not, the option's values are wrong: an ``OptionError`` naming
+    that option."""
     try:
         return model_from_dict(_step_data(base, sweep, index), source=source)
     except ModelError as exc:
         where = f"{exc.entry}: " if exc.entry else ""
+        turned = _the_turn_breaks(base, sweep, index, source)
         raise OptionError(
-            f"at the step {_step_name(sweep, index)}: {where}{exc.problem}; {VARY_FIX}",
+            f"at the step {_step_name(sweep, index)}: {where}{exc.problem}; "
+            f"{ROTATE_FIX if turned else VARY_FIX}",
             source=source,
-            entry="--vary" if sweep.vary else "--rotate-load",
+            entry="--rotate-load" if turned else "--vary",
         ) from None
+
+
+def _the_turn_breaks(
+    base: dict[str, Any], sweep: Sweep, index: tuple[int, ...], source: str
+) -> bool:
+    """Whether the turn of --rotate-load makes step ``index`` invalid: the
+    step's --vary values alone (if any) give a valid model."""
+    if sweep.rotate is None:
+        return False
+    if not sweep.vary:
+        return True
+    try:
+        model_from_dict(_step_data(base, replace(sweep, rotate=None), index[:-1]), source=source)
+    except ModelError:
+        return False
+    return True
 
 
 def parse_path(path: str) -> list[str | int]:

@@ -26,7 +26,8 @@ results side by side"), for each requirement's measure y: |d| of its point
 - *Monte Carlo*: the samples' mean m and standard deviation s; Pp and Ppk as
   Cp and Cpk with m and s; ppm the fraction of samples outside, with its
   Wilson interval (from 0 when no sample fails); the samples' range, and
-  how many of them pass the worst case (none, on every bundled example: a test).
+  how many of them pass the worst case (along a direction, lie outside its
+  least to greatest d . u; none, on every bundled example: a test).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from jointplay.errors import StudyError
+from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
 from jointplay.studies.contributions import Contributions, ContributionsResult
 from jointplay.studies.linearity import LINEAR_ERROR_SHARE, ROUND_OFF_MM
@@ -128,7 +130,9 @@ class RequirementTolerances:
     mc_interval_ppm: tuple[float, float]
     mc_low: float  # the assembled samples' range
     mc_high: float
-    beyond_bound: int  # samples whose measure passes the worst case
+    #: samples that pass the worst case: |d| above it, or d . u outside
+    #: ``worst_low`` to ``worst_high``
+    beyond_bound: int
 
     @property
     def limits(self) -> tuple[float | None, float]:
@@ -149,9 +153,14 @@ class RequirementTolerances:
         """What it means when samples pass the worst case ('' if none do)."""
         if not self.beyond_bound:
             return ""
+        reached = (
+            f"they reach {self.mc_low:.6g} to {self.mc_high:.6g} mm"
+            if self.worst_low is not None
+            else f"up to {self.mc_high:.6g} mm"
+        )
         return (
-            f"{self.beyond_bound:,} of the {samples:,} samples pass the worst case (up to "
-            f"{self.mc_high:.6g} mm): it is taken at the tolerances' limits, and these parts "
+            f"{self.beyond_bound:,} of the {samples:,} samples pass the worst case ({reached}): "
+            "it is taken at the tolerances' limits, and these parts "
             "go further between them; the worst case does not pass, and the Monte Carlo "
             "range is the better guide"
         )
@@ -273,6 +282,16 @@ def _measure_of(req: Requirement) -> Measure:
     return Measure(req.point, (float(u[0]), float(u[1]), float(u[2])))
 
 
+def beyond_reach(y: FloatArray, reach: Reach) -> int:
+    """How many of the measure's values ``y`` (the assembled samples) pass its
+    worst case by more than ``CERTIFIED_MM``: for |d|, above it; along a
+    direction, outside the least to the greatest d . u it reached (the range
+    the text prints), so that a part below its low end counts too."""
+    if reach.low is None or reach.high is None:
+        return int(np.sum(np.abs(y) > reach.worst + CERTIFIED_MM))
+    return int(np.sum((y < reach.low - CERTIFIED_MM) | (y > reach.high + CERTIFIED_MM)))
+
+
 def _one(
     req: Requirement,
     interval: tuple[float, float],
@@ -311,7 +330,7 @@ def _one(
     with np.errstate(invalid="ignore"):
         outside = ((np.abs(y) > high) if two_sided else (y > high)) | ~assembled
     sampled = y[assembled]
-    beyond = int(np.sum(np.abs(sampled) > reach.worst + CERTIFIED_MM))
+    beyond = beyond_reach(sampled, reach)
     return RequirementTolerances(
         req,
         two_sided,

@@ -10,12 +10,12 @@ at the limits, but on the mechanism's own equilibria:
   than ``MOST_LOAD_SETS``), each solved as the model's own equilibrium,
   springs and all (one batch, certified answers). The worst case is the
   largest of those answers, at the combination it names (only the inputs
-  that decide it: those left out reach it at any of their values): exact
-  there. A
-  smaller play can push a point further (a gear between two bearings tilts
-  more about a tighter one), so the lower limits count as much as the upper
-  ones; between the limits a part may still go further, and the Monte Carlo
-  beside it says so when one of its samples does (``Tolerances``);
+  that decide it: those left out reach it at each of their limits, and a
+  load's mean): exact there. A smaller play can push a point further (a gear
+  between two bearings tilts more about a tighter one), so the lower limits
+  count as much as the upper ones; between the limits a part may still go
+  further, and the Monte Carlo beside it says so when one of its samples
+  does (``Tolerances``);
 - with deviation zones: the support of every position the plays and the
   zones allow (the envelope's program over the positions and the
   deviations together), whatever the loads: along u, the larger of
@@ -40,7 +40,7 @@ from jointplay.assembly import assemble
 from jointplay.errors import OptionError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
-from jointplay.proven import Resolution, proven
+from jointplay.proven import proven
 from jointplay.studies.contributions import unit_of
 from jointplay.studies.envelope import MOST_LOAD_SETS
 from jointplay.studies.parts import Inputs, Measure, inputs_of, measured, solve_sets
@@ -106,13 +106,11 @@ def _over_load_sets(
 
     names = [v.label for v in plays] + [v.label for v in lmap.variables]
     shape = [len(g) for g in grids]
-    asm = assemble(model)
-    length = Resolution.of(asm.s, asm.ell).length
 
     def at(size: FloatArray, j: int) -> str:
         if not names:
             return "the plays as given"
-        deciding = _deciding(size.reshape(shape), np.unravel_index(j, shape), length)
+        deciding = _deciding(size.reshape(shape), np.unravel_index(j, shape), inputs.length)
         if not deciding:
             return "every combination alike (no input changes it)"
         words = ", ".join(f"{names[i]} = {rows[j, i]:g} {unit_of(names[i])}" for i in deciding)
@@ -134,9 +132,9 @@ def _over_load_sets(
 
 def _deciding(size: FloatArray, top: tuple[Any, ...], length: float) -> list[int]:
     """The inputs (axes of the grid ``size``) that decide its greatest value at
-    ``top``: the others, left to any of their values together, keep it to
-    ``length`` (what the positions prove). Each input is let go in turn while
-    that holds, so the named ones with the others free reach it."""
+    ``top``: the others, left to any of their values in the grid together,
+    keep it to ``length`` (what the positions prove). Each input is let go in
+    turn while that holds, so the named ones with the others free reach it."""
     worst = size[top]
     free: list[int] = []
     for i in range(size.ndim):
