@@ -354,7 +354,8 @@ def test_samples_pass_the_worst_case_outside_its_range_or_above_its_size() -> No
     """The count: along a direction, a value below the low end or above the
     high end by more than the certified margin; for |d|, one above the worst
     case by more than it. A value within the margin is the answers' round-off."""
-    from jointplay.studies.tolerances import CERTIFIED_MM, beyond_reach
+    from jointplay.settings import CERTIFIED_MM
+    from jointplay.studies.tolerances import beyond_reach
     from jointplay.studies.worstcase import Reach
 
     along = Reach("d P along [0, 0, 1]", 0.3, "", "", 0.3, 0.1, 0.3)

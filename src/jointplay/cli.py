@@ -450,7 +450,8 @@ def envelope(
     probe directions it does not hold."""
     from jointplay.io.modelfile import load
     from jointplay.present.textreport import render_envelope
-    from jointplay.studies.envelope import SMALLEST_PROBE, Envelope
+    from jointplay.settings import SMALLEST_PROBE
+    from jointplay.studies.envelope import Envelope
 
     def run() -> None:
         if plays not in ("max", "mean"):

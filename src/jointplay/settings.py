@@ -232,6 +232,37 @@ GRAM_CERTAIN = sys.float_info.epsilon**0.5
 GRAM_MARGIN = 4.0
 
 
+# -- the studies (tolerances of a study's verdicts, not of any answer) -------
+
+#: One-sided slopes differing by more than this (relative), and not converging
+#: as the step halves, mark a kink.
+KINK = 1e-6
+
+#: Smallest probe force (N): a smaller one vanishes against the weights' round-off.
+SMALLEST_PROBE = 1e-6
+
+#: Largest error of the slopes' prediction, as a share of the linear stack's
+#: half-width, for RSS to hold. A distance |d| bends over a fit's range or a
+#: position zone (a norm of displacements that grow apart): on the bundled
+#: examples whose contacts stay the same the error is at most 0.4 of the
+#: half-width (shaft_deviations, where RSS's sigma is within 10 % of the
+#: Monte Carlo's), most below 0.15; a change of contacts gives errors of the
+#: half-width or many times it (the four-bar's out-of-plane force: 23 times).
+LINEAR_ERROR_SHARE = 0.5
+
+#: An error below this (mm) is round-off of a certified answer (1e-9 of a
+#: clearance of 1 mm): a measure that does not vary is linear.
+ROUND_OFF_MM = 1e-9
+
+#: A sample passes the worst case only by more than this (mm): the
+#: certificates' promise on every answer.
+CERTIFIED_MM = 1e-6
+
+#: A spread below this share of the measure's scale (its mean or its limit) is
+#: round-off of a measure that does not vary: it counts as 0.
+ROUND_OFF_SPREAD = 1e-12
+
+
 @dataclass(frozen=True)
 class MotionSettings:
     """Tolerances of the nominal kinematics (``jointplay.studies.kinematics``).

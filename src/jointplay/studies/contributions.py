@@ -46,6 +46,7 @@ from jointplay.errors import UnassembledError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, check_case
 from jointplay.proven import proven
+from jointplay.settings import KINK
 from jointplay.solver.solve import Workspace
 from jointplay.studies.linearity import Linearity, check_linearity
 from jointplay.studies.parts import Inputs, measures_of, proven_length
@@ -62,10 +63,6 @@ from jointplay.studies.variation import (
 
 if TYPE_CHECKING:
     import pandas as pd
-
-#: One-sided slopes differing by more than this (relative), and not converging
-#: as the step halves, mark a kink.
-KINK = 1e-6
 
 
 @dataclass(frozen=True)

@@ -68,6 +68,7 @@ from jointplay.geometry import FloatArray, skew
 from jointplay.model.mechanism import Model, check_case
 from jointplay.model.tables import DriveTable
 from jointplay.proven import Resolution, direction, proven
+from jointplay.settings import SMALLEST_PROBE
 from jointplay.solver import held
 from jointplay.solver.solve import Workspace
 from jointplay.studies.variation import deviation_map, load_map, play_map
@@ -80,8 +81,6 @@ if TYPE_CHECKING:
 AXES = np.vstack([np.eye(3), -np.eye(3)]) + 0.0  # + 0.0: no -0 in the output
 #: Steps of the climb from a support point to the largest displacement.
 CLIMB_STEPS = 30
-#: Smallest probe force (N): a smaller one vanishes against the weights' round-off.
-SMALLEST_PROBE = 1e-6
 #: Most load combinations an envelope over the model's loads solves (levels ** components
 #: per case): beyond it the grid is a slip, and Monte Carlo is the study to run.
 MOST_LOAD_SETS = 100_000

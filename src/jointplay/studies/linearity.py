@@ -29,22 +29,12 @@ import numpy as np
 
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model
+from jointplay.settings import LINEAR_ERROR_SHARE, ROUND_OFF_MM
 from jointplay.studies.parts import Inputs, Measure, measured, solve_sets
 
-#: Largest error of the slopes' prediction, as a share of the linear stack's
-#: half-width, for RSS to hold. A distance |d| bends over a fit's range or a
-#: position zone (a norm of displacements that grow apart): on the bundled
-#: examples whose contacts stay the same the error is at most 0.4 of the
-#: half-width (shaft_deviations, where RSS's sigma is within 10 % of the
-#: Monte Carlo's), most below 0.15; a change of contacts gives errors of the
-#: half-width or many times it (the four-bar's out-of-plane force: 23 times).
-LINEAR_ERROR_SHARE = 0.5
 #: Random sets of parts in the check: a few beyond the limits' one-at-a-time
 #: solves, to catch inputs that bend the measure only together.
 DESIGN = 16
-#: An error below this (mm) is round-off of a certified answer (1e-9 of a
-#: clearance of 1 mm): a measure that does not vary is linear.
-ROUND_OFF_MM = 1e-9
 
 
 @dataclass(frozen=True)

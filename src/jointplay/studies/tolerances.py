@@ -41,8 +41,8 @@ import numpy as np
 from jointplay.errors import StudyError
 from jointplay.geometry import FloatArray
 from jointplay.model.mechanism import Model, Requirement, check_case
+from jointplay.settings import CERTIFIED_MM, LINEAR_ERROR_SHARE, ROUND_OFF_MM, ROUND_OFF_SPREAD
 from jointplay.studies.contributions import Contributions, ContributionsResult
-from jointplay.studies.linearity import LINEAR_ERROR_SHARE, ROUND_OFF_MM
 from jointplay.studies.montecarlo import MonteCarlo, MonteCarloResult
 from jointplay.studies.parts import Measure
 
@@ -51,19 +51,10 @@ if TYPE_CHECKING:
 
     from jointplay.studies.worstcase import Reach
 
-#: A sample passes the worst case only by more than this (mm): the
-#: certificates' promise on every answer.
-CERTIFIED_MM = 1e-6
-
 
 def _normal_tail(z: float) -> float:
     """P(Z > z) for a standard normal Z."""
     return 0.5 * math.erfc(z / math.sqrt(2.0))
-
-
-#: A spread below this share of the measure's scale (its mean or its limit) is
-#: round-off of a measure that does not vary: it counts as 0.
-ROUND_OFF_SPREAD = 1e-12
 
 
 def _spread(sigma: float, mean: float, limit: float) -> float:
