@@ -410,11 +410,23 @@ def test_a_valid_model_with_nothing_to_study_is_not_called_invalid(
     assert words in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
 
 
-def test_envelope_without_a_point_lists_the_points() -> None:
-    proc = run("envelope", str(ROOT / "examples" / "studies" / "shaft_cases.yaml"))
+def test_envelope_without_a_point_bounds_the_only_one_or_lists_them(tmp_path: Path) -> None:
+    """Without --point, a model with one point has nothing to choose: it is
+    bounded (as with --point tip); with two, the message names the file and
+    lists them (exit 2)."""
+    path = ROOT / "examples" / "studies" / "shaft_cases.yaml"
+    alone = run("envelope", str(path), "--case", "cutting", "--json")
+    named = run("envelope", str(path), "--case", "cutting", "--point", "tip", "--json")
+    assert alone.returncode == 0, alone.stderr
+    assert json.loads(alone.stdout) == json.loads(named.stdout)
+    data = yaml.safe_load(path.read_text())
+    data["points"].append({"name": "mid", "body": "S1", "at": [150, 0, 0]})
+    two = tmp_path / "two_points.yaml"
+    two.write_text(yaml.safe_dump(data))
+    proc = run("envelope", str(two))
     assert proc.returncode == 2 and proc.stdout == ""
-    assert proc.stderr.startswith("jointplay: invalid option: --point: ")
-    assert "'tip'" in proc.stderr
+    assert proc.stderr.startswith(f"jointplay: invalid option: {two}: --point: "), proc.stderr
+    assert "'tip'" in proc.stderr and "'mid'" in proc.stderr
 
 
 # -- load cases a mechanism does not hold, sweeps of another case, usage errors in --json ---

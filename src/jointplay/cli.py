@@ -394,7 +394,8 @@ def envelope(
         typer.Option(
             "--point",
             metavar="NAME",
-            help="The functional point to bound (without it, the model's points are listed).",
+            help="The functional point to bound (without it: the model's only point, or "
+            "its points are listed).",
         ),
     ] = None,
     directions: Annotated[
@@ -465,10 +466,12 @@ def envelope(
             raise OptionError(f"--loads {loads!r}: expected 'auto', 'model' or 'probes'")
         _check_outputs(csv, plot)
         model = load(model_path)
-        if point is None:
+        # the only point: nothing to choose
+        bounded = model.points[0].name if point is None and len(model.points) == 1 else point
+        if bounded is None:
             raise _no_point(model, model_path)
         settings = Envelope(
-            point,
+            bounded,
             directions,
             "max" if plays == "max" else "mean",
             "auto" if loads == "auto" else "model" if loads == "model" else "probes",
@@ -1104,7 +1107,7 @@ def _no_point(model: Any, model_path: Path) -> JointplayError:
             source=str(model_path),
         )
     names = ", ".join(repr(p.name) for p in model.points)
-    return OptionError(f"--point: name the point to bound, one of {names}")
+    return OptionError(f"--point: name the point to bound, one of {names}", source=str(model_path))
 
 
 def _first_case(model: Any, case: str | None) -> str | None:
