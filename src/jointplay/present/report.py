@@ -1080,7 +1080,7 @@ class _Page:
             if not r.rss_applies:
                 words += f" RSS, Cp, Cpk: not applicable: {r.linear_why}."
             self.parts.append(f"<p>{html.escape(words)}</p>")
-            if r.beyond_bound:
+            if r.beyond_words(samples):
                 words = f"{r.requirement.describe()}: {r.beyond_words(samples)}."
                 self.parts.append(f"<p><strong>{html.escape(words)}</strong></p>")
 

@@ -782,7 +782,7 @@ def _tolerance_table(r: Any, samples: int) -> list[Table | Text]:
             f"RSS, Cp, Cpk: not applicable: {r.linear_why}; the verdict comes from the worst "
             "case and the Monte Carlo\n"
         )
-    if r.beyond_bound:
+    if r.beyond_words(samples):
         notes.append(r.beyond_words(samples) + "\n", style="bold")
     return [table, notes]
 

@@ -121,9 +121,12 @@ class RequirementTolerances:
     mc_interval_ppm: tuple[float, float]
     mc_low: float  # the assembled samples' range
     mc_high: float
-    #: samples that pass the worst case: |d| above it, or d . u outside
-    #: ``worst_low`` to ``worst_high``
+    #: samples that pass the worst case: the requirement's size (|d|, or
+    #: |d . u|) above it
     beyond_bound: int
+    #: along a direction, samples outside ``worst_low`` to ``worst_high`` (the
+    #: range printed), past it or not
+    outside_range: int = 0
 
     @property
     def limits(self) -> tuple[float | None, float]:
@@ -141,20 +144,29 @@ class RequirementTolerances:
         return self.linear and abs(top - self.worst) <= LINEAR_ERROR_SHARE * half + ROUND_OFF_MM
 
     def beyond_words(self, samples: int) -> str:
-        """What it means when samples pass the worst case ('' if none do)."""
-        if not self.beyond_bound:
-            return ""
+        """What it means when samples pass the worst case, or lie outside the
+        range it prints ('' if none do)."""
         reached = (
             f"they reach {self.mc_low:.6g} to {self.mc_high:.6g} mm"
             if self.worst_low is not None
             else f"up to {self.mc_high:.6g} mm"
         )
-        return (
-            f"{self.beyond_bound:,} of the {samples:,} samples pass the worst case ({reached}): "
-            "it is taken at the tolerances' limits, and these parts "
-            "go further between them; the worst case does not pass, and the Monte Carlo "
-            "range is the better guide"
-        )
+        if self.beyond_bound:
+            return (
+                f"{self.beyond_bound:,} of the {samples:,} samples pass the worst case "
+                f"({reached}): it is taken at the tolerances' limits, and these parts "
+                "go further between them; the worst case does not pass, and the Monte Carlo "
+                "range is the better guide"
+            )
+        if self.outside_range:
+            return (
+                f"{self.outside_range:,} of the {samples:,} samples lie outside the worst "
+                f"case's range ({reached}): it is taken at the tolerances' limits, and these "
+                "parts lie between them; none goes past the worst case's size, so its verdict "
+                "holds, but the range is no bound on d . u: the Monte Carlo range is the "
+                "better guide"
+            )
+        return ""
 
     @property
     def worst_case_passes(self) -> bool:
@@ -209,6 +221,7 @@ class RequirementTolerances:
                 "low": num(self.mc_low),
                 "high": num(self.mc_high),
                 "beyond_worst_case": self.beyond_bound,
+                "outside_worst_case_range": self.outside_range,
             },
         }
 
@@ -321,7 +334,8 @@ def _one(
     with np.errstate(invalid="ignore"):
         outside = ((np.abs(y) > high) if two_sided else (y > high)) | ~assembled
     sampled = y[assembled]
-    beyond = beyond_reach(sampled, reach)
+    beyond = int(np.sum(np.abs(sampled) > reach.worst + CERTIFIED_MM))
+    outside_range = beyond_reach(sampled, reach) if reach.low is not None else 0
     return RequirementTolerances(
         req,
         two_sided,
@@ -350,6 +364,7 @@ def _one(
         float(np.min(sampled)) if n else math.nan,
         float(np.max(sampled)) if n else math.nan,
         beyond,
+        outside_range,
     )
 
 
@@ -410,6 +425,7 @@ class TolerancesResult:
                     "mc_low": r.mc_low,
                     "mc_high": r.mc_high,
                     "beyond_worst_case": r.beyond_bound,
+                    "outside_worst_case_range": r.outside_range,
                     "kink": r.kink,
                 }
             )
